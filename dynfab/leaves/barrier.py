@@ -1,0 +1,71 @@
+"""The 1-D barrier shared by every avoidance leaf (obstacles, joint limits, self-collision).
+
+The task variable is a clearance ``x`` [m or rad] that must stay positive. Following
+Ratliff et al. 2020 and Van Wyk et al. 2022 the leaf is a geometry weighted by a Finsler
+energy:
+
+- geometry ``ẍ + h = 0`` with ``h = −k ẋ² / x`` (homogeneous of degree 2 in ``ẋ``): an
+  approaching motion decelerates like ``ẋ ∝ x^k`` and never reaches ``x = 0``;
+- energy ``L_e = λ (1 − H(ẋ)) ẋ² / x²`` with the Heaviside gate ``H``: the leaf has metric
+  ``M_e = 2λ (1 − H(ẋ)) / x²`` only while the clearance shrinks, and vanishes otherwise.
+
+``x`` is clamped below at ``min_clearance`` so metric and forces stay finite when a sphere
+overlaps the robot (the leaf then pushes as hard as its clamp allows).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import casadi as ca
+
+from dynfab.energy import Lagrangian, WeightedGeometry
+
+#: ``h(x, ẋ)`` of a geometry ``ẍ + h = 0`` on a 1-D clearance.
+GeometryFunction = Callable[[ca.SX, ca.SX], ca.SX]
+#: A Lagrangian ``L_e(x, ẋ)`` on a 1-D clearance.
+EnergyFunction = Callable[[ca.SX, ca.SX], ca.SX]
+
+
+@dataclass(frozen=True)
+class Barrier:
+    """Geometry and Finsler energy of a clearance leaf.
+
+    Attributes:
+        geometry_gain: ``k`` in ``h = −k ẋ²/x`` [-].
+        energy_gain: ``λ`` in ``L_e = λ (1 − H(ẋ)) ẋ²/x²`` [m²].
+        min_clearance: clamp of ``x`` used inside ``h`` and ``L_e`` [m or rad].
+        geometry: optional replacement ``h(x, ẋ)``; receives the clamped ``x``.
+        energy: optional replacement ``L_e(x, ẋ)``; receives the clamped ``x``.
+    """
+
+    geometry_gain: float = 0.5
+    energy_gain: float = 0.1
+    min_clearance: float = 1e-3
+    geometry: GeometryFunction | None = None
+    energy: EnergyFunction | None = None
+
+    def __post_init__(self) -> None:
+        if self.min_clearance <= 0:
+            raise ValueError(f"Barrier.min_clearance must be > 0, got {self.min_clearance}")
+        if self.energy_gain < 0 or self.geometry_gain < 0:
+            raise ValueError("Barrier gains must be >= 0")
+
+    def weighted_geometry(self) -> WeightedGeometry:
+        """The leaf ``(M_e, M_e h)`` with ``f_e`` in fresh 1-D symbols ``x``, ``ẋ``."""
+        x = ca.SX.sym("x", 1)
+        xdot = ca.SX.sym("xdot", 1)
+        clearance = ca.fmax(x, self.min_clearance)
+        geometry = self.geometry or _default_geometry(self.geometry_gain)
+        energy = self.energy or _default_energy(self.energy_gain)
+        h = geometry(clearance, xdot)
+        return WeightedGeometry.from_parts(h, Lagrangian(energy(clearance, xdot), x, xdot))
+
+
+def _default_geometry(gain: float) -> GeometryFunction:
+    return lambda x, xdot: -gain / x * xdot**2
+
+
+def _default_energy(gain: float) -> EnergyFunction:
+    return lambda x, xdot: gain / x**2 * (1 - ca.heaviside(xdot)) * xdot**2

@@ -1,0 +1,187 @@
+"""Run metrics of DESIGN.md section 6 (as in the paper and localPlannerBench).
+
+All functions are pure numpy. Positions are in metres, times in seconds. For planar
+robots distances are measured in the xy-plane: only the first two coordinates count.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from dynfab.sim.simulator import Record
+
+
+@dataclass(frozen=True)
+class Metrics:
+    """Metrics of one run; ``to_dict`` gives the ``dynfab run --json`` object.
+
+    Attributes:
+        success: Goal reached and no collision.
+        goal_reached: The goal link came within tolerance of the goal (or reference).
+        collision: Clearance went below zero.
+        time_to_goal: First time within tolerance [s]; None if never.
+        clearance: min over time, robot spheres i and obstacles j of
+            ||p_i - p_j|| - r_i - r_j [m]; None without obstacles.
+        path_length: sum_k ||x_{k+1} - x_k|| of the goal link [m].
+        summed_error: Path goals: mean ||x - x_ref|| from the first time within
+            tolerance [m]; None for other goals or if never within tolerance.
+        solver_time_ms: Mean wall time of one controller call [ms].
+        steps: Number of control steps.
+    """
+
+    success: bool
+    goal_reached: bool
+    collision: bool
+    time_to_goal: float | None
+    clearance: float | None
+    path_length: float
+    summed_error: float | None
+    solver_time_ms: float
+    steps: int
+
+    def to_dict(self) -> dict[str, bool | int | float | None]:
+        """The metrics as a JSON-ready dict with the keys of DESIGN.md section 5."""
+        return asdict(self)
+
+
+def compute_metrics(
+    record: Record,
+    goal_link_positions: ArrayLike,
+    goal: ArrayLike,
+    tolerance: float,
+    sphere_centers: ArrayLike,
+    sphere_radii: ArrayLike,
+    obstacle_centers: ArrayLike,
+    obstacle_radii: ArrayLike,
+    *,
+    planar: bool = False,
+    path_goal: bool = False,
+) -> Metrics:
+    """Compute the metrics of a run.
+
+    Args:
+        record: The simulated run; its states are at ``record.t`` (T = N + 1 samples).
+        goal_link_positions: Goal-link positions at ``record.t``, shape (T, d).
+        goal: Goal position, shape (d,), or the reference at ``record.t``, shape (T, d).
+        tolerance: The goal is reached when ||x - goal|| < tolerance [m].
+        sphere_centers: Robot collision-sphere centres, shape (T, k, 3).
+        sphere_radii: Their radii, shape (k,).
+        obstacle_centers: Obstacle centres, shape (T, m, 3) (planar robots: 2 or 3).
+        obstacle_radii: Their radii, shape (m,); m = 0 means no obstacles.
+        planar: Measure every distance in the xy-plane.
+        path_goal: ``goal`` is a path reference: report ``summed_error``.
+
+    Returns:
+        The metrics.
+
+    Raises:
+        ValueError: If the arrays do not match the record's T samples.
+    """
+    positions = _workspace(goal_link_positions, planar)
+    target = _workspace(goal, planar)
+    if positions.shape[0] != record.t.shape[0]:
+        raise ValueError(
+            f"goal_link_positions has {positions.shape[0]} samples, the record {record.t.shape[0]}"
+        )
+    errors = np.linalg.norm(positions - target, axis=-1)
+    reached = _first_within(errors, tolerance)
+    clearances = clearance_over_time(
+        sphere_centers, sphere_radii, obstacle_centers, obstacle_radii, planar=planar
+    )
+    clearance = float(np.min(clearances)) if np.isfinite(clearances).any() else None
+    collision = clearance is not None and clearance < 0.0
+    return Metrics(
+        success=reached is not None and not collision,
+        goal_reached=reached is not None,
+        collision=collision,
+        time_to_goal=None if reached is None else float(record.t[reached]),
+        clearance=clearance,
+        path_length=path_length(positions),
+        summed_error=_mean_from(errors, reached) if path_goal else None,
+        solver_time_ms=float(np.mean(record.solver_time)) * 1e3,
+        steps=record.steps,
+    )
+
+
+def clearance_over_time(
+    sphere_centers: ArrayLike,
+    sphere_radii: ArrayLike,
+    obstacle_centers: ArrayLike,
+    obstacle_radii: ArrayLike,
+    *,
+    planar: bool = False,
+) -> NDArray[np.float64]:
+    """Clearance at each sample: min over i, j of ||p_i(t) - p_j(t)|| - r_i - r_j [m].
+
+    Args:
+        sphere_centers: Robot sphere centres, shape (T, k, 3).
+        sphere_radii: Robot sphere radii, shape (k,).
+        obstacle_centers: Obstacle centres, shape (T, m, 3) (planar robots: 2 or 3).
+        obstacle_radii: Obstacle radii, shape (m,).
+        planar: Use xy distances (spheres act as discs).
+
+    Returns:
+        Shape (T,); +inf at every sample if there are no spheres or no obstacles.
+    """
+    spheres = _workspace(sphere_centers, planar)
+    obstacles = _workspace(obstacle_centers, planar)
+    r_spheres = np.asarray(sphere_radii, dtype=float)
+    r_obstacles = np.asarray(obstacle_radii, dtype=float)
+    if (
+        spheres.ndim != 3
+        or obstacles.ndim != 3
+        or spheres.shape[0] != obstacles.shape[0]
+        or spheres.shape[2] != obstacles.shape[2]
+    ):
+        raise ValueError(
+            f"expected centres of shape (T, k, d) and (T, m, d), got {spheres.shape} "
+            f"and {obstacles.shape}"
+        )
+    if spheres.shape[1] == 0 or obstacles.shape[1] == 0:
+        return np.full(spheres.shape[0], np.inf)
+    gaps = np.linalg.norm(spheres[:, :, None, :] - obstacles[:, None, :, :], axis=-1)
+    gaps -= r_spheres[None, :, None] + r_obstacles[None, None, :]
+    return np.min(gaps, axis=(1, 2))
+
+
+def path_length(positions: ArrayLike) -> float:
+    """Length of a sampled path: sum_k ||x_{k+1} - x_k|| [m], positions of shape (T, d)."""
+    points = np.asarray(positions, dtype=float)
+    return float(np.sum(np.linalg.norm(np.diff(points, axis=0), axis=-1)))
+
+
+def summed_error(positions: ArrayLike, reference: ArrayLike, tolerance: float) -> float | None:
+    """Path-following error: mean ||x(t) - x_ref(t)|| from the first time it is < tolerance.
+
+    Args:
+        positions: Goal-link positions x(t), shape (T, d).
+        reference: Reference positions x_ref(t) at the same times, shape (T, d).
+        tolerance: Distance at which the reference counts as caught up [m].
+
+    Returns:
+        The mean distance [m] over the samples from that time on; None if never reached.
+    """
+    errors = np.linalg.norm(
+        np.asarray(positions, dtype=float) - np.asarray(reference, dtype=float), axis=-1
+    )
+    return _mean_from(errors, _first_within(errors, tolerance))
+
+
+def _first_within(errors: NDArray[np.float64], tolerance: float) -> int | None:
+    """Index of the first error below ``tolerance``; None if there is none."""
+    below = np.flatnonzero(errors < tolerance)
+    return int(below[0]) if below.size else None
+
+
+def _mean_from(errors: NDArray[np.float64], start: int | None) -> float | None:
+    """Mean of ``errors[start:]``; None if ``start`` is None."""
+    return None if start is None else float(np.mean(errors[start:]))
+
+
+def _workspace(points: ArrayLike, planar: bool) -> NDArray[np.float64]:
+    """Points as a float array; for planar robots only their x and y coordinates."""
+    array = np.asarray(points, dtype=float)
+    return array[..., :2] if planar else array

@@ -1,0 +1,259 @@
+"""The static fabric planner: leaves composed into the root and compiled into one function.
+
+``FabricPlanner(robot, config)`` builds, in CasADi SX, the joint-space fabric
+
+- one point map per robot collision sphere (forward kinematics, ``J``, ``J̇ q̇``);
+- obstacle leaves summed in each sphere's point space, then pulled once per sphere;
+- self-collision leaves on sphere pairs, joint-limit leaves on joints, a base energy;
+- goal forcing on the goal links (or joints);
+- the root of :mod:`dynfab.speed_control`;
+
+and compiles ONE function ``z = [q, q̇, p] ↦ q̈``. The runtime parameters ``p`` (goals,
+weights, obstacle slots) are written through :attr:`FabricPlanner.parameters`; calling
+:meth:`FabricPlanner.compute` then costs one buffer evaluation, with no per-argument
+conversion.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+from dynfab.energy import WeightedGeometry
+from dynfab.leaves.goal import GoalAttractor
+from dynfab.leaves.limits import JointLimitAvoidance
+from dynfab.leaves.obstacle import SphereObstacleAvoidance
+from dynfab.leaves.self_collision import SelfCollisionAvoidance
+from dynfab.maps import DifferentialMap, linear_map, selected
+from dynfab.parameters import ParameterLayout, ParameterSymbols, RuntimeParameters
+from dynfab.robots.robot import Robot
+from dynfab.spec import Spec
+from dynfab.speed_control import SpeedControl
+
+_AXES = "xyz"
+
+
+@dataclass(frozen=True)
+class GoalConfig:
+    """One sub-goal; the first goal of a planner is the primary one (it drives damping).
+
+    Attributes:
+        link: goal link for a position goal; ``None`` for a joint-space goal.
+        axes: controlled axes of the link position, e.g. ``"xyz"`` or ``"xy"``; ``None``
+            means ``"xy"`` for planar robots and ``"xyz"`` otherwise.
+        parent_link: express the link position in this link's frame (``None``: root).
+        joints: indices of the joints of a joint-space goal (``None``: all).
+        weight: initial weight; changed at run time through the parameters.
+        attractor: potential and metric of the forcing.
+    """
+
+    link: str | None = None
+    axes: str | None = None
+    parent_link: str | None = None
+    joints: tuple[int, ...] | None = None
+    weight: float = 1.0
+    attractor: GoalAttractor = field(default_factory=GoalAttractor)
+
+
+@dataclass(frozen=True)
+class PlannerConfig:
+    """What the planner is made of. ``None`` disables a component.
+
+    Attributes:
+        goals: sub-goals (at least one).
+        obstacle_slots: number of sphere obstacle slots (fixed at build time).
+        obstacle_avoidance: leaf of each robot sphere against each obstacle slot.
+        joint_limits: joint-limit leaf.
+        self_collision: leaf of each self-collision pair of the robot.
+        speed_control: root parameters.
+        collision_links: restrict obstacle avoidance to spheres on these links
+            (``None``: every collision sphere of the robot).
+        fallback_braking: ``k`` of the safe action ``q̈ = −k q̇`` returned if the fabric
+            ever produced a non-finite value [1/s].
+    """
+
+    goals: tuple[GoalConfig, ...]
+    obstacle_slots: int = 0
+    obstacle_avoidance: SphereObstacleAvoidance | None = field(default_factory=SphereObstacleAvoidance)
+    joint_limits: JointLimitAvoidance | None = field(default_factory=JointLimitAvoidance)
+    self_collision: SelfCollisionAvoidance | None = field(default_factory=SelfCollisionAvoidance)
+    speed_control: SpeedControl = field(default_factory=SpeedControl)
+    collision_links: tuple[str, ...] | None = None
+    fallback_braking: float = 5.0
+
+    def __post_init__(self) -> None:
+        if not self.goals:
+            raise ValueError("PlannerConfig.goals: at least one goal is required")
+        if self.obstacle_slots < 0:
+            raise ValueError(f"PlannerConfig.obstacle_slots must be >= 0, got {self.obstacle_slots}")
+
+
+class FabricPlanner:
+    """Static optimization fabric for one robot (see module docstring).
+
+    Attributes:
+        robot: the robot.
+        config: the configuration it was built with.
+        parameters: writable views of the runtime parameters.
+        function: the compiled CasADi function ``z ↦ q̈``.
+        build_time_s: wall time of building and compiling [s].
+        fallback_count: how many calls returned the fallback action.
+    """
+
+    def __init__(self, robot: Robot, config: PlannerConfig) -> None:
+        start = time.perf_counter()
+        self.robot = robot
+        self.config = config
+        self._n = robot.kinematics.dof
+        goal_dimensions = tuple(len(self._goal_axes(goal)) if goal.link else len(self._goal_joints(goal))
+                                for goal in config.goals)
+        self._layout = ParameterLayout(goal_dimensions, config.obstacle_slots)
+        self.function = self._build()
+        self._input = np.zeros(2 * self._n + self._layout.size)
+        self._output = np.zeros(self._n)
+        self._buffer, self._evaluate = self.function.buffer()
+        self._buffer.set_arg(0, memoryview(self._input))
+        self._buffer.set_res(0, memoryview(self._output))
+        self.parameters: RuntimeParameters = self._layout.views(self._input[2 * self._n:])
+        for i, goal in enumerate(config.goals):
+            self.parameters.goal_weight[i] = goal.weight
+        self.fallback_count = 0
+        self.build_time_s = time.perf_counter() - start
+
+    @property
+    def n_instructions(self) -> int:
+        """SX instructions evaluated per call."""
+        return self.function.n_instructions()
+
+    def compute(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
+        """``q̈`` for the joint state, with the current parameters. Always finite.
+
+        Raises:
+            ValueError: if ``q`` or ``q̇`` has the wrong shape, or the state or a
+                parameter is not finite.
+        """
+        n = self._n
+        q = np.asarray(q, dtype=float)
+        qdot = np.asarray(qdot, dtype=float)
+        if q.shape != (n,):
+            raise ValueError(f"q must have shape ({n},), got {q.shape}")
+        if qdot.shape != (n,):
+            raise ValueError(f"qdot must have shape ({n},), got {qdot.shape}")
+        self._input[:n] = q
+        self._input[n:2 * n] = qdot
+        if not np.isfinite(self._input).all():
+            raise ValueError(self._describe_non_finite_input())
+        self._evaluate()
+        if np.isfinite(self._output).all():
+            return self._output.copy()
+        self.fallback_count += 1
+        return -self.config.fallback_braking * qdot
+
+    def _describe_non_finite_input(self) -> str:
+        n = self._n
+        if not np.isfinite(self._input[:n]).all():
+            return "q contains NaN or infinity"
+        if not np.isfinite(self._input[n:2 * n]).all():
+            return "qdot contains NaN or infinity"
+        return "a planner parameter (goal or obstacle) contains NaN or infinity"
+
+    # -- construction -------------------------------------------------------------------
+
+    def _goal_axes(self, goal: GoalConfig) -> list[int]:
+        axes = goal.axes if goal.axes is not None else ("xy" if self.robot.planar else "xyz")
+        if not axes or any(a not in _AXES for a in axes) or len(set(axes)) != len(axes):
+            raise ValueError(f"GoalConfig.axes must be distinct letters of 'xyz', got {axes!r}")
+        return [_AXES.index(a) for a in axes]
+
+    def _goal_joints(self, goal: GoalConfig) -> list[int]:
+        joints = list(goal.joints) if goal.joints is not None else list(range(self._n))
+        if any(not 0 <= j < self._n for j in joints):
+            raise ValueError(f"GoalConfig.joints must index the {self._n} joints, got {joints}")
+        return joints
+
+    def _build(self) -> ca.Function:
+        n = self._n
+        q = ca.SX.sym("q", n)
+        qdot = ca.SX.sym("qdot", n)
+        params = self._layout.symbols()
+        geometry = self.config.speed_control.base(q, qdot)
+        sphere_maps = self._sphere_maps(q, qdot)
+        for term in self._obstacle_terms(sphere_maps, params):
+            geometry = geometry + term
+        for term in self._self_collision_terms(sphere_maps):
+            geometry = geometry + term
+        if self.config.joint_limits is not None:
+            kin = self.robot.kinematics
+            geometry = geometry + self.config.joint_limits.on_joints(q, qdot, kin.lower, kin.upper)
+        forcing, goal_distance = self._forcing(q, qdot, params)
+        qddot = self.config.speed_control.acceleration(geometry, forcing, goal_distance)
+        inner = ca.Function("fabric_parts", [q, qdot, params.vector], [qddot])
+        z = ca.SX.sym("z", 2 * n + self._layout.size)
+        return ca.Function("fabric", [z], [inner(z[:n], z[n:2 * n], z[2 * n:])], {"cse": True})
+
+    def _sphere_maps(self, q: ca.SX, qdot: ca.SX) -> list[DifferentialMap]:
+        kin = self.robot.kinematics
+        dims = 2 if self.robot.planar else 3
+        maps = []
+        for sphere in self.robot.collision_spheres:
+            position = kin.position(q, sphere.link, offset=sphere.center)
+            maps.append(DifferentialMap.from_expression(position[:dims], q, qdot))
+        return maps
+
+    def _obstacle_terms(self, sphere_maps: list[DifferentialMap], params: ParameterSymbols) -> list[WeightedGeometry]:
+        """Per robot sphere: the obstacle leaves of all slots summed in the sphere's point
+        space, then pulled once to joint space."""
+        avoidance = self.config.obstacle_avoidance
+        if avoidance is None or self.config.obstacle_slots == 0:
+            return []
+        links = self.config.collision_links
+        if links is not None:
+            unknown = sorted(set(links) - set(self.robot.kinematics.link_names))
+            if unknown:
+                raise ValueError(f"PlannerConfig.collision_links: unknown links {unknown}")
+        dims = 2 if self.robot.planar else 3
+        terms = []
+        for sphere, point_map in zip(self.robot.collision_spheres, sphere_maps):
+            if links is not None and sphere.link not in links:
+                continue
+            p = ca.SX.sym("p", dims)
+            pdot = ca.SX.sym("pdot", dims)
+            leaves = [avoidance.on_point(p, pdot, center[:dims], radius, sphere.radius)
+                      for center, radius in zip(params.obstacle_position, params.obstacle_radius)]
+            in_point_space = leaves[0]
+            for leaf in leaves[1:]:
+                in_point_space = in_point_space + leaf
+            terms.append(in_point_space.pull(point_map))
+        return terms
+
+    def _self_collision_terms(self, sphere_maps: list[DifferentialMap]) -> list[WeightedGeometry]:
+        avoidance = self.config.self_collision
+        if avoidance is None:
+            return []
+        spheres = self.robot.collision_spheres
+        return [avoidance.on_pair(sphere_maps[a], sphere_maps[b], spheres[a].radius, spheres[b].radius)
+                for a, b in self.robot.self_collision_pairs]
+
+    def _forcing(self, q: ca.SX, qdot: ca.SX, params: ParameterSymbols) -> tuple[Spec, ca.SX]:
+        kin = self.robot.kinematics
+        total: Spec | None = None
+        primary_distance = None
+        for i, goal in enumerate(self.config.goals):
+            target = params.goal_position[i]
+            if goal.link is not None:
+                position = kin.position(q, goal.link, parent=goal.parent_link)
+                error = selected(DifferentialMap.from_expression(position, q, qdot), self._goal_axes(goal), target)
+            else:
+                joints = self._goal_joints(goal)
+                selector = np.zeros((len(joints), self._n))
+                selector[range(len(joints)), joints] = 1.0
+                error = linear_map(selector, target, q, qdot)
+            spec = goal.attractor.forcing(error, params.goal_weight[i])
+            total = spec if total is None else total + spec
+            if primary_distance is None:
+                primary_distance = ca.norm_2(error.phi)
+        return total, primary_distance
+

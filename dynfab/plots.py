@@ -1,0 +1,187 @@
+"""Plots of a run: goal-link path, goals and obstacles, and clearance over time.
+
+Figures are drawn on matplotlib's Agg canvas (no pyplot, no display, no global state).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.patches import Circle
+from mpl_toolkits.mplot3d import Axes3D
+from numpy.typing import ArrayLike, NDArray
+
+_PATH_COLOR = "C0"
+_GOAL_COLOR = "C2"
+_OBSTACLE_COLOR = "C3"
+_AXIS_NAMES = "xyz"
+
+GoalMarker = tuple[ArrayLike, float]
+"""``(position, tolerance)``: a goal point (d,) or a reference path (T, d), and [m]."""
+
+
+def plot_run(
+    path: str | Path,
+    goal_link_positions: ArrayLike,
+    goals: Sequence[GoalMarker],
+    obstacles_over_time: ArrayLike,
+    obstacle_radii: ArrayLike,
+    planar: bool,
+    clearance_over_time: ArrayLike | None = None,
+    times: ArrayLike | None = None,
+    title: str = "dynfab run",
+) -> None:
+    """Save a PNG of a run.
+
+    3-D robots get a 3-D view plus top (x-y) and side (x-z) projections; planar robots a
+    top view. Obstacles are drawn at their start (faint) and end positions with the path
+    of their centre; goals as stars with their tolerance circle (reference paths as
+    dashed lines). A last panel shows the clearance over time if given.
+
+    Args:
+        path: Output PNG file.
+        goal_link_positions: Goal-link positions over time, shape (T, 3) or (T, 2) [m].
+        goals: ``(position, tolerance)`` per goal; position (d,) or a reference (T, d).
+        obstacles_over_time: Obstacle centres, shape (T, m, 3) or (T, m, 2) [m].
+        obstacle_radii: Obstacle radii, shape (m,) [m].
+        planar: Draw the top view only.
+        clearance_over_time: Clearance at each sample, shape (T,) [m].
+        times: Sample times, shape (T,) [s], for the clearance axis (else step indices).
+        title: Figure title.
+    """
+    positions = np.asarray(goal_link_positions, dtype=float)
+    obstacles = np.asarray(obstacles_over_time, dtype=float)
+    radii = np.asarray(obstacle_radii, dtype=float)
+    markers = [(np.asarray(goal, dtype=float), float(tol)) for goal, tol in goals]
+    has_clearance = clearance_over_time is not None
+    if planar:
+        figure = Figure(figsize=(11.0 if has_clearance else 6.0, 5.0), layout="constrained")
+        grid = figure.add_gridspec(1, 2 if has_clearance else 1)
+        top = figure.add_subplot(grid[0, 0])
+        _draw_projection(top, (0, 1), positions, markers, obstacles, radii)
+        top.legend(loc="best", fontsize="small")
+        clearance_slot = grid[0, 1] if has_clearance else None
+    else:
+        size = (12.0, 10.0) if has_clearance else (16.0, 5.0)
+        figure = Figure(figsize=size, layout="constrained")
+        grid = figure.add_gridspec(2 if has_clearance else 1, 2 if has_clearance else 3)
+        view = figure.add_subplot(grid[0, 0], projection="3d")
+        _draw_3d(view, positions, markers, obstacles, radii)
+        top = figure.add_subplot(grid[0, 1])
+        _draw_projection(top, (0, 1), positions, markers, obstacles, radii)
+        top.legend(loc="best", fontsize="small")
+        side = figure.add_subplot(grid[1, 0] if has_clearance else grid[0, 2])
+        _draw_projection(side, (0, 2), positions, markers, obstacles, radii)
+        clearance_slot = grid[1, 1] if has_clearance else None
+    if clearance_slot is not None and clearance_over_time is not None:
+        _draw_clearance(figure.add_subplot(clearance_slot), clearance_over_time, times)
+    figure.suptitle(title)
+    figure.savefig(Path(path), dpi=100)
+
+
+def _draw_projection(
+    ax: Axes,
+    axes: tuple[int, int],
+    positions: NDArray[np.float64],
+    goals: list[tuple[NDArray[np.float64], float]],
+    obstacles: NDArray[np.float64],
+    radii: NDArray[np.float64],
+) -> None:
+    """Draw the path, goals and obstacles projected on the plane of two axes."""
+    i, j = axes
+    for k, radius in enumerate(radii):
+        centers = obstacles[:, k, :]
+        label = "obstacle" if k == 0 else None
+        if np.ptp(centers[:, [i, j]], axis=0).max() > 0.0:
+            ax.plot(centers[:, i], centers[:, j], ":", color=_OBSTACLE_COLOR, linewidth=1)
+            start = (centers[0, i], centers[0, j])
+            ax.add_patch(Circle(start, radius, color=_OBSTACLE_COLOR, alpha=0.12))
+        end = (centers[-1, i], centers[-1, j])
+        ax.add_patch(Circle(end, radius, color=_OBSTACLE_COLOR, alpha=0.35, label=label))
+    for k, (goal, tolerance) in enumerate(goals):
+        target = goal if goal.ndim == 1 else goal[-1]
+        label = "goal" if k == 0 else None
+        if goal.ndim == 2:
+            ax.plot(goal[:, i], goal[:, j], "--", color=_GOAL_COLOR, linewidth=1, label="reference")
+        ax.plot(target[i], target[j], "*", color=_GOAL_COLOR, markersize=12, label=label)
+        tolerance_circle = Circle(
+            (target[i], target[j]), tolerance, fill=False, linestyle="--", color=_GOAL_COLOR
+        )
+        ax.add_patch(tolerance_circle)
+    ax.plot(positions[:, i], positions[:, j], color=_PATH_COLOR, label="goal link")
+    ax.plot(positions[0, i], positions[0, j], "o", color=_PATH_COLOR, label="start")
+    ax.set_xlabel(f"{_AXIS_NAMES[i]} [m]")
+    ax.set_ylabel(f"{_AXIS_NAMES[j]} [m]")
+    ax.set_title("top (x-y)" if axes == (0, 1) else "side (x-z)")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.grid(True, alpha=0.3)
+
+
+def _draw_3d(
+    ax: Axes3D,
+    positions: NDArray[np.float64],
+    goals: list[tuple[NDArray[np.float64], float]],
+    obstacles: NDArray[np.float64],
+    radii: NDArray[np.float64],
+) -> None:
+    """Draw the path, goals (with tolerance spheres) and obstacles in 3-D."""
+    extent = [positions]
+    for k, radius in enumerate(radii):
+        centers = obstacles[:, k, :]
+        ax.plot(*centers.T, ":", color=_OBSTACLE_COLOR, linewidth=1)
+        x, y, z = _sphere_surface(centers[-1], radius)
+        ax.plot_surface(x, y, z, color=_OBSTACLE_COLOR, alpha=0.3, linewidth=0)
+        extent += [centers - radius, centers + radius]
+    for goal, tolerance in goals:
+        end = goal if goal.ndim == 1 else goal[-1]
+        if goal.ndim == 2:
+            ax.plot(goal[:, 0], goal[:, 1], goal[:, 2], "--", color=_GOAL_COLOR, linewidth=1)
+        ax.plot([end[0]], [end[1]], [end[2]], "*", color=_GOAL_COLOR, markersize=12)
+        x, y, z = _sphere_surface(end, tolerance)
+        ax.plot_wireframe(x, y, z, color=_GOAL_COLOR, alpha=0.4, linewidth=0.5)
+        extent += [np.atleast_2d(end) - tolerance, np.atleast_2d(end) + tolerance]
+    ax.plot(positions[:, 0], positions[:, 1], positions[:, 2], color=_PATH_COLOR)
+    ax.plot([positions[0, 0]], [positions[0, 1]], [positions[0, 2]], "o", color=_PATH_COLOR)
+    points = np.vstack(extent)
+    low, high = points.min(axis=0), points.max(axis=0)
+    ax.set_xlim(low[0], high[0])
+    ax.set_ylim(low[1], high[1])
+    ax.set_zlim(low[2], high[2])
+    ax.set_box_aspect(np.maximum(high - low, 1e-3))
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_zlabel("z [m]")
+    ax.set_title("3-D view")
+
+
+def _draw_clearance(ax: Axes, clearance: ArrayLike, times: ArrayLike | None) -> None:
+    """Plot clearance over time with the collision threshold at zero."""
+    values = np.asarray(clearance, dtype=float)
+    x = np.arange(values.shape[0]) if times is None else np.asarray(times, dtype=float)
+    ax.plot(x, values, color=_PATH_COLOR)
+    ax.axhline(0.0, color=_OBSTACLE_COLOR, linestyle="--", linewidth=1, label="collision")
+    finite = values[np.isfinite(values)]
+    if finite.size:
+        ax.set_title(f"clearance (min {finite.min():.3f} m)")
+    ax.set_xlabel("step" if times is None else "time [s]")
+    ax.set_ylabel("clearance [m]")
+    ax.legend(loc="best", fontsize="small")
+    ax.grid(True, alpha=0.3)
+
+
+def _sphere_surface(
+    center: NDArray[np.float64], radius: float, resolution: int = 16
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Grid points (x, y, z) of a sphere surface, for plot_surface / plot_wireframe."""
+    u, v = np.meshgrid(
+        np.linspace(0.0, 2.0 * np.pi, resolution), np.linspace(0.0, np.pi, resolution)
+    )
+    return (
+        center[0] + radius * np.cos(u) * np.sin(v),
+        center[1] + radius * np.sin(u) * np.sin(v),
+        center[2] + radius * np.cos(v),
+    )

@@ -1,0 +1,460 @@
+"""Symbolic forward kinematics of a URDF kinematic tree with CasADi.
+
+A link pose is the product of the joint transforms on the path from the root,
+
+    T_root_link(q) = prod_j  T_origin_j @ M_j(q_j),
+
+with ``T_origin = [R(rpy), xyz; 0, 1]``, ``R(rpy) = Rz(yaw) Ry(pitch) Rx(roll)`` and the
+joint motion ``M`` a rotation about the unit axis ``a`` (Rodrigues,
+``R = cos(q) I + sin(q) [a]_x + (1 - cos(q)) a a^T``) or a translation ``q a``.
+
+The expressions are built entry by entry with constants folded: products with exact
+0 and +-1 are skipped, so axis-aligned axes and right-angle origins (all of the Panda)
+cost nothing beyond the sines and cosines and the dense products. Rotation entries of
+an origin within 1e-12 of 0 or +-1 are snapped to these values (``cos(pi/2)`` is
+6e-17 in floating point).
+
+Each query compiles (once, cached) a CasADi SX ``Function`` of ``q`` and calls it with
+the given ``q``, so the same method works for ``SX`` (returns the expression, inlined),
+``MX`` (returns a call node) and numbers (returns a numeric ``DM``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+from typing import Union
+
+import casadi as ca
+import numpy as np
+
+from .urdf import Joint, UrdfModel
+
+__all__ = ["Kinematics", "UnknownLinkError"]
+
+Scalar = Union[float, ca.SX]
+"""A Python float (constant, folded at build time) or a 1x1 SX expression."""
+CasadiLike = Union[ca.SX, ca.MX, ca.DM]
+Point = tuple[str, tuple[float, float, float]]
+
+_SNAP_TOLERANCE = 1e-12
+
+
+class UnknownLinkError(ValueError):
+    """A link name that is not part of the kinematic tree."""
+
+
+@dataclass(frozen=True)
+class _Pose:
+    """A rigid transform with scalar entries: ``x_parent = rot @ x_child + pos``.
+
+    Attributes:
+        rot: Rotation matrix as three rows of three scalars [-].
+        pos: Translation as three scalars [m].
+    """
+
+    rot: tuple[tuple[Scalar, Scalar, Scalar], ...]
+    pos: tuple[Scalar, Scalar, Scalar]
+
+
+_IDENTITY = _Pose(rot=((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
+                  pos=(0.0, 0.0, 0.0))
+
+
+class Kinematics:
+    """Forward kinematics of a URDF tree (or of the subtree below ``root_link``).
+
+    Attributes:
+        model: The parsed URDF.
+        root_link: The link whose frame is the reference ("world") frame.
+        joint_names: Actuated joints (revolute, continuous, prismatic, not mimic) in
+            depth-first order from the root; ``q[i]`` belongs to ``joint_names[i]``.
+        dof: Number of actuated joints.
+        lower: Lower position limits, shape (dof,); ``-inf`` if unlimited [rad or m].
+        upper: Upper position limits, shape (dof,); ``+inf`` if unlimited [rad or m].
+        velocity_limits: Velocity limits, shape (dof,); ``inf`` if not given
+            [rad/s or m/s].
+        link_names: Links of the tree in depth-first order from the root.
+    """
+
+    def __init__(self, model: UrdfModel, root_link: str | None = None) -> None:
+        """Index the tree below ``root_link`` (the URDF root if ``None``).
+
+        Raises:
+            UnknownLinkError: ``root_link`` is not a link of ``model``.
+        """
+        self.model = model
+        if root_link is not None and root_link not in model.link_names:
+            raise _unknown_link(root_link, model.link_names)
+        self.root_link: str = model.root_link if root_link is None else root_link
+        self._parent_joint: dict[str, Joint] = {}
+        links: list[str] = []
+        actuated: list[Joint] = []
+        stack = [self.root_link]
+        while stack:
+            link = stack.pop()
+            links.append(link)
+            children = model.child_joints(link)
+            for joint in children:
+                self._parent_joint[joint.child] = joint
+            stack.extend(j.child for j in reversed(children))
+        # Depth-first link order; joints are numbered in the order their child is visited.
+        for link in links[1:]:
+            if self._parent_joint[link].is_actuated:
+                actuated.append(self._parent_joint[link])
+        self.link_names: tuple[str, ...] = tuple(links)
+        self.joint_names: tuple[str, ...] = tuple(j.name for j in actuated)
+        self.dof: int = len(actuated)
+        self._index = {name: i for i, name in enumerate(self.joint_names)}
+        for joint in self._parent_joint.values():
+            if joint.mimic is not None and joint.mimic.joint not in self._index:
+                raise ValueError(f"joint '{joint.name}' mimics '{joint.mimic.joint}', "
+                                 f"which is not below root link '{self.root_link}'")
+        self.lower = np.array([_limit(j, "lower") for j in actuated], dtype=float)
+        self.upper = np.array([_limit(j, "upper") for j in actuated], dtype=float)
+        self.velocity_limits = np.array(
+            [j.limit.velocity if j.limit is not None else math.inf for j in actuated],
+            dtype=float)
+        for array in (self.lower, self.upper, self.velocity_limits):
+            array.setflags(write=False)
+        self._functions: dict[tuple[object, ...], ca.Function] = {}
+
+    # ------------------------------------------------------------------ public API
+
+    def transform(self, q: object, link: str, parent: str | None = None) -> CasadiLike:
+        """Homogeneous transform of ``link`` in the frame of ``parent``.
+
+        Args:
+            q: Configuration, shape (dof,): ``ca.SX``, ``ca.MX`` or array-like numbers.
+            link: Link whose pose is returned.
+            parent: Reference link; the root link if ``None``.
+
+        Returns:
+            4x4 ``[[R, p], [0, 0, 0, 1]]`` with ``x_parent = R x_link + p`` [m]; of the
+            type of ``q`` (``ca.DM`` for numeric input).
+
+        Raises:
+            UnknownLinkError: ``link`` or ``parent`` is not in the tree.
+        """
+        parent = self._check_links(link, parent)
+        key = ("transform", link, parent)
+        return self._call(key, q, lambda b: _homogeneous(b.relative(link, parent)))
+
+    def rotation(self, q: object, link: str, parent: str | None = None) -> CasadiLike:
+        """Rotation matrix R (3x3) of ``link`` in the frame of ``parent`` (root if None).
+
+        Columns are the link's unit axes in ``parent`` coordinates [-].
+        """
+        parent = self._check_links(link, parent)
+        key = ("rotation", link, parent)
+        return self._call(key, q, lambda b: _matrix(b.relative(link, parent).rot))
+
+    def position(self, q: object, link: str, parent: str | None = None,
+                 offset: Sequence[float] = (0.0, 0.0, 0.0)) -> CasadiLike:
+        """Position (3x1) of a point fixed in ``link``, in the frame of ``parent``.
+
+        ``p = R_parent_link(q) @ offset + p_parent_link(q)`` [m].
+
+        Args:
+            q: Configuration, shape (dof,).
+            link: Link carrying the point.
+            parent: Reference link; the root link if ``None``.
+            offset: Point in ``link`` coordinates [m].
+        """
+        parent = self._check_links(link, parent)
+        point = _as_offset(offset)
+        key = ("position", link, parent, point)
+        return self._call(
+            key, q, lambda b: _column(b.point(link, parent, point)))
+
+    def positions(self, q: object, points: Iterable[tuple[str, Sequence[float]]]
+                  ) -> CasadiLike:
+        """Root-frame positions of several link-fixed points, shape (k, 3) [m].
+
+        Row ``i`` is ``position(q, points[i][0], offset=points[i][1]).T``; the common
+        parts of the chains are computed once.
+
+        Args:
+            q: Configuration, shape (dof,).
+            points: ``(link, offset)`` pairs, ``offset`` in link coordinates [m].
+        """
+        pts: tuple[Point, ...] = tuple((link, _as_offset(off)) for link, off in points)
+        for link, _ in pts:
+            self._check_links(link, None)
+        key = ("positions", pts)
+
+        def build(b: _Builder) -> ca.SX:
+            rows = [_apply(b.relative(link, self.root_link), off) for link, off in pts]
+            if not rows:
+                return ca.SX(0, 3)
+            return ca.vertcat(*[ca.horzcat(*[_sx(x) for x in row]) for row in rows])
+
+        return self._call(key, q, build)
+
+    # ------------------------------------------------------------------ internals
+
+    def _check_links(self, link: str, parent: str | None) -> str:
+        """Validate link names; return the reference link."""
+        for name in (link, parent):
+            if name is not None and name not in self._parent_joint \
+                    and name != self.root_link:
+                raise _unknown_link(name, self.link_names)
+        return self.root_link if parent is None else parent
+
+    def _call(self, key: tuple[object, ...], q: object,
+              build: Callable[[_Builder], ca.SX]) -> CasadiLike:
+        """Evaluate (compiling once per ``key``) the SX function ``q -> build(q)``."""
+        function = self._functions.get(key)
+        if function is None:
+            q_sym = ca.SX.sym("q", self.dof)
+            function = ca.Function("fk", [q_sym], [build(_Builder(self, q_sym))])
+            self._functions[key] = function
+        return function(self._as_input(q))
+
+    def _as_input(self, q: object) -> CasadiLike:
+        """Check the size of ``q`` and return it as a CasADi column."""
+        if isinstance(q, (ca.SX, ca.MX, ca.DM)):
+            if q.numel() != self.dof or (q.shape[1] != 1 and q.shape[0] != 1):
+                raise ValueError(f"q must have {self.dof} elements, got shape {q.shape}")
+            return q if q.shape[1] == 1 else q.T
+        array = np.asarray(q, dtype=float).reshape(-1)
+        if array.size != self.dof:
+            raise ValueError(f"q must have {self.dof} elements, got {array.size}")
+        return ca.DM(array)
+
+
+class _Builder:
+    """Builds link poses for one symbolic ``q``, sharing common chain prefixes."""
+
+    def __init__(self, kinematics: Kinematics, q: ca.SX) -> None:
+        self._kin = kinematics
+        self._q = q
+        self._joint_poses: dict[str, _Pose] = {}
+        self._chains: dict[tuple[str, str], _Pose] = {}
+
+    def relative(self, link: str, parent: str) -> _Pose:
+        """Pose of ``link`` in ``parent``: via their lowest common ancestor."""
+        common = self._common_ancestor(link, parent)
+        pose = self._chain(common, link)
+        if common == parent:
+            return pose
+        return _compose(_inverse(self._chain(common, parent)), pose)
+
+    def point(self, link: str, parent: str,
+              point: Sequence[Scalar]) -> tuple[Scalar, Scalar, Scalar]:
+        """A point of ``link`` in ``parent`` coordinates, applied joint by joint.
+
+        ``p = O_1 M_1 (O_2 M_2 (... point))`` costs a rotated vector per joint instead
+        of a 3x3 product, which is cheaper for a single point than :meth:`relative`.
+        """
+        common = self._common_ancestor(link, parent)
+        v = (point[0], point[1], point[2])
+        for child in self._ancestors(link)[:-1]:
+            if child == common:
+                break
+            joint = self._kin._parent_joint[child]
+            v = _apply(self._origin(joint), _apply(self._motion(joint), v))
+        down = self._ancestors(parent)
+        for child in reversed(down[:down.index(common)]):
+            joint = self._kin._parent_joint[child]
+            v = _apply(_inverse(self._motion(joint)), _apply(_inverse(self._origin(joint)), v))
+        return v
+
+    def _common_ancestor(self, link: str, parent: str) -> str:
+        """The deepest link that is an ancestor of (or equal to) both links."""
+        up_parent = set(self._ancestors(parent))
+        return next(a for a in self._ancestors(link) if a in up_parent)
+
+    def _ancestors(self, link: str) -> list[str]:
+        """``link``, its parent, ..., the root."""
+        chain = [link]
+        while chain[-1] != self._kin.root_link:
+            chain.append(self._kin._parent_joint[chain[-1]].parent)
+        return chain
+
+    def _chain(self, base: str, link: str) -> _Pose:
+        """Pose of ``link`` in its ancestor ``base``, memoised."""
+        if link == base:
+            return _IDENTITY
+        key = (base, link)
+        if key not in self._chains:
+            joint = self._kin._parent_joint[link]
+            self._chains[key] = _compose(self._chain(base, joint.parent),
+                                         self._joint_pose(joint))
+        return self._chains[key]
+
+    def _joint_pose(self, joint: Joint) -> _Pose:
+        """``T_origin @ M(q_joint)``, memoised per joint."""
+        if joint.name not in self._joint_poses:
+            self._joint_poses[joint.name] = _compose(self._origin(joint),
+                                                     self._motion(joint))
+        return self._joint_poses[joint.name]
+
+    def _origin(self, joint: Joint) -> _Pose:
+        """The constant origin transform of ``joint``."""
+        return _origin_pose(joint.origin.xyz, joint.origin.rpy)
+
+    def _motion(self, joint: Joint) -> _Pose:
+        """The joint motion ``M(q_joint)``, memoised per joint."""
+        key = "motion:" + joint.name
+        if key not in self._joint_poses:
+            self._joint_poses[key] = (_IDENTITY if joint.type == "fixed" else
+                                      _motion_pose(joint, self._joint_value(joint)))
+        return self._joint_poses[key]
+
+    def _joint_value(self, joint: Joint) -> ca.SX:
+        """The joint coordinate: ``q[i]``, or ``m q[i] + c`` for a mimic joint."""
+        if joint.mimic is None:
+            return self._q[self._kin._index[joint.name]]
+        value = self._q[self._kin._index[joint.mimic.joint]]
+        if joint.mimic.multiplier != 1.0:
+            value = joint.mimic.multiplier * value
+        if joint.mimic.offset != 0.0:
+            value = value + joint.mimic.offset
+        return value
+
+
+# ---------------------------------------------------------------------- pose algebra
+
+
+def _lincomb(terms: Iterable[tuple[Scalar, Scalar]]) -> Scalar:
+    """``sum(a * b)`` with constants folded and products by 0, +-1 skipped."""
+    constant = 0.0
+    plus: list[ca.SX] = []
+    minus: list[ca.SX] = []
+    for a, b in terms:
+        a_const, b_const = isinstance(a, float), isinstance(b, float)
+        if a_const and b_const:
+            constant += a * b
+            continue
+        if (a_const and a == 0.0) or (b_const and b == 0.0):
+            continue
+        if a_const or b_const:
+            k, e = (a, b) if a_const else (b, a)
+            if k == 1.0:
+                plus.append(e)
+            elif k == -1.0:
+                minus.append(e)
+            elif k > 0.0:
+                plus.append(k * e)
+            else:
+                minus.append((-k) * e)
+        else:
+            plus.append(a * b)
+    if not plus and not minus:
+        return constant
+    if plus:
+        result = plus[0]
+        for e in plus[1:]:
+            result = result + e
+    else:
+        result = -minus[0]
+        minus = minus[1:]
+    for e in minus:
+        result = result - e
+    return result + constant if constant != 0.0 else result
+
+
+def _compose(a: _Pose, b: _Pose) -> _Pose:
+    """``a @ b``: rotation ``Ra Rb``, translation ``Ra pb + pa``."""
+    rot = tuple(tuple(_lincomb((a.rot[i][k], b.rot[k][j]) for k in range(3))
+                      for j in range(3)) for i in range(3))
+    pos = tuple(_lincomb([(a.rot[i][k], b.pos[k]) for k in range(3)] + [(1.0, a.pos[i])])
+                for i in range(3))
+    return _Pose(rot=rot, pos=pos)  # type: ignore[arg-type]
+
+
+def _inverse(a: _Pose) -> _Pose:
+    """``a^-1``: rotation ``R^T``, translation ``-R^T p``."""
+    rot = tuple(tuple(a.rot[j][i] for j in range(3)) for i in range(3))
+    pos = tuple(_lincomb([(-1.0, _lincomb((rot[i][k], a.pos[k]) for k in range(3)))])
+                for i in range(3))
+    return _Pose(rot=rot, pos=pos)  # type: ignore[arg-type]
+
+
+def _apply(pose: _Pose, point: Sequence[Scalar]) -> tuple[Scalar, Scalar, Scalar]:
+    """``R @ point + p``."""
+    return tuple(_lincomb([(pose.rot[i][k], point[k]) for k in range(3)]
+                          + [(1.0, pose.pos[i])]) for i in range(3))
+
+
+def _origin_pose(xyz: tuple[float, float, float],
+                 rpy: tuple[float, float, float]) -> _Pose:
+    """Constant pose ``Trans(xyz) Rz(y) Ry(p) Rx(r)`` with near-0/+-1 entries snapped."""
+    r, p, y = rpy
+    cr, sr, cp, sp, cy, sy = (math.cos(r), math.sin(r), math.cos(p), math.sin(p),
+                              math.cos(y), math.sin(y))
+    rot = ((cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr),
+           (sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr),
+           (-sp, cp * sr, cp * cr))
+    snapped = tuple(tuple(_snap(x) for x in row) for row in rot)
+    return _Pose(rot=snapped, pos=(float(xyz[0]), float(xyz[1]), float(xyz[2])))
+
+
+def _snap(x: float) -> float:
+    """Round ``x`` to 0, 1 or -1 if it is within floating-point noise of them."""
+    for target in (0.0, 1.0, -1.0):
+        if abs(x - target) < _SNAP_TOLERANCE:
+            return target
+    return float(x)
+
+
+def _motion_pose(joint: Joint, value: ca.SX) -> _Pose:
+    """Joint motion ``M(q)``: Rodrigues rotation or translation along the axis."""
+    a = joint.axis
+    if joint.type == "prismatic":
+        return _Pose(rot=_IDENTITY.rot,
+                     pos=tuple(_lincomb([(a[i], value)]) for i in range(3)))  # type: ignore
+    c, s = ca.cos(value), ca.sin(value)
+    skew = ((0.0, -a[2], a[1]), (a[2], 0.0, -a[0]), (-a[1], a[0], 0.0))
+    rot = tuple(tuple(
+        _lincomb([(_snap((1.0 if i == j else 0.0) - a[i] * a[j]), c),
+                  (_snap(skew[i][j]), s),
+                  (_snap(a[i] * a[j]), 1.0)])
+        for j in range(3)) for i in range(3))
+    return _Pose(rot=rot, pos=(0.0, 0.0, 0.0))  # type: ignore[arg-type]
+
+
+# ---------------------------------------------------------------------- conversions
+
+
+def _sx(x: Scalar) -> ca.SX:
+    """A scalar as a 1x1 SX."""
+    return ca.SX(x) if isinstance(x, float) else x
+
+
+def _matrix(rows: Sequence[Sequence[Scalar]]) -> ca.SX:
+    """Rows of scalars as an SX matrix."""
+    return ca.vertcat(*[ca.horzcat(*[_sx(x) for x in row]) for row in rows])
+
+
+def _column(entries: Sequence[Scalar]) -> ca.SX:
+    """Scalars as an SX column."""
+    return ca.vertcat(*[_sx(x) for x in entries])
+
+
+def _homogeneous(pose: _Pose) -> ca.SX:
+    """``[[R, p], [0, 0, 0, 1]]`` as a 4x4 SX."""
+    rows = [list(pose.rot[i]) + [pose.pos[i]] for i in range(3)]
+    return _matrix(rows + [[0.0, 0.0, 0.0, 1.0]])
+
+
+def _as_offset(offset: Sequence[float]) -> tuple[float, float, float]:
+    """A constant 3-vector of Python floats."""
+    values = tuple(float(x) for x in np.asarray(offset, dtype=float).reshape(-1))
+    if len(values) != 3:
+        raise ValueError(f"offset must have 3 elements, got {len(values)}")
+    return (values[0], values[1], values[2])
+
+
+def _limit(joint: Joint, side: str) -> float:
+    """Position limit of an actuated joint; +-inf for continuous or missing limits."""
+    if joint.type == "continuous" or joint.limit is None:
+        return -math.inf if side == "lower" else math.inf
+    return joint.limit.lower if side == "lower" else joint.limit.upper
+
+
+def _unknown_link(name: str, valid: Iterable[str]) -> UnknownLinkError:
+    """The error for an unknown link name, listing the valid ones."""
+    return UnknownLinkError(f"unknown link '{name}'; valid links: {', '.join(valid)}")

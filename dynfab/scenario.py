@@ -1,0 +1,592 @@
+"""Scenario files: load and validate the YAML contract of DESIGN.md section 5.
+
+A scenario names a robot, a planner, the control period ``dt`` [s], the simulated
+``duration`` [s], the initial state, one or more weighted goals and the obstacles.
+Parsing never evaluates text as code (``yaml.safe_load`` only). Every violation raises
+:class:`ScenarioError` with a one-line message that starts with the field path, e.g.
+``goal[0].position: expected 3 numbers, got 2``.
+
+Checks that need the robot (number of joints, planar or not, link names) live in
+:func:`validate_for_robot`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any, Literal, cast
+
+import yaml
+
+if TYPE_CHECKING:
+    from dynfab.robots.robot import Robot
+
+BUILTIN_ROBOTS: tuple[str, ...] = ("panda", "point", "boxer", "boxer-panda")
+PLANNERS: tuple[str, ...] = ("static-fabric", "dynamic-fabric", "mpc")
+TRAJECTORY_TYPES: tuple[str, ...] = ("linear", "circle", "expression", "spline", "rrt")
+GoalType = Literal["position", "joint", "path"]
+_GOAL_TYPES: tuple[str, ...] = ("position", "joint", "path")
+_WORKSPACE_KEYS = ("link", "parent_link", "axes", "tolerance", "weight")
+
+
+class ScenarioError(ValueError):
+    """An invalid scenario; the message is one line ``<field>: <problem>``.
+
+    Attributes:
+        field: Path of the offending field, e.g. ``goal[0].position``.
+        problem: What is wrong with it.
+    """
+
+    def __init__(self, field: str, problem: str) -> None:
+        self.field = field
+        self.problem = problem
+        super().__init__(f"{field}: {problem}")
+
+
+@dataclass(frozen=True)
+class InitialState:
+    """Initial joint state.
+
+    Attributes:
+        q: Joint positions [rad or m], base pose (x, y, yaw) first for mobile bases.
+        qdot: Joint velocities [rad/s or m/s]; zeros when the file omits them.
+    """
+
+    q: tuple[float, ...]
+    qdot: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class GoalSpec:
+    """One weighted sub-goal; the first goal of a scenario is the primary one.
+
+    Attributes:
+        type: ``position`` (a workspace point for ``link``), ``joint`` (a configuration)
+            or ``path`` (``link`` follows the reference ``trajectory``).
+        link: Goal link; None means the robot's goal link (see :func:`validate_for_robot`).
+            Always None for joint goals.
+        position: Target point [m] in the ``parent_link`` frame (one number per axis of
+            ``axes`` if given, else x, y for planar robots and x, y, z otherwise), or the
+            target configuration for joint goals. None for path goals.
+        tolerance: Reached when ||x_link - x_goal|| < tolerance [m] (joint goals: [rad]).
+        weight: Relative weight of this goal (> 0).
+        parent_link: Frame in which the target is expressed; None is the robot root.
+        axes: The workspace axes constrained by the goal, a subset of ``"xyz"``; None: all.
+        trajectory: Reference of a path goal, a read-only mapping with a ``type`` among
+            :data:`TRAJECTORY_TYPES`; None for the other goal types.
+    """
+
+    type: GoalType
+    link: str | None = None
+    position: tuple[float, ...] | None = None
+    tolerance: float = 0.05
+    weight: float = 1.0
+    parent_link: str | None = None
+    axes: str | None = None
+    trajectory: Mapping[str, Any] | None = None
+
+
+@dataclass(frozen=True)
+class ObstacleSpec:
+    """A spherical obstacle, static (``position``) or moving (``trajectory``).
+
+    Attributes:
+        type: Always ``sphere``.
+        radius: Sphere radius [m] (> 0).
+        position: Centre [m], 2 numbers (planar robots only) or 3; None if moving.
+        trajectory: Read-only mapping of the centre's motion, with a ``type`` among
+            :data:`TRAJECTORY_TYPES`; None if static.
+    """
+
+    type: Literal["sphere"]
+    radius: float
+    position: tuple[float, ...] | None = None
+    trajectory: Mapping[str, Any] | None = None
+
+
+@dataclass(frozen=True)
+class CollisionSphereSpec:
+    """A collision sphere fixed to a link of a URDF robot.
+
+    Attributes:
+        link: Link the sphere is attached to.
+        center: Centre in the link frame [m].
+        radius: Radius [m] (> 0).
+    """
+
+    link: str
+    center: tuple[float, float, float]
+    radius: float
+
+
+@dataclass(frozen=True)
+class UrdfRobotSpec:
+    """A user robot described by a URDF file.
+
+    Attributes:
+        urdf: Path of the URDF file (resolved against the scenario file's directory).
+        goal_link: Default goal link of the robot.
+        collision_spheres: Spheres used for obstacle and self-collision avoidance.
+        self_collision_pairs: Pairs (i, j) of indices into ``collision_spheres``.
+        planar: True if the workspace is the xy-plane (goals [x, y]).
+    """
+
+    urdf: Path
+    goal_link: str
+    collision_spheres: tuple[CollisionSphereSpec, ...] = ()
+    self_collision_pairs: tuple[tuple[int, int], ...] = ()
+    planar: bool = False
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A validated scenario file.
+
+    Attributes:
+        robot: A name from :data:`BUILTIN_ROBOTS` or a URDF robot description.
+        planner: One of :data:`PLANNERS`.
+        dt: Control period [s] (> 0).
+        duration: Simulated time [s] (>= dt).
+        initial_state: Initial joint positions and velocities.
+        goals: One or more goals; the first is the primary goal.
+        obstacles: Spherical obstacles (possibly none).
+        path: The file the scenario was loaded from; None if built from a mapping.
+    """
+
+    robot: str | UrdfRobotSpec
+    planner: str
+    dt: float
+    duration: float
+    initial_state: InitialState
+    goals: tuple[GoalSpec, ...]
+    obstacles: tuple[ObstacleSpec, ...]
+    path: Path | None = None
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario YAML file.
+
+    Args:
+        path: Scenario file; a URDF path inside it is relative to the file's directory.
+
+    Returns:
+        The scenario, with ``path`` set to the file.
+
+    Raises:
+        ScenarioError: If the file cannot be read, is not valid YAML or breaks the contract.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as error:
+        raise ScenarioError(str(path), f"cannot read file ({error.strerror})") from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as error:
+        raise ScenarioError(str(path), _yaml_problem(error)) from None
+    scenario = scenario_from_dict(data, path.parent)
+    return dataclasses.replace(scenario, path=path)
+
+
+def scenario_from_dict(data: object, base_dir: str | Path = ".") -> Scenario:
+    """Validate a parsed scenario mapping.
+
+    Args:
+        data: The parsed YAML document.
+        base_dir: Directory against which a relative URDF path is resolved.
+
+    Returns:
+        The scenario (``path`` is None).
+
+    Raises:
+        ScenarioError: On the first violation of the contract.
+    """
+    root = _mapping(data, "scenario")
+    _check_keys(
+        root,
+        "",
+        required=("robot", "planner", "dt", "duration", "initial_state", "goal"),
+        optional=("obstacles",),
+    )
+    dt = _positive(root["dt"], "dt")
+    duration = _positive(root["duration"], "duration")
+    if duration < dt:
+        raise ScenarioError("duration", f"must be at least dt = {dt:g} s, got {duration:g}")
+    goals = _list(root["goal"], "goal")
+    if not goals:
+        raise ScenarioError("goal", "expected at least one goal, got an empty list")
+    obstacles = _list(root.get("obstacles", []), "obstacles")
+    return Scenario(
+        robot=_robot(root["robot"], "robot", Path(base_dir)),
+        planner=_choice(root["planner"], "planner", PLANNERS),
+        dt=dt,
+        duration=duration,
+        initial_state=_initial_state(root["initial_state"], "initial_state"),
+        goals=tuple(_goal(goal, f"goal[{i}]") for i, goal in enumerate(goals)),
+        obstacles=tuple(_obstacle(obs, f"obstacles[{i}]") for i, obs in enumerate(obstacles)),
+    )
+
+
+def validate_for_robot(scenario: Scenario, robot: Robot) -> Scenario:
+    """Check the robot-dependent shapes and names, and fill in default goal links.
+
+    Checks: ``initial_state.q``/``qdot`` have ``robot.kinematics.dof`` entries; goal
+    positions have 2 numbers for planar robots and 3 otherwise (or one per axis of
+    ``axes``, which must not contain z for planar robots); joint goals have ``dof``
+    entries; obstacle positions have 3 numbers (planar robots: 2 or 3); every link
+    named by the scenario exists.
+
+    Args:
+        scenario: A scenario from :func:`load_scenario` or :func:`scenario_from_dict`.
+        robot: The robot it runs on (uses ``kinematics.dof``, ``kinematics.link_names``,
+            ``planar`` and ``goal_link``).
+
+    Returns:
+        The scenario with every ``link=None`` of position and path goals replaced by
+        ``robot.goal_link``.
+
+    Raises:
+        ScenarioError: Naming the first field that does not fit the robot.
+    """
+    dof = robot.kinematics.dof
+    links = tuple(robot.kinematics.link_names)
+    state = scenario.initial_state
+    _check_length(state.q, "initial_state.q", (dof,))
+    _check_length(state.qdot, "initial_state.qdot", (dof,))
+    if isinstance(scenario.robot, UrdfRobotSpec):
+        _check_link(scenario.robot.goal_link, "robot.goal_link", links)
+        for i, sphere in enumerate(scenario.robot.collision_spheres):
+            _check_link(sphere.link, f"robot.collision_spheres[{i}].link", links)
+    goals = tuple(
+        _goal_for_robot(goal, f"goal[{i}]", robot, links)
+        for i, goal in enumerate(scenario.goals)
+    )
+    obstacle_lengths = (2, 3) if robot.planar else (3,)
+    for i, obstacle in enumerate(scenario.obstacles):
+        if obstacle.position is not None:
+            _check_length(obstacle.position, f"obstacles[{i}].position", obstacle_lengths)
+    return dataclasses.replace(scenario, goals=goals)
+
+
+def _goal_for_robot(
+    goal: GoalSpec, field: str, robot: Robot, links: tuple[str, ...]
+) -> GoalSpec:
+    """Check one goal against the robot and resolve its default link."""
+    position = goal.position or ()
+    if goal.type == "joint":
+        _check_length(position, f"{field}.position", (robot.kinematics.dof,))
+        return goal
+    link = robot.goal_link if goal.link is None else goal.link
+    _check_link(link, f"{field}.link", links)
+    if goal.parent_link is not None:
+        _check_link(goal.parent_link, f"{field}.parent_link", links)
+    if robot.planar and goal.axes is not None and "z" in goal.axes:
+        raise ScenarioError(f"{field}.axes", f"planar robot has no z axis, got {goal.axes!r}")
+    if goal.type == "position" and goal.axes is None:
+        _check_length(position, f"{field}.position", (2 if robot.planar else 3,))
+    return dataclasses.replace(goal, link=link)
+
+
+def _check_link(link: str, field: str, links: tuple[str, ...]) -> None:
+    """Raise unless ``link`` is one of the robot's links."""
+    if link not in links:
+        raise ScenarioError(field, f"unknown link {link!r} (robot links: {', '.join(links)})")
+
+
+def _check_length(values: Sequence[float], field: str, lengths: tuple[int, ...]) -> None:
+    """Raise unless ``values`` has one of the allowed ``lengths``."""
+    if len(values) not in lengths:
+        expected = " or ".join(str(n) for n in lengths)
+        raise ScenarioError(field, f"expected {expected} numbers, got {len(values)}")
+
+
+def _robot(value: object, field: str, base_dir: Path) -> str | UrdfRobotSpec:
+    """Parse ``robot``: a built-in name or a URDF description mapping."""
+    if isinstance(value, str):
+        return _choice(value, field, BUILTIN_ROBOTS)
+    data = _mapping(value, field, "a built-in robot name or a mapping")
+    _check_keys(
+        data,
+        field,
+        required=("urdf", "goal_link"),
+        optional=("collision_spheres", "self_collision_pairs", "planar"),
+    )
+    urdf = base_dir / _string(data["urdf"], f"{field}.urdf")
+    if not urdf.is_file():
+        raise ScenarioError(f"{field}.urdf", f"file not found: {urdf}")
+    spheres_field = f"{field}.collision_spheres"
+    spheres = tuple(
+        _collision_sphere(sphere, f"{spheres_field}[{i}]")
+        for i, sphere in enumerate(_list(data.get("collision_spheres", []), spheres_field))
+    )
+    pairs_field = f"{field}.self_collision_pairs"
+    pairs = tuple(
+        _sphere_pair(pair, f"{pairs_field}[{i}]", len(spheres))
+        for i, pair in enumerate(_list(data.get("self_collision_pairs", []), pairs_field))
+    )
+    planar = data.get("planar", False)
+    if not isinstance(planar, bool):
+        raise ScenarioError(f"{field}.planar", f"expected true or false, got {_describe(planar)}")
+    return UrdfRobotSpec(
+        urdf=urdf,
+        goal_link=_string(data["goal_link"], f"{field}.goal_link"),
+        collision_spheres=spheres,
+        self_collision_pairs=pairs,
+        planar=planar,
+    )
+
+
+def _collision_sphere(value: object, field: str) -> CollisionSphereSpec:
+    """Parse one ``{link, center, radius}`` collision sphere."""
+    data = _mapping(value, field)
+    _check_keys(data, field, required=("link", "center", "radius"))
+    x, y, z = _vector(data["center"], f"{field}.center", (3,))
+    return CollisionSphereSpec(
+        link=_string(data["link"], f"{field}.link"),
+        center=(x, y, z),
+        radius=_positive(data["radius"], f"{field}.radius"),
+    )
+
+
+def _sphere_pair(value: object, field: str, n_spheres: int) -> tuple[int, int]:
+    """Parse a self-collision pair ``[i, j]`` of distinct collision-sphere indices."""
+    pair = _list(value, field)
+    if len(pair) != 2:
+        raise ScenarioError(field, f"expected 2 sphere indices, got {len(pair)}")
+    indices = []
+    for k, index in enumerate(pair):
+        if isinstance(index, bool) or not isinstance(index, int):
+            raise ScenarioError(f"{field}[{k}]", f"expected an integer, got {_describe(index)}")
+        if not 0 <= index < n_spheres:
+            raise ScenarioError(
+                f"{field}[{k}]", f"sphere index {index} out of range (0 to {n_spheres - 1})"
+            )
+        indices.append(index)
+    if indices[0] == indices[1]:
+        raise ScenarioError(field, f"expected two different spheres, got {indices}")
+    return indices[0], indices[1]
+
+
+def _initial_state(value: object, field: str) -> InitialState:
+    """Parse ``initial_state``; ``qdot`` defaults to zeros."""
+    data = _mapping(value, field)
+    _check_keys(data, field, required=("q",), optional=("qdot",))
+    q = _vector(data["q"], f"{field}.q")
+    if "qdot" not in data:
+        return InitialState(q=q, qdot=(0.0,) * len(q))
+    qdot = _vector(data["qdot"], f"{field}.qdot", (len(q),))
+    return InitialState(q=q, qdot=qdot)
+
+
+def _goal(value: object, field: str) -> GoalSpec:
+    """Parse one entry of ``goal``; the allowed keys depend on its ``type``."""
+    data = _mapping(value, field)
+    if "type" not in data:
+        raise ScenarioError(f"{field}.type", "missing required key")
+    goal_type = cast(GoalType, _choice(data["type"], f"{field}.type", _GOAL_TYPES))
+    if goal_type == "joint":
+        _check_keys(data, field, ("type", "position"), ("tolerance", "weight"))
+    else:
+        target = "position" if goal_type == "position" else "trajectory"
+        _check_keys(data, field, ("type", target), _WORKSPACE_KEYS)
+    axes = _axes(data["axes"], f"{field}.axes") if "axes" in data else None
+    position: tuple[float, ...] | None = None
+    trajectory: Mapping[str, Any] | None = None
+    if goal_type == "joint":
+        position = _vector(data["position"], f"{field}.position")
+    elif goal_type == "position":
+        position = _goal_position(data["position"], f"{field}.position", axes)
+    else:
+        trajectory = _trajectory(data["trajectory"], f"{field}.trajectory")
+    return GoalSpec(
+        type=goal_type,
+        link=_optional_string(data, "link", field),
+        position=position,
+        tolerance=_positive(data.get("tolerance", 0.05), f"{field}.tolerance"),
+        weight=_positive(data.get("weight", 1.0), f"{field}.weight"),
+        parent_link=_optional_string(data, "parent_link", field),
+        axes=axes,
+        trajectory=trajectory,
+    )
+
+
+def _goal_position(value: object, field: str, axes: str | None) -> tuple[float, ...]:
+    """Parse a goal point: one number per axis of ``axes``, else 2 or 3 numbers."""
+    if axes is None:
+        return _vector(value, field, (2, 3))
+    position = _vector(value, field)
+    if len(position) != len(axes):
+        raise ScenarioError(
+            field, f"expected {len(axes)} numbers (one per axis of {axes!r}), got {len(position)}"
+        )
+    return position
+
+
+def _axes(value: object, field: str) -> str:
+    """Parse ``axes``: distinct letters of ``xyz`` in that order, e.g. ``xy``."""
+    axes = _string(value, field)
+    if axes not in ("x", "y", "z", "xy", "xz", "yz", "xyz"):
+        raise ScenarioError(
+            field, f"expected distinct axes among x, y, z in that order (e.g. 'xy'), got {axes!r}"
+        )
+    return axes
+
+
+def _obstacle(value: object, field: str) -> ObstacleSpec:
+    """Parse one entry of ``obstacles``."""
+    data = _mapping(value, field)
+    _check_keys(data, field, required=("type", "radius"), optional=("position", "trajectory"))
+    _choice(data["type"], f"{field}.type", ("sphere",))
+    if ("position" in data) == ("trajectory" in data):
+        raise ScenarioError(
+            field, "expected exactly one of 'position' (static) or 'trajectory' (moving)"
+        )
+    moving = "trajectory" in data
+    return ObstacleSpec(
+        type="sphere",
+        radius=_positive(data["radius"], f"{field}.radius"),
+        position=None if moving else _vector(data["position"], f"{field}.position", (2, 3)),
+        trajectory=_trajectory(data["trajectory"], f"{field}.trajectory") if moving else None,
+    )
+
+
+def _trajectory(value: object, field: str) -> Mapping[str, Any]:
+    """Check a trajectory is a mapping with a known ``type``; return it read-only."""
+    data = _mapping(value, field)
+    if "type" not in data:
+        raise ScenarioError(f"{field}.type", "missing required key")
+    _choice(data["type"], f"{field}.type", TRAJECTORY_TYPES)
+    return cast(Mapping[str, Any], _freeze(data))
+
+
+def _freeze(value: object) -> object:
+    """Return a read-only deep copy: mappings become MappingProxyType, lists tuples."""
+    if isinstance(value, Mapping):
+        return MappingProxyType({key: _freeze(item) for key, item in value.items()})
+    if isinstance(value, list | tuple):
+        return tuple(_freeze(item) for item in value)
+    return value
+
+
+def _mapping(value: object, field: str, expected: str = "a mapping") -> Mapping[str, Any]:
+    """Return ``value`` if it is a mapping with string keys."""
+    if not isinstance(value, Mapping):
+        raise ScenarioError(field or "scenario", f"expected {expected}, got {_describe(value)}")
+    for key in value:
+        if not isinstance(key, str):
+            raise ScenarioError(field or "scenario", f"keys must be text, got {_describe(key)}")
+    return value
+
+
+def _check_keys(
+    data: Mapping[str, Any], field: str, required: Iterable[str], optional: Iterable[str] = ()
+) -> None:
+    """Raise on the first unknown key, then on the first missing required key."""
+    required = tuple(required)
+    allowed = required + tuple(optional)
+    for key in data:
+        if key not in allowed:
+            raise ScenarioError(_join(field, key), f"unknown key (allowed: {', '.join(allowed)})")
+    for key in required:
+        if key not in data:
+            raise ScenarioError(_join(field, key), "missing required key")
+
+
+def _join(field: str, key: str) -> str:
+    """Field path of ``key`` inside ``field`` (the top level has an empty path)."""
+    return f"{field}.{key}" if field else key
+
+
+def _list(value: object, field: str) -> list[Any]:
+    """Return ``value`` if it is a list."""
+    if not isinstance(value, list | tuple):
+        raise ScenarioError(field, f"expected a list, got {_describe(value)}")
+    return list(value)
+
+
+def _string(value: object, field: str) -> str:
+    """Return ``value`` if it is a non-empty string."""
+    if not isinstance(value, str) or not value:
+        raise ScenarioError(field, f"expected a non-empty text, got {_describe(value)}")
+    return value
+
+
+def _optional_string(data: Mapping[str, Any], key: str, field: str) -> str | None:
+    """Return ``data[key]`` as a non-empty string, or None if absent."""
+    return _string(data[key], f"{field}.{key}") if key in data else None
+
+
+def _choice(value: object, field: str, options: tuple[str, ...]) -> str:
+    """Return ``value`` if it is one of ``options``."""
+    if not isinstance(value, str) or value not in options:
+        raise ScenarioError(field, f"expected one of {', '.join(options)}; got {_describe(value)}")
+    return value
+
+
+def _number(value: object, field: str) -> float:
+    """Return ``value`` as a finite float (booleans are not numbers)."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        hint = ""
+        if isinstance(value, str) and _is_float_text(value):
+            hint = " (YAML reads 1e-3 as text: write 1.0e-3)"
+        raise ScenarioError(field, f"expected a number, got {_describe(value)}{hint}")
+    number = float(value)
+    if not math.isfinite(number):
+        raise ScenarioError(field, f"expected a finite number, got {number}")
+    return number
+
+
+def _is_float_text(text: str) -> bool:
+    """True if ``text`` spells a float (e.g. ``1e-3``, which YAML 1.1 keeps as text)."""
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _positive(value: object, field: str) -> float:
+    """Return ``value`` as a finite float > 0."""
+    number = _number(value, field)
+    if number <= 0.0:
+        raise ScenarioError(field, f"must be positive, got {number:g}")
+    return number
+
+
+def _vector(value: object, field: str, lengths: tuple[int, ...] | None = None) -> tuple[float, ...]:
+    """Return a non-empty list of finite numbers, optionally of one of ``lengths``."""
+    items = _list(value, field)
+    if not items:
+        raise ScenarioError(field, "expected numbers, got an empty list")
+    if lengths is not None:
+        _check_length(items, field, lengths)
+    return tuple(_number(item, f"{field}[{i}]") for i, item in enumerate(items))
+
+
+def _describe(value: object) -> str:
+    """Short one-line description of a YAML value for error messages."""
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return f"boolean {str(value).lower()}"
+    if isinstance(value, list | tuple):
+        return f"a list of {len(value)}"
+    if isinstance(value, Mapping):
+        return "a mapping"
+    text = repr(value)
+    if len(text) > 40:
+        text = text[:37] + "..."
+    return f"{type(value).__name__} {text}"
+
+
+def _yaml_problem(error: yaml.YAMLError) -> str:
+    """One-line description of a YAML syntax error."""
+    if isinstance(error, yaml.MarkedYAMLError) and error.problem_mark is not None:
+        mark = error.problem_mark
+        problem = error.problem or error.context or "syntax error"
+        return f"invalid YAML: {problem} (line {mark.line + 1}, column {mark.column + 1})"
+    return "invalid YAML: " + " ".join(str(error).split())

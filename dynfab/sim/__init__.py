@@ -1,0 +1,21 @@
+"""Embedded simulators that close the loop around a controller."""
+
+from dynfab.sim.simulator import (
+    Controller,
+    ControllerError,
+    ProgressCallback,
+    Record,
+    StopPredicate,
+    n_steps_for,
+    simulate,
+)
+
+__all__ = [
+    "Controller",
+    "ControllerError",
+    "ProgressCallback",
+    "Record",
+    "StopPredicate",
+    "n_steps_for",
+    "simulate",
+]
