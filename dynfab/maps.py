@@ -47,7 +47,7 @@ class DifferentialMap:
 
     def substitute(self, expressions: list[ca.SX], x: ca.SX, xdot: ca.SX) -> list[ca.SX]:
         """Express codomain functions ``g(x, ẋ)`` in the domain: ``g(φ(q), J q̇)``."""
-        return ca.substitute(expressions, [x, xdot], [self.phi, self.velocity])
+        return ca.substitute(expressions, [x, xdot], [ca.densify(self.phi), ca.densify(self.velocity)])
 
     def after(self, inner: DifferentialMap) -> DifferentialMap:
         """Composition ``self ∘ inner``: ``q → inner → self``.

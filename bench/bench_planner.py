@@ -1,0 +1,94 @@
+"""Benchmark: build time, SX instructions and per-step time of the Panda static-fabric
+planner with 1, 5 and 10 sphere obstacles plus self-collision and joint limits, side by
+side with the reference package ``fabrics`` 0.10.0 in the same run when it is installed
+in ``.venv-reference`` (``bash bench/setup_reference.sh``).
+
+    .venv/bin/python bench/bench_planner.py [--spheres 1 5 10] [--steps 2000]
+
+Each build is a cold start in a fresh process (nothing cached). Times are wall-clock
+medians of ``FabricPlanner.compute`` from Python, including input checks.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+BENCH_DIR = Path(__file__).resolve().parent
+sys.path.insert(0, str(BENCH_DIR))
+
+from reference import REFERENCE_MISSING_MESSAGE, run_reference  # noqa: E402
+
+PANDA_URDF = BENCH_DIR.parent / "dynfab" / "robots" / "data" / "panda.urdf"
+Q0 = np.array([1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0])
+
+
+def measure_ours(spheres: int, steps: int) -> dict:
+    """Build the planner and time ``compute`` (run in a fresh interpreter by :func:`main`)."""
+    from dynfab.planner import FabricPlanner, GoalConfig, PlannerConfig
+    from dynfab.robots import load_robot
+
+    start = time.perf_counter()
+    robot = load_robot("panda")
+    planner = FabricPlanner(robot, PlannerConfig(goals=(GoalConfig(link="panda_hand"),), obstacle_slots=spheres))
+    build_s = time.perf_counter() - start
+    rng = np.random.default_rng(0)
+    planner.parameters.goal_position[0][:] = [0.5, -0.4, 0.3]
+    planner.parameters.obstacle_position[:] = rng.uniform([-0.6, -0.8, 0.05], [0.8, 0.8, 1.0], size=(spheres, 3))
+    planner.parameters.obstacle_radius[:] = 0.15
+    states = [(Q0 + rng.normal(0, 0.01, 7), rng.normal(0, 0.1, 7)) for _ in range(steps)]
+    for q, qdot in states[:20]:
+        planner.compute(q, qdot)
+    times, non_finite = [], 0
+    for q, qdot in states:
+        t0 = time.perf_counter()
+        out = planner.compute(q, qdot)
+        times.append(time.perf_counter() - t0)
+        non_finite += not np.isfinite(out).all()
+    return {"spheres": spheres, "build_s": build_s, "step_ms_median": 1e3 * statistics.median(times),
+            "step_ms_mean": 1e3 * statistics.fmean(times), "n_instructions": planner.n_instructions,
+            "nan_fraction": non_finite / steps}
+
+
+def _ours_in_fresh_process(spheres: int, steps: int) -> dict:
+    code = ("import json, sys; sys.path.insert(0, %r); from bench_planner import measure_ours; "
+            "print(json.dumps(measure_ours(%d, %d)))" % (str(BENCH_DIR), spheres, steps))
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--spheres", type=int, nargs="+", default=[1, 5, 10])
+    parser.add_argument("--steps", type=int, default=2000)
+    args = parser.parse_args(argv)
+    header = f"{'spheres':>7} | {'build [s]':>17} | {'step median [ms]':>21} | {'SX instructions':>19} | step ratio ref/ours"
+    print(header)
+    print("-" * len(header))
+    missing = False
+    for n in args.spheres:
+        ours = _ours_in_fresh_process(n, args.steps)
+        ref = run_reference(n, min(args.steps, 1000), PANDA_URDF)
+        if ref is None:
+            missing = True
+            print(f"{n:>7} | {ours['build_s']:>7.2f} {'-':>9} | {ours['step_ms_median']:>9.4f} {'-':>11} | "
+                  f"{ours['n_instructions']:>8} {'-':>10} | -")
+            continue
+        ratio = ref["step_ms_median"] / ours["step_ms_median"]
+        print(f"{n:>7} | {ours['build_s']:>7.2f} vs {ref['build_s']:>6.2f} | {ours['step_ms_median']:>9.4f} vs "
+              f"{ref['step_ms_median']:>8.4f} | {ours['n_instructions']:>8} vs {ref['n_instructions']:>7} | {ratio:>6.1f}x")
+    print("(ours vs reference fabrics 0.10.0; NaN fraction ours 0 by construction)")
+    if missing:
+        print(REFERENCE_MISSING_MESSAGE)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

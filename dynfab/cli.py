@@ -1,0 +1,87 @@
+"""The ``dynfab`` command: ``run`` a scenario file, or the ``demo``.
+
+Exit codes: 0 success (the run finished, whatever its metrics), 2 invalid input (one
+line on stderr naming the field), 1 unexpected failure.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from importlib.resources import files
+from pathlib import Path
+
+from dynfab.runner import RunResult, run_scenario
+from dynfab.scenario import ScenarioError, load_scenario
+
+DEMO_SCENARIO = "panda_spheres.yaml"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="dynfab", description="Reactive motion generation with optimization fabrics.")
+    commands = parser.add_subparsers(dest="command", required=True)
+    run = commands.add_parser("run", help="run a scenario file in the embedded simulator")
+    run.add_argument("file", type=Path, help="scenario YAML file")
+    _output_options(run)
+    demo = commands.add_parser("demo", help="the Panda reaching a goal among spheres")
+    _output_options(demo, default_plot=Path("dynfab-demo.png"))
+    args = parser.parse_args(argv)
+    path = args.file if args.command == "run" else Path(str(files("dynfab.scenarios") / DEMO_SCENARIO))
+    try:
+        scenario = load_scenario(path)
+        print(f"dynfab: {path.name}: robot {scenario.robot if isinstance(scenario.robot, str) else 'urdf'}, "
+              f"planner {scenario.planner}, {scenario.duration:g} s at dt {scenario.dt:g} s", file=sys.stderr)
+        result = run_scenario(scenario, progress=_ProgressBar())
+    except ScenarioError as error:
+        print(f"dynfab: error: {error}", file=sys.stderr)
+        return 2
+    _report(result, args.json)
+    if args.plot is not None:
+        _plot(result, args.plot)
+        print(f"dynfab: plot written to {args.plot}", file=sys.stderr)
+    return 0
+
+
+def _output_options(parser: argparse.ArgumentParser, default_plot: Path | None = None) -> None:
+    parser.add_argument("--json", action="store_true", help="print the metrics as one JSON object on stdout")
+    parser.add_argument("--plot", type=Path, default=default_plot, help="write a PNG of the run")
+
+
+class _ProgressBar:
+    """A progress bar on stderr, redrawn at each whole percent."""
+
+    def __init__(self) -> None:
+        self._last = -1
+
+    def __call__(self, step: int, total: int) -> None:
+        percent = 100 * step // total
+        if percent == self._last:
+            return
+        self._last = percent
+        bar = "#" * (percent // 4)
+        print(f"\r  simulating [{bar:<25}] {percent:3d}%", end="\n" if step == total else "", file=sys.stderr)
+
+
+def _report(result: RunResult, as_json: bool) -> None:
+    metrics = result.metrics.to_dict()
+    if as_json:
+        print(json.dumps(metrics))
+        return
+    for key, value in metrics.items():
+        shown = f"{value:.4g}" if isinstance(value, float) else value
+        print(f"{key:>15}: {shown}")
+
+
+def _plot(result: RunResult, path: Path) -> None:
+    from dynfab.plots import plot_run
+
+    goals = [(goal.position, goal.tolerance) for goal in result.scenario.goals[:1]]
+    radii = [o.radius for o in result.scenario.obstacles]
+    plot_run(path, result.goal_positions, goals, result.obstacle_centers, radii, result.robot.planar,
+             clearance_over_time=result.clearance if radii else None, times=result.record.t,
+             title=f"{result.robot.name}: {'success' if result.metrics.success else 'failure'}")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,19 @@
+"""Robot descriptions: URDF parsing, symbolic forward kinematics, built-in robots."""
+
+from .builtin import UnknownRobotError, load_robot, robot_from_urdf
+from .kinematics import Kinematics, UnknownLinkError
+from .robot import CollisionSphere, Robot
+from .urdf import UrdfError, UrdfModel, parse_urdf
+
+__all__ = [
+    "CollisionSphere",
+    "Kinematics",
+    "Robot",
+    "UnknownLinkError",
+    "UnknownRobotError",
+    "UrdfError",
+    "UrdfModel",
+    "load_robot",
+    "parse_urdf",
+    "robot_from_urdf",
+]

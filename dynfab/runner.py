@@ -1,0 +1,111 @@
+"""Run a scenario in the embedded simulator and measure it (DESIGN.md sections 5 and 6)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from dynfab.controllers import make_controller
+from dynfab.metrics import Metrics, clearance_over_time, compute_metrics
+from dynfab.robots import load_robot, robot_from_urdf
+from dynfab.robots.builtin import UnknownRobotError
+from dynfab.robots.robot import CollisionSphere, Robot
+from dynfab.scenario import Scenario, ScenarioError, UrdfRobotSpec, validate_for_robot
+from dynfab.sim import Record, simulate
+
+_AXES = "xyz"
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """A finished run.
+
+    Attributes:
+        scenario: the scenario as validated for the robot.
+        robot: the robot.
+        record: states and commands over time.
+        metrics: the run's metrics.
+        goal_positions: the primary goal's task coordinates over time (T, d).
+        obstacle_centers: obstacle centres over time (T, m, 3).
+        clearance: minimum clearance at each sample (T,) [m] (inf without obstacles).
+    """
+
+    scenario: Scenario
+    robot: Robot
+    record: Record
+    metrics: Metrics
+    goal_positions: np.ndarray
+    obstacle_centers: np.ndarray
+    clearance: np.ndarray
+
+
+def robot_for(scenario: Scenario) -> Robot:
+    """The robot a scenario names (built-in or its own URDF)."""
+    spec = scenario.robot
+    if isinstance(spec, UrdfRobotSpec):
+        try:
+            return robot_from_urdf(
+                spec.urdf, spec.goal_link,
+                tuple(CollisionSphere(s.link, s.center, s.radius) for s in spec.collision_spheres),
+                self_collision_pairs=spec.self_collision_pairs, planar=spec.planar)
+        except (OSError, ValueError) as error:
+            raise ScenarioError("robot.urdf", str(error).splitlines()[0]) from error
+    try:
+        return load_robot(spec)
+    except UnknownRobotError as error:
+        raise ScenarioError("robot", str(error)) from error
+
+
+def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None = None) -> RunResult:
+    """Build the robot and controller, simulate ``scenario.duration`` and compute metrics.
+
+    Raises:
+        ScenarioError: if the scenario does not fit the robot or the planner.
+    """
+    robot = robot_for(scenario)
+    scenario = validate_for_robot(scenario, robot)
+    controller = make_controller(scenario, robot)
+    state = scenario.initial_state
+    record = simulate(controller, state.q, state.qdot, scenario.dt, scenario.duration, progress=progress)
+    samples = record.q.shape[0]
+    goal = scenario.goals[0]
+    goal_positions = _goal_coordinates(robot, scenario, record.q)
+    centres, radii = _sphere_centres(robot, record.q)
+    obstacle_centers = np.zeros((samples, len(scenario.obstacles), 3))
+    for k, obstacle in enumerate(scenario.obstacles):
+        obstacle_centers[:, k, : len(obstacle.position)] = obstacle.position
+    obstacle_radii = np.array([o.radius for o in scenario.obstacles])
+    metrics = compute_metrics(record, goal_positions, np.asarray(goal.position), goal.tolerance,
+                              centres, radii, obstacle_centers, obstacle_radii, planar=robot.planar)
+    clearance = clearance_over_time(centres, radii, obstacle_centers, obstacle_radii, planar=robot.planar)
+    return RunResult(scenario, robot, record, metrics, goal_positions, obstacle_centers, clearance)
+
+
+def _goal_coordinates(robot: Robot, scenario: Scenario, qs: np.ndarray) -> np.ndarray:
+    """The primary goal's coordinates (link position on its axes, or joints) per sample."""
+    goal = scenario.goals[0]
+    if goal.type == "joint":
+        return qs.copy()
+    q = ca.SX.sym("q", robot.kinematics.dof)
+    axes = goal.axes if goal.axes is not None else ("xy" if robot.planar else "xyz")
+    position = robot.kinematics.position(q, goal.link, parent=goal.parent_link)
+    return _evaluate_over(q, position[[_AXES.index(a) for a in axes]], qs)
+
+
+def _sphere_centres(robot: Robot, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    q = ca.SX.sym("q", robot.kinematics.dof)
+    spheres = robot.collision_spheres
+    if not spheres:
+        return np.zeros((qs.shape[0], 0, 3)), np.zeros(0)
+    centres = ca.vertcat(*[robot.kinematics.position(q, s.link, offset=s.center) for s in spheres])
+    flat = _evaluate_over(q, centres, qs)
+    return flat.reshape(qs.shape[0], len(spheres), 3), np.array([s.radius for s in spheres])
+
+
+def _evaluate_over(q: ca.SX, expression: ca.SX, qs: np.ndarray) -> np.ndarray:
+    """Evaluate ``expression(q)`` at every row of ``qs`` in one mapped call."""
+    function = ca.Function("f", [q], [expression]).map(qs.shape[0])
+    return np.array(function(qs.T)).T
