@@ -1,0 +1,1 @@
+"""The paper's experiments: scenario distributions (and, later, the runner)."""
