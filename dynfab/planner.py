@@ -219,6 +219,8 @@ class FabricPlanner:
         for sphere, point_map in zip(self.robot.collision_spheres, sphere_maps):
             if links is not None and sphere.link not in links:
                 continue
+            if point_map.jacobian.nnz() == 0:
+                continue  # a sphere no joint moves (e.g. on the base) cannot avoid anything
             p = ca.SX.sym("p", dims)
             pdot = ca.SX.sym("pdot", dims)
             leaves = [avoidance.on_point(p, pdot, center[:dims], radius, sphere.radius)
