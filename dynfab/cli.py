@@ -49,18 +49,23 @@ def _output_options(parser: argparse.ArgumentParser, default_plot: Path | None =
 
 
 class _ProgressBar:
-    """A progress bar on stderr, redrawn at each whole percent."""
+    """Progress on stderr: a bar redrawn at each percent on a terminal, otherwise one
+    line per quarter of the run."""
 
     def __init__(self) -> None:
         self._last = -1
+        self._step = 1 if sys.stderr.isatty() else 25
 
     def __call__(self, step: int, total: int) -> None:
-        percent = 100 * step // total
+        percent = 100 * step // total // self._step * self._step
         if percent == self._last:
             return
         self._last = percent
         bar = "#" * (percent // 4)
-        print(f"\r  simulating [{bar:<25}] {percent:3d}%", end="\n" if step == total else "", file=sys.stderr)
+        if self._step == 1:
+            print(f"\r  simulating [{bar:<25}] {percent:3d}%", end="\n" if step == total else "", file=sys.stderr)
+        else:
+            print(f"  simulating [{bar:<25}] {percent:3d}%", file=sys.stderr)
 
 
 def _report(result: RunResult, as_json: bool) -> None:
