@@ -30,9 +30,9 @@ def main(argv: list[str] | None = None) -> int:
     path = args.file if args.command == "run" else Path(str(files("dynfab.scenarios") / DEMO_SCENARIO))
     try:
         scenario = load_scenario(path)
-        print(f"dynfab: {path.name}: robot {scenario.robot if isinstance(scenario.robot, str) else 'urdf'}, "
-              f"planner {scenario.planner}, {scenario.duration:g} s at dt {scenario.dt:g} s", file=sys.stderr)
-        result = run_scenario(scenario, progress=_ProgressBar())
+        header = (f"dynfab: {path.name}: robot {scenario.robot if isinstance(scenario.robot, str) else 'urdf'}, "
+                  f"planner {scenario.planner}, {scenario.duration:g} s at dt {scenario.dt:g} s")
+        result = run_scenario(scenario, progress=_ProgressBar(header))
     except ScenarioError as error:
         print(f"dynfab: error: {error}", file=sys.stderr)
         return 2
@@ -49,14 +49,19 @@ def _output_options(parser: argparse.ArgumentParser, default_plot: Path | None =
 
 
 class _ProgressBar:
-    """Progress on stderr: a bar redrawn at each percent on a terminal, otherwise one
-    line per quarter of the run."""
+    """Progress on stderr: a header once the run starts (so that an invalid scenario
+    prints nothing but its error), then a bar redrawn at each percent on a terminal,
+    otherwise one line per quarter of the run."""
 
-    def __init__(self) -> None:
+    def __init__(self, header: str) -> None:
+        self._header: str | None = header
         self._last = -1
         self._step = 1 if sys.stderr.isatty() else 25
 
     def __call__(self, step: int, total: int) -> None:
+        if self._header is not None:
+            print(self._header, file=sys.stderr)
+            self._header = None
         percent = 100 * step // total // self._step * self._step
         if percent == self._last:
             return

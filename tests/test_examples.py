@@ -1,0 +1,48 @@
+"""Every scenario file under ``examples/`` loads, runs and succeeds."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from dynfab.runner import run_scenario
+from dynfab.scenario import UrdfRobotSpec, load_scenario
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+FILES = sorted(EXAMPLES.glob("**/*.yaml"))
+
+
+def test_examples_are_present() -> None:
+    names = {path.relative_to(EXAMPLES).as_posix() for path in FILES}
+    assert {"panda_reach.yaml", "panda_spheres.yaml", "panda_joint_goal.yaml", "panda_multi_goal.yaml",
+            "point_spheres.yaml", "custom_urdf/arm_spheres.yaml"} <= names
+
+
+@pytest.mark.parametrize("path", FILES, ids=lambda path: path.relative_to(EXAMPLES).as_posix())
+def test_example_runs_and_succeeds(path: Path) -> None:
+    assert path.read_text(encoding="utf-8").startswith("#"), "an example starts with a comment saying what it shows"
+    result = run_scenario(load_scenario(path))
+    assert result.metrics.success, f"{path.name}: {result.metrics}"
+
+
+def test_custom_urdf_example_uses_its_own_robot() -> None:
+    scenario = load_scenario(EXAMPLES / "custom_urdf" / "arm_spheres.yaml")
+    assert isinstance(scenario.robot, UrdfRobotSpec)
+    assert scenario.robot.urdf == EXAMPLES / "custom_urdf" / "arm.urdf"
+    result = run_scenario(scenario)
+    assert result.robot.kinematics.dof == 3
+    assert result.metrics.clearance is not None and result.metrics.clearance > 0.0
+
+
+def test_multi_goal_example_reaches_its_secondary_goal() -> None:
+    scenario = load_scenario(EXAMPLES / "panda_multi_goal.yaml")
+    secondary = scenario.goals[1]
+    result = run_scenario(scenario)
+    kinematics = result.robot.kinematics
+    q = ca.SX.sym("q", kinematics.dof)
+    link7 = ca.Function("link7", [q], [kinematics.position(q, secondary.link)])
+    final_xy = np.array(link7(result.record.q[-1])).ravel()[:2]
+    assert np.linalg.norm(final_xy - np.array(secondary.position)) < secondary.tolerance
