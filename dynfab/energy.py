@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import casadi as ca
 
 from dynfab.linalg import congruence
-from dynfab.maps import DifferentialMap
+from dynfab.maps import DifferentialMap, Reference
 from dynfab.spec import Spec
 
 
@@ -42,6 +42,13 @@ class Lagrangian:
 
     def __add__(self, other: Lagrangian) -> Lagrangian:
         return Lagrangian(self.L + other.L, self.x, self.xdot)
+
+    def dynamic_pull(self, x: ca.SX, xdot: ca.SX, reference: Reference) -> Lagrangian:
+        """A dynamic Lagrangian ``L_d(x_rel, ẋ_rel)`` written in the fixed coordinates:
+        ``L_d(x − x̃, ẋ − ẋ̃)`` (``x̃``, ``ẋ̃`` enter as parameters, not as system variables)."""
+        (pulled,) = ca.substitute([self.L], [self.x, self.xdot],
+                                  [x - reference.position, xdot - reference.velocity])
+        return Lagrangian(pulled, x, xdot)
 
 
 def finsler_energy(finsler_structure: ca.SX, x: ca.SX, xdot: ca.SX) -> Lagrangian:
@@ -78,6 +85,28 @@ def energize(geometry: Spec, lagrangian: Lagrangian, regularization: float = 0.0
     M_xdot = ca.mtimes(M, xdot)
     projected = residual - M_xdot * ca.dot(xdot, residual) / (ca.dot(xdot, M_xdot) + regularization)
     return Spec(M, energy_spec.f + projected, x, xdot)
+
+
+def dynamic_energize(geometry: Spec, lagrangian_spec: Spec, relative_velocity: ca.SX,
+                     regularization: float = 0.0) -> Spec:
+    """Dynamic energization (paper Proposition "Dynamic Energization").
+
+    Given the geometry ``ẍ + h = 0`` (``h = M_g⁻¹ f_g`` of ``geometry``), the spec
+    ``(M, f)`` of a dynamic Lagrangian already pulled dynamically to these coordinates
+    (``f = f_de − M ẍ̃``, so that ``M ẍ + f = 0`` conserves ``H_d``) and the relative
+    velocity ``v_r`` (``ẋ − ẋ̃``, or ``q̇ − J⁺ ẋ̃`` after a pullback), the system
+    ``ẍ + h + α v_r = 0`` with
+
+        α = −(v_rᵀ M v_r)⁻¹ v_rᵀ (M h − f)  [= −(ẋ_rᵀ M ẋ_r)⁻¹ ẋ_rᵀ (M (h + ẍ̃) − f_de)]
+
+    conserves the dynamic energy ``H_d``. Returned as the spec ``(M, M (h + α v_r))``.
+    """
+    M, f = lagrangian_spec.M, lagrangian_spec.f
+    h = -geometry.acceleration()
+    (h,) = ca.substitute([h], [geometry.x, geometry.xdot], [lagrangian_spec.x, lagrangian_spec.xdot])
+    M_v = ca.mtimes(M, relative_velocity)
+    alpha = -ca.dot(relative_velocity, ca.mtimes(M, h) - f) / (ca.dot(relative_velocity, M_v) + regularization)
+    return Spec(M, ca.mtimes(M, h) + alpha * M_v, lagrangian_spec.x, lagrangian_spec.xdot)
 
 
 @dataclass(frozen=True)

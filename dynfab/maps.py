@@ -66,6 +66,23 @@ class DifferentialMap:
         )
 
 
+@dataclass(frozen=True)
+class Reference:
+    """A reference trajectory's state at the current time (paper Definition 1):
+    ``x̃(t)``, ``ẋ̃(t)`` and ``ẍ̃(t)``, as CasADi symbols (runtime parameters) or expressions.
+    """
+
+    position: ca.SX
+    velocity: ca.SX
+    acceleration: ca.SX
+
+    @classmethod
+    def symbols(cls, name: str, dimension: int) -> Reference:
+        """Fresh symbols ``name``, ``name_dot``, ``name_ddot`` of the given dimension."""
+        return cls(ca.SX.sym(name, dimension), ca.SX.sym(name + "_dot", dimension),
+                   ca.SX.sym(name + "_ddot", dimension))
+
+
 def sphere_distance_map(
     p: ca.SX, pdot: ca.SX, center: ca.SX, radius: ca.SX, smoothing: float = 1e-6
 ) -> DifferentialMap:

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import casadi as ca
 
 from dynfab.linalg import congruence
-from dynfab.maps import DifferentialMap
+from dynfab.maps import DifferentialMap, Reference
 
 
 @dataclass(frozen=True)
@@ -45,6 +45,15 @@ class Spec:
             dmap.q,
             dmap.qdot,
         )
+
+    def dynamic_pull(self, x: ca.SX, xdot: ca.SX, reference: Reference) -> Spec:
+        """Dynamic pullback (paper eq. (dynamic_pull)) of a spec written in relative
+        coordinates ``x_rel = x − x̃(t)`` (its symbols ``self.x``, ``self.xdot``) to the fixed
+        coordinates ``x``: ``(M, f − M ẍ̃)`` with ``x_rel → x − x̃``, ``ẋ_rel → ẋ − ẋ̃``.
+        """
+        M, f = ca.substitute([self.M, self.f], [self.x, self.xdot],
+                             [x - reference.position, xdot - reference.velocity])
+        return Spec(M, f - ca.mtimes(M, reference.acceleration), x, xdot)
 
     def acceleration(self) -> ca.SX:
         """The motion the spec describes, ``ẍ = −M⁻¹ f``."""
