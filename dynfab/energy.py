@@ -156,6 +156,15 @@ class WeightedGeometry:
             dmap.qdot,
         )
 
+    def dynamic_pull(self, x: ca.SX, xdot: ca.SX, reference: Reference) -> WeightedGeometry:
+        """Dynamic pullback from relative coordinates ``x − x̃`` to ``x``: both forces lose
+        ``M ẍ̃`` (see :meth:`dynfab.spec.Spec.dynamic_pull`)."""
+        M, f_geometry, f_energy = ca.substitute(
+            [self.M, self.f_geometry, self.f_energy], [self.x, self.xdot],
+            [x - reference.position, xdot - reference.velocity])
+        inertial = ca.mtimes(M, reference.acceleration)
+        return WeightedGeometry(M, f_geometry - inertial, f_energy - inertial, x, xdot)
+
     def scaled(self, factor: ca.SX) -> WeightedGeometry:
         """Multiply metric and forces by a scalar (e.g. an activation flag of 0 or 1)."""
         return WeightedGeometry(self.M * factor, self.f_geometry * factor,

@@ -5,6 +5,10 @@ obstacle slots. :class:`ParameterLayout` says where each named quantity lives, c
 matching CasADi symbols at build time, and numpy views into the packed buffer at run
 time, so that ``params.obstacle_position[2] = [x, y, z]`` writes straight into the
 planner's input without any per-call conversion.
+
+A *dynamic* layout also carries the velocity and acceleration of every goal reference
+and obstacle (paper section IV: the dynamic pullback needs ``ẋ̃`` and ``ẍ̃``); a static
+layout has none, and its planner treats them as structurally zero.
 """
 
 from __future__ import annotations
@@ -14,15 +18,26 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from dynfab.maps import Reference
+
 
 @dataclass(frozen=True)
 class ParameterSymbols:
-    """CasADi symbols of the runtime parameters (slices of one vector ``p``)."""
+    """CasADi symbols of the runtime parameters (slices of one vector ``p``).
+
+    Attributes:
+        vector: the whole ``p``.
+        goals: per goal, its reference ``(x̃, ẋ̃, ẍ̃)``; velocity and acceleration are
+            structural zeros in a static layout.
+        goal_weight: per goal, its weight.
+        obstacles: per slot, the centre's reference ``(c, ċ, c̈)`` (3-D).
+        obstacle_radius: per slot, the radius.
+    """
 
     vector: ca.SX
-    goal_position: tuple[ca.SX, ...]
+    goals: tuple[Reference, ...]
     goal_weight: tuple[ca.SX, ...]
-    obstacle_position: tuple[ca.SX, ...]
+    obstacles: tuple[Reference, ...]
     obstacle_radius: tuple[ca.SX, ...]
 
 
@@ -35,45 +50,72 @@ class RuntimeParameters:
         goal_weight: (n_goals,) weights; 0 deactivates a goal.
         obstacle_position: (slots, 3) sphere centres [m] (z ignored by planar robots).
         obstacle_radius: (slots,) radii [m]; 0 marks an unused slot.
+        goal_velocity, goal_acceleration: per goal ``ẋ̃`` [m/s], ``ẍ̃`` [m/s²]
+            (dynamic planners only, else ``None``).
+        obstacle_velocity, obstacle_acceleration: (slots, 3) [m/s], [m/s²]
+            (dynamic planners only, else ``None``).
     """
 
     goal_position: tuple[np.ndarray, ...]
     goal_weight: np.ndarray
     obstacle_position: np.ndarray
     obstacle_radius: np.ndarray
+    goal_velocity: tuple[np.ndarray, ...] | None = None
+    goal_acceleration: tuple[np.ndarray, ...] | None = None
+    obstacle_velocity: np.ndarray | None = None
+    obstacle_acceleration: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
 class ParameterLayout:
-    """Order of the packed parameters: goal positions, goal weights, obstacle centres,
-    obstacle radii."""
+    """Order of the packed parameters: per goal its position (then velocity and
+    acceleration if dynamic), the goal weights, the obstacle centres (then velocities and
+    accelerations if dynamic), the obstacle radii."""
 
     goal_dimensions: tuple[int, ...]
     obstacle_slots: int
+    dynamic: bool = False
+
+    @property
+    def _derivatives(self) -> int:
+        return 3 if self.dynamic else 1
 
     @property
     def size(self) -> int:
-        return sum(self.goal_dimensions) + len(self.goal_dimensions) + 4 * self.obstacle_slots
+        k = self._derivatives
+        return k * sum(self.goal_dimensions) + len(self.goal_dimensions) + (3 * k + 1) * self.obstacle_slots
 
-    def _offsets(self) -> tuple[list[slice], int, int, int]:
-        goal_slices, start = [], 0
+    def _blocks(self) -> tuple[list[list[slice]], int, list[slice], int]:
+        """Goal slices per goal and derivative, weight offset, obstacle blocks, radius offset."""
+        k, start = self._derivatives, 0
+        goals = []
         for dim in self.goal_dimensions:
-            goal_slices.append(slice(start, start + dim))
-            start += dim
+            goals.append([slice(start + i * dim, start + (i + 1) * dim) for i in range(k)])
+            start += k * dim
         weights = start
-        centres = weights + len(self.goal_dimensions)
-        radii = centres + 3 * self.obstacle_slots
-        return goal_slices, weights, centres, radii
+        start += len(self.goal_dimensions)
+        obstacle_blocks = [slice(start + i * 3 * self.obstacle_slots, start + (i + 1) * 3 * self.obstacle_slots)
+                           for i in range(k)]
+        radii = start + 3 * k * self.obstacle_slots
+        return goals, weights, obstacle_blocks, radii
 
     def symbols(self) -> ParameterSymbols:
         vector = ca.SX.sym("p", self.size)
-        goal_slices, weights, centres, radii = self._offsets()
-        n_goals = len(self.goal_dimensions)
+        goals, weights, obstacle_blocks, radii = self._blocks()
+        goal_references = []
+        for dim, slices in zip(self.goal_dimensions, goals):
+            parts = [vector[s] for s in slices] + [ca.SX(dim, 1)] * (3 - len(slices))
+            goal_references.append(Reference(*parts))
+        obstacle_references = []
+        for slot in range(self.obstacle_slots):
+            parts = [vector[block.start + 3 * slot: block.start + 3 * slot + 3] for block in obstacle_blocks]
+            parts += [ca.SX(3, 1)] * (3 - len(parts))
+            obstacle_references.append(Reference(*parts))
         return ParameterSymbols(
             vector=vector,
-            goal_position=tuple(vector[s] for s in goal_slices),
-            goal_weight=tuple(vector[weights + i] for i in range(n_goals)),
-            obstacle_position=tuple(vector[centres + 3 * k: centres + 3 * k + 3] for k in range(self.obstacle_slots)),
+            goals=tuple(goal_references),
+            goal_weight=tuple(vector[weights + i] for i in range(len(self.goal_dimensions))),
+            obstacles=tuple(obstacle_references),
             obstacle_radius=tuple(vector[radii + k] for k in range(self.obstacle_slots)),
         )
 
@@ -81,11 +123,17 @@ class ParameterLayout:
         """Views into ``buffer`` (length :attr:`size`); writes go straight into it."""
         if buffer.shape != (self.size,):
             raise ValueError(f"parameter buffer must have shape ({self.size},), got {buffer.shape}")
-        goal_slices, weights, centres, radii = self._offsets()
+        goals, weights, obstacle_blocks, radii = self._blocks()
         n_goals = len(self.goal_dimensions)
+        goal_views = [tuple(buffer[slices[i]] for slices in goals) for i in range(self._derivatives)]
+        obstacle_views = [buffer[block].reshape(self.obstacle_slots, 3) for block in obstacle_blocks]
         return RuntimeParameters(
-            goal_position=tuple(buffer[s] for s in goal_slices),
+            goal_position=goal_views[0],
             goal_weight=buffer[weights: weights + n_goals],
-            obstacle_position=buffer[centres: radii].reshape(self.obstacle_slots, 3),
+            obstacle_position=obstacle_views[0],
             obstacle_radius=buffer[radii: radii + self.obstacle_slots],
+            goal_velocity=goal_views[1] if self.dynamic else None,
+            goal_acceleration=goal_views[2] if self.dynamic else None,
+            obstacle_velocity=obstacle_views[1] if self.dynamic else None,
+            obstacle_acceleration=obstacle_views[2] if self.dynamic else None,
         )

@@ -27,7 +27,8 @@ from dynfab.leaves.goal import GoalAttractor
 from dynfab.leaves.limits import JointLimitAvoidance
 from dynfab.leaves.obstacle import SphereObstacleAvoidance
 from dynfab.leaves.self_collision import SelfCollisionAvoidance
-from dynfab.maps import DifferentialMap, linear_map, selected
+from dynfab.linalg import cholesky_solve
+from dynfab.maps import DifferentialMap, Reference, linear_map, selected
 from dynfab.parameters import ParameterLayout, ParameterSymbols, RuntimeParameters
 from dynfab.robots.robot import Robot
 from dynfab.spec import Spec
@@ -73,6 +74,11 @@ class PlannerConfig:
             (``None``: every collision sphere of the robot).
         fallback_braking: ``k`` of the safe action ``q̈ = −k q̇`` returned if the fabric
             ever produced a non-finite value [1/s].
+        dynamic: build dynamic fabrics: goals and obstacles take velocities and
+            accelerations as runtime parameters (paper section IV). ``False`` builds the
+            static fabric, which is the dynamic one with all of them zero.
+        reference_damping: ``λ`` of the damped pseudo-inverse ``J⁺ = Jᵀ (J Jᵀ + λ² I)⁻¹``
+            that pulls the primary goal's reference velocity to joint space [m].
     """
 
     goals: tuple[GoalConfig, ...]
@@ -83,6 +89,8 @@ class PlannerConfig:
     speed_control: SpeedControl = field(default_factory=SpeedControl)
     collision_links: tuple[str, ...] | None = None
     fallback_braking: float = 5.0
+    dynamic: bool = False
+    reference_damping: float = 0.05
 
     def __post_init__(self) -> None:
         if not self.goals:
@@ -110,7 +118,7 @@ class FabricPlanner:
         self._n = robot.kinematics.dof
         goal_dimensions = tuple(len(self._goal_axes(goal)) if goal.link else len(self._goal_joints(goal))
                                 for goal in config.goals)
-        self._layout = ParameterLayout(goal_dimensions, config.obstacle_slots)
+        self._layout = ParameterLayout(goal_dimensions, config.obstacle_slots, config.dynamic)
         self.function = self._build()
         self._input = np.zeros(2 * self._n + self._layout.size)
         self._output = np.zeros(self._n)
@@ -188,8 +196,8 @@ class FabricPlanner:
         if self.config.joint_limits is not None:
             kin = self.robot.kinematics
             geometry = geometry + self.config.joint_limits.on_joints(q, qdot, kin.lower, kin.upper)
-        forcing, goal_distance = self._forcing(q, qdot, params)
-        qddot = self.config.speed_control.acceleration(geometry, forcing, goal_distance)
+        forcing, goal_distance, reference_velocity = self._forcing(q, qdot, params)
+        qddot = self.config.speed_control.acceleration(geometry, forcing, goal_distance, reference_velocity)
         inner = ca.Function("fabric_parts", [q, qdot, params.vector], [qddot])
         z = ca.SX.sym("z", 2 * n + self._layout.size)
         return ca.Function("fabric", [z], [inner(z[:n], z[n:2 * n], z[2 * n:])], {"cse": True})
@@ -223,8 +231,8 @@ class FabricPlanner:
                 continue  # a sphere no joint moves (e.g. on the base) cannot avoid anything
             p = ca.SX.sym("p", dims)
             pdot = ca.SX.sym("pdot", dims)
-            leaves = [avoidance.on_point(p, pdot, center[:dims], radius, sphere.radius)
-                      for center, radius in zip(params.obstacle_position, params.obstacle_radius)]
+            leaves = [avoidance.on_point(p, pdot, _first_axes(obstacle, dims), radius, sphere.radius)
+                      for obstacle, radius in zip(params.obstacles, params.obstacle_radius)]
             in_point_space = leaves[0]
             for leaf in leaves[1:]:
                 in_point_space = in_point_space + leaf
@@ -239,23 +247,39 @@ class FabricPlanner:
         return [avoidance.on_pair(sphere_maps[a], sphere_maps[b], spheres[a].radius, spheres[b].radius)
                 for a, b in self.robot.self_collision_pairs]
 
-    def _forcing(self, q: ca.SX, qdot: ca.SX, params: ParameterSymbols) -> tuple[Spec, ca.SX]:
+    def _forcing(self, q: ca.SX, qdot: ca.SX, params: ParameterSymbols) -> tuple[Spec, ca.SX, ca.SX | None]:
+        """Summed goal forcing, the primary goal's error norm, and (dynamic planners) the
+        primary goal reference's velocity pulled to joint space."""
         kin = self.robot.kinematics
         total: Spec | None = None
-        primary_distance = None
+        primary: tuple[ca.SX, ca.SX | None] | None = None
         for i, goal in enumerate(self.config.goals):
-            target = params.goal_position[i]
+            reference = params.goals[i]
             if goal.link is not None:
                 position = kin.position(q, goal.link, parent=goal.parent_link)
-                error = selected(DifferentialMap.from_expression(position, q, qdot), self._goal_axes(goal), target)
+                task = selected(DifferentialMap.from_expression(position, q, qdot), self._goal_axes(goal), ca.SX(len(self._goal_axes(goal)), 1))
             else:
                 joints = self._goal_joints(goal)
                 selector = np.zeros((len(joints), self._n))
                 selector[range(len(joints)), joints] = 1.0
-                error = linear_map(selector, target, q, qdot)
-            spec = goal.attractor.forcing(error, params.goal_weight[i])
+                task = linear_map(selector, ca.SX(len(joints), 1), q, qdot)
+            spec = goal.attractor.forcing(task, reference, params.goal_weight[i])
             total = spec if total is None else total + spec
-            if primary_distance is None:
-                primary_distance = ca.norm_2(error.phi)
-        return total, primary_distance
+            if primary is None:
+                distance = ca.norm_2(task.phi - reference.position)
+                velocity = self._pulled_reference_velocity(task, reference) if self.config.dynamic else None
+                primary = (distance, velocity)
+        return total, primary[0], primary[1]
 
+    def _pulled_reference_velocity(self, task: DifferentialMap, reference: Reference) -> ca.SX:
+        """``q̇̃ = Jᵀ (J Jᵀ + λ² I)⁻¹ ẋ̃``: the least-norm joint velocity that moves the task
+        with the reference, damped near singularities so it stays finite."""
+        jacobian = task.jacobian
+        m = jacobian.shape[0]
+        gram = ca.mtimes(jacobian, jacobian.T) + self.config.reference_damping**2 * ca.SX.eye(m)
+        return ca.mtimes(jacobian.T, cholesky_solve(gram, reference.velocity))
+
+
+def _first_axes(reference: Reference, dims: int) -> Reference:
+    """The first ``dims`` coordinates of a 3-D reference (planar robots use x, y)."""
+    return Reference(reference.position[:dims], reference.velocity[:dims], reference.acceleration[:dims])

@@ -67,9 +67,21 @@ class SpeedControl:
         n = q.shape[0]
         return WeightedGeometry(self.base_metric * ca.SX.eye(n), ca.SX(n, 1), ca.SX(n, 1), q, qdot)
 
-    def acceleration(self, geometry: WeightedGeometry, forcing: Spec, goal_distance: ca.SX) -> ca.SX:
-        """``q̈`` of the damped, speed-controlled, forced fabric (module docstring)."""
-        qdot = geometry.xdot
+    def acceleration(self, geometry: WeightedGeometry, forcing: Spec, goal_distance: ca.SX,
+                     reference_velocity: ca.SX | None = None) -> ca.SX:
+        """``q̈`` of the damped, speed-controlled, forced fabric (module docstring).
+
+        Args:
+            geometry: summed weighted geometry in joint space (base included).
+            forcing: summed forcing spec in joint space.
+            goal_distance: ``‖x_goal‖`` of the primary goal [m].
+            reference_velocity: ``q̇̃ = J⁺ ẋ̃``, the primary goal reference's velocity pulled
+                to joint space (dynamic fabrics). Energization, speed control and damping
+                then act on the relative velocity ``q̇ − q̇̃`` (paper Lemma "Dynamically
+                energized fabrics": damping ``B ẋ_r``), so following a moving reference is
+                not damped. ``None``: a static goal, ``q̇̃ = 0``.
+        """
+        qdot = geometry.xdot if reference_velocity is None else geometry.xdot - reference_velocity
         eps = self.regularization
         speed_squared = ca.dot(qdot, qdot)
         geometric = -cholesky_solve(geometry.M, geometry.f_geometry)

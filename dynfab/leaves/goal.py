@@ -1,4 +1,4 @@
-"""Goal attraction: a forcing potential on ``x = S φ(q) − x_goal``.
+"""Goal attraction: a forcing potential on the error ``x = y − x̃(t)`` of a task ``y = S φ(q)``.
 
 Default potential (Ratliff et al. 2020, "speed-controlled" attractor): the smoothed norm
 
@@ -7,7 +7,12 @@ Default potential (Ratliff et al. 2020, "speed-controlled" attractor): the smoot
 whose gradient has magnitude ``k`` away from the goal and fades linearly inside a radius
 ``≈ 1/α``. Default metric: ``M_ψ(x) = ((m_near − m_far) exp(−(β‖x‖)²) + m_far) I``, heavier
 near the goal so the goal wins over other leaves there. The forcing spec is
-``(M_ψ, w M_ψ ∇ψ)``, pulled to joint space; a goal of weight ``w = 0`` is inactive.
+``(M_ψ, w M_ψ ∇ψ)`` in the error coordinates; a goal of weight ``w = 0`` is inactive.
+
+For a moving goal (path following, paper Lemma "Dynamic Lagrangian fabrics") the forcing
+spec is brought to the task coordinates by the dynamic pullback, ``(M_ψ, w M_ψ ∇ψ − M_ψ ẍ̃)``;
+since ``ψ`` depends on ``y − x̃`` only, ``∂ψ/∂y = −∂ψ/∂x̃`` as the lemma requires. A
+static goal has ``ẋ̃ = ẍ̃ = 0``.
 """
 
 from __future__ import annotations
@@ -17,7 +22,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from dynfab.maps import DifferentialMap
+from dynfab.maps import DifferentialMap, Reference
 from dynfab.spec import Spec
 
 #: ``ψ(x)``: a scalar potential of the goal error.
@@ -69,11 +74,18 @@ class GoalAttractor:
         scale = (self.metric_near - self.metric_far) * ca.exp(-((self.metric_width * r) ** 2)) + self.metric_far
         return scale * ca.SX.eye(x.shape[0])
 
-    def forcing(self, error: DifferentialMap, weight: ca.SX) -> Spec:
-        """The forcing spec ``(M_ψ, w M_ψ ∇ψ)`` pulled through the goal-error map."""
-        x = ca.SX.sym("x", error.phi.shape[0])
-        xdot = ca.SX.sym("xdot", error.phi.shape[0])
+    def forcing(self, task: DifferentialMap, goal: Reference, weight: ca.SX) -> Spec:
+        """The forcing spec pulled to joint space.
+
+        Args:
+            task: the goal task map ``y = S φ(q)``.
+            goal: the goal reference ``x̃``, ``ẋ̃``, ``ẍ̃`` in task coordinates.
+            weight: the goal's weight parameter ``w``.
+        """
+        dimension = task.phi.shape[0]
+        x, xdot = ca.SX.sym("x", dimension), ca.SX.sym("xdot", dimension)
         metric = self.metric_of(x)
         active = weight > 0
-        spec = Spec(metric * active, weight * ca.mtimes(metric, ca.gradient(self.potential_of(x), x)), x, xdot)
-        return spec.pull(error)
+        in_error_frame = Spec(metric * active, weight * ca.mtimes(metric, ca.gradient(self.potential_of(x), x)), x, xdot)
+        y, ydot = ca.SX.sym("y", dimension), ca.SX.sym("ydot", dimension)
+        return in_error_frame.dynamic_pull(y, ydot, goal).pull(task)

@@ -1,7 +1,11 @@
-"""Static sphere obstacle avoidance for one robot collision sphere.
+"""Sphere obstacle avoidance, static or moving, for one robot collision sphere.
 
-Task map: ``x = ‖p(q) − c‖ − r_robot − r_obstacle`` (the clearance [m]); the leaf is the
-:class:`~dynfab.leaves.barrier.Barrier` on ``x``. It is pulled first to the sphere's point
+Task map: ``x = ‖p_rel‖ − r_robot − r_obstacle`` (the clearance [m]) of the robot sphere's
+centre relative to the obstacle's, ``p_rel = p − c(t)``; the leaf is the
+:class:`~dynfab.leaves.barrier.Barrier` on ``x``, written in the obstacle's frame and
+brought to the fixed frame by the dynamic pullback (paper eq. (dynamic_pull)), which uses
+the obstacle's velocity ``ċ`` and acceleration ``c̈``. A static obstacle is the case
+``ċ = c̈ = 0``, where the dynamic pullback is the identity. It is pulled first to the sphere's point
 space (``J = nᵀ``), where all obstacles acting on that sphere are summed, so the robot's
 kinematics is pulled once per sphere, not once per sphere-obstacle pair.
 """
@@ -14,7 +18,7 @@ import casadi as ca
 
 from dynfab.energy import WeightedGeometry
 from dynfab.leaves.barrier import Barrier
-from dynfab.maps import sphere_distance_map
+from dynfab.maps import Reference, sphere_distance_map
 
 
 @dataclass(frozen=True)
@@ -29,18 +33,22 @@ class SphereObstacleAvoidance:
 
     barrier: Barrier = field(default_factory=lambda: Barrier(geometry_gain=1.0, energy_gain=0.5))
 
-    def on_point(self, point: ca.SX, point_velocity: ca.SX, center: ca.SX,
+    def on_point(self, point: ca.SX, point_velocity: ca.SX, obstacle: Reference,
                  obstacle_radius: ca.SX, sphere_radius: float) -> WeightedGeometry:
         """The leaf pulled to the point space of one robot sphere.
 
         Args:
             point: sphere centre symbols ``p`` (d, 1) [m].
             point_velocity: ``ṗ`` symbols (d, 1) [m/s].
-            center: obstacle centre parameter (d, 1) [m].
+            obstacle: obstacle centre ``c``, ``ċ``, ``c̈`` (d, 1) [m, m/s, m/s²], parameters.
             obstacle_radius: obstacle radius parameter [m]; a slot with radius ≤ 0 is
                 inactive and contributes nothing.
             sphere_radius: radius of the robot sphere [m].
         """
-        distance = sphere_distance_map(point, point_velocity, center, obstacle_radius + sphere_radius)
+        d = point.shape[0]
+        relative = ca.SX.sym("p_rel", d)
+        relative_velocity = ca.SX.sym("p_rel_dot", d)
+        distance = sphere_distance_map(relative, relative_velocity, ca.SX(d, 1), obstacle_radius + sphere_radius)
         active = obstacle_radius > 0
-        return self.barrier.weighted_geometry().pull(distance).scaled(active)
+        in_obstacle_frame = self.barrier.weighted_geometry().pull(distance)
+        return in_obstacle_frame.dynamic_pull(point, point_velocity, obstacle).scaled(active)
