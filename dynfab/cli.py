@@ -86,7 +86,8 @@ def _report(result: RunResult, as_json: bool) -> None:
 def _plot(result: RunResult, path: Path) -> None:
     from dynfab.plots import plot_run
 
-    goals = [(goal.position, goal.tolerance) for goal in result.scenario.goals[:1]]
+    goals = [(result.goal_reference if result.scenario.goals[0].type == "path" else result.scenario.goals[0].position,
+              result.scenario.goals[0].tolerance)]
     radii = [o.radius for o in result.scenario.obstacles]
     plot_run(path, result.goal_positions, goals, result.obstacle_centers, radii, result.robot.planar,
              clearance_over_time=result.clearance if radii else None, times=result.record.t,

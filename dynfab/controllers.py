@@ -1,11 +1,17 @@
 """Turn a scenario into a controller ``(t, q, q̇) ↦ q̈`` for the simulator.
 
-A controller owns its planner and, each tick, writes the scenario's current goals and
-obstacles into the planner's runtime parameters before calling it.
+A controller owns its planner and, each tick, writes the scenario's current goal and
+obstacle references into the planner's runtime parameters before calling it.
+
+- ``static-fabric``: a moving goal or obstacle is seen as a position updated every tick
+  (the paper's static-fabric baseline: no velocity, no acceleration).
+- ``dynamic-fabric``: goals and obstacles also pass their velocity and acceleration, which
+  the dynamic pullback uses (paper section IV).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
@@ -13,6 +19,9 @@ import numpy as np
 from dynfab.planner import FabricPlanner, GoalConfig, PlannerConfig
 from dynfab.robots.robot import Robot
 from dynfab.scenario import GoalSpec, Scenario, ScenarioError
+from dynfab.trajectories import Trajectory
+
+_FABRIC_PLANNERS = {"static-fabric": False, "dynamic-fabric": True}
 
 
 class Controller(Protocol):
@@ -21,45 +30,77 @@ class Controller(Protocol):
     def __call__(self, t: float, q: np.ndarray, qdot: np.ndarray) -> np.ndarray: ...
 
 
-class StaticFabricController:
-    """Static optimization fabrics with static goals and obstacles.
+@dataclass(frozen=True)
+class References:
+    """Where the goals and obstacles of a scenario are over time.
+
+    Attributes:
+        goals: per goal, its trajectory in the goal's coordinates (a static goal is a
+            trajectory at rest).
+        obstacles: per obstacle, its centre's trajectory, 3-D.
+    """
+
+    goals: tuple[Trajectory, ...]
+    obstacles: tuple[Trajectory, ...]
+
+
+class FabricController:
+    """A fabric planner fed with the references of a scenario.
 
     Attributes:
         planner: the compiled planner.
+        references: the goal and obstacle trajectories.
     """
 
-    def __init__(self, planner: FabricPlanner) -> None:
+    def __init__(self, planner: FabricPlanner, references: References,
+                 moving_goals: tuple[int, ...], moving_obstacles: tuple[int, ...]) -> None:
         self.planner = planner
+        self.references = references
+        self._moving_goals = moving_goals
+        self._moving_obstacles = moving_obstacles
+        self._write_all(0.0)
 
     def __call__(self, t: float, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
+        self._write(t, self._moving_goals, self._moving_obstacles)
         return self.planner.compute(q, qdot)
 
+    def _write_all(self, t: float) -> None:
+        self._write(t, tuple(range(len(self.references.goals))), tuple(range(len(self.references.obstacles))))
 
-def make_controller(scenario: Scenario, robot: Robot) -> Controller:
+    def _write(self, t: float, goals: tuple[int, ...], obstacles: tuple[int, ...]) -> None:
+        params = self.planner.parameters
+        dynamic = params.goal_velocity is not None
+        for i in goals:
+            point = self.references.goals[i].evaluate(t)
+            params.goal_position[i][:] = point.position
+            if dynamic:
+                params.goal_velocity[i][:] = point.velocity
+                params.goal_acceleration[i][:] = point.acceleration
+        for k in obstacles:
+            point = self.references.obstacles[k].evaluate(t)
+            d = len(point.position)  # planar scenarios may give x, y only
+            params.obstacle_position[k, :d] = point.position
+            if dynamic:
+                params.obstacle_velocity[k, :d] = point.velocity
+                params.obstacle_acceleration[k, :d] = point.acceleration
+
+
+def make_controller(scenario: Scenario, robot: Robot, references: References) -> Controller:
     """The controller of ``scenario.planner`` for ``robot``.
 
     Raises:
         ScenarioError: if the scenario asks for something this planner cannot do.
     """
-    if scenario.planner != "static-fabric":
-        raise ScenarioError("planner", f"{scenario.planner!r} is not available yet; use static-fabric")
-    for i, goal in enumerate(scenario.goals):
-        if goal.type == "path":
-            raise ScenarioError(f"goal[{i}].type", "path goals need the dynamic-fabric planner, not available yet")
-    for i, obstacle in enumerate(scenario.obstacles):
-        if obstacle.trajectory is not None:
-            raise ScenarioError(f"obstacles[{i}].trajectory", "moving obstacles are not available yet")
+    if scenario.planner not in _FABRIC_PLANNERS:
+        raise ScenarioError("planner", f"{scenario.planner!r} is not available yet; use static-fabric or dynamic-fabric")
     config = PlannerConfig(goals=tuple(_goal_config(goal) for goal in scenario.goals),
-                           obstacle_slots=len(scenario.obstacles))
+                           obstacle_slots=len(scenario.obstacles), dynamic=_FABRIC_PLANNERS[scenario.planner])
     planner = FabricPlanner(robot, config)
-    for i, goal in enumerate(scenario.goals):
-        planner.parameters.goal_position[i][:] = goal.position
     for k, obstacle in enumerate(scenario.obstacles):
-        centre = np.zeros(3)
-        centre[: len(obstacle.position)] = obstacle.position
-        planner.parameters.obstacle_position[k] = centre
         planner.parameters.obstacle_radius[k] = obstacle.radius
-    return StaticFabricController(planner)
+    moving_goals = tuple(i for i, goal in enumerate(scenario.goals) if goal.type == "path")
+    moving_obstacles = tuple(k for k, obstacle in enumerate(scenario.obstacles) if obstacle.trajectory is not None)
+    return FabricController(planner, references, moving_goals, moving_obstacles)
 
 
 def _goal_config(goal: GoalSpec) -> GoalConfig:

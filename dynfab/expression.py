@@ -164,8 +164,9 @@ class _Builder:
         """A finite real literal; strings, booleans, complex numbers and None are rejected."""
         value = node.value
         if isinstance(value, bool) or not isinstance(value, int | float):
-            kind = "strings" if isinstance(value, str | bytes) else f"{type(value).__name__} literals"
-            self._reject(f"{kind} not allowed", node)
+            if isinstance(value, str | bytes):
+                self._reject("strings not allowed", node)
+            self._reject(f"{type(value).__name__} literals not allowed", node)
         try:
             number = float(value)
         except OverflowError:
@@ -180,8 +181,9 @@ class _Builder:
             return self._t
         if node.id in CONSTANTS:
             return CONSTANTS[node.id]
-        hint = "functions must be called" if node.id in FUNCTIONS else "allowed: t, " + ", ".join(CONSTANTS)
-        self._reject("unknown name", node, hint)
+        if node.id in FUNCTIONS:
+            self._reject("unknown name", node, "functions must be called")
+        self._reject("unknown name", node, "allowed: t, " + ", ".join(CONSTANTS))
 
     def _call(self, node: ast.Call, depth: int) -> ca.SX:
         """A whitelisted function called with exactly its number of positional arguments."""

@@ -8,15 +8,14 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from dynfab.controllers import make_controller
+from dynfab.controllers import Controller, make_controller
+from dynfab.references import goal_axes, scenario_references
 from dynfab.metrics import Metrics, clearance_over_time, compute_metrics
 from dynfab.robots import load_robot, robot_from_urdf
 from dynfab.robots.builtin import UnknownRobotError
 from dynfab.robots.robot import CollisionSphere, Robot
 from dynfab.scenario import Scenario, ScenarioError, UrdfRobotSpec, validate_for_robot
 from dynfab.sim import Record, simulate
-
-_AXES = "xyz"
 
 
 @dataclass(frozen=True)
@@ -29,8 +28,10 @@ class RunResult:
         record: states and commands over time.
         metrics: the run's metrics.
         goal_positions: the primary goal's task coordinates over time (T, d).
+        goal_reference: the primary goal's reference over time (T, d).
         obstacle_centers: obstacle centres over time (T, m, 3).
         clearance: minimum clearance at each sample (T,) [m] (inf without obstacles).
+        controller: the controller that ran (its planner, fallback count, ...).
     """
 
     scenario: Scenario
@@ -38,8 +39,10 @@ class RunResult:
     record: Record
     metrics: Metrics
     goal_positions: np.ndarray
+    goal_reference: np.ndarray
     obstacle_centers: np.ndarray
     clearance: np.ndarray
+    controller: Controller
 
 
 def robot_for(scenario: Scenario) -> Robot:
@@ -67,21 +70,26 @@ def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None
     """
     robot = robot_for(scenario)
     scenario = validate_for_robot(scenario, robot)
-    controller = make_controller(scenario, robot)
+    references = scenario_references(scenario, robot)
+    controller = make_controller(scenario, robot, references)
     state = scenario.initial_state
     record = simulate(controller, state.q, state.qdot, scenario.dt, scenario.duration, progress=progress)
     samples = record.q.shape[0]
     goal = scenario.goals[0]
     goal_positions = _goal_coordinates(robot, scenario, record.q)
+    goal_reference = references.goals[0].sample(record.t)[0]
     centres, radii = _sphere_centres(robot, record.q)
     obstacle_centers = np.zeros((samples, len(scenario.obstacles), 3))
-    for k, obstacle in enumerate(scenario.obstacles):
-        obstacle_centers[:, k, : len(obstacle.position)] = obstacle.position
+    for k, trajectory in enumerate(references.obstacles):
+        positions = trajectory.sample(record.t)[0]
+        obstacle_centers[:, k, : positions.shape[1]] = positions
     obstacle_radii = np.array([o.radius for o in scenario.obstacles])
-    metrics = compute_metrics(record, goal_positions, np.asarray(goal.position), goal.tolerance,
-                              centres, radii, obstacle_centers, obstacle_radii, planar=robot.planar)
+    metrics = compute_metrics(record, goal_positions, goal_reference, goal.tolerance,
+                              centres, radii, obstacle_centers, obstacle_radii, planar=robot.planar,
+                              path_goal=goal.type == "path")
     clearance = clearance_over_time(centres, radii, obstacle_centers, obstacle_radii, planar=robot.planar)
-    return RunResult(scenario, robot, record, metrics, goal_positions, obstacle_centers, clearance)
+    return RunResult(scenario, robot, record, metrics, goal_positions, goal_reference, obstacle_centers, clearance,
+                     controller)
 
 
 def _goal_coordinates(robot: Robot, scenario: Scenario, qs: np.ndarray) -> np.ndarray:
@@ -90,9 +98,8 @@ def _goal_coordinates(robot: Robot, scenario: Scenario, qs: np.ndarray) -> np.nd
     if goal.type == "joint":
         return qs.copy()
     q = ca.SX.sym("q", robot.kinematics.dof)
-    axes = goal.axes if goal.axes is not None else ("xy" if robot.planar else "xyz")
     position = robot.kinematics.position(q, goal.link, parent=goal.parent_link)
-    return _evaluate_over(q, position[[_AXES.index(a) for a in axes]], qs)
+    return _evaluate_over(q, position[goal_axes(goal, robot)], qs)
 
 
 def _sphere_centres(robot: Robot, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -27,7 +27,7 @@ if TYPE_CHECKING:
 
 BUILTIN_ROBOTS: tuple[str, ...] = ("panda", "point", "boxer", "boxer-panda")
 PLANNERS: tuple[str, ...] = ("static-fabric", "dynamic-fabric", "mpc")
-TRAJECTORY_TYPES: tuple[str, ...] = ("linear", "circle", "expression", "spline", "rrt")
+TRAJECTORY_TYPES: tuple[str, ...] = ("linear", "circle", "polynomial", "expression", "spline", "rrt")
 GoalType = Literal["position", "joint", "path"]
 _GOAL_TYPES: tuple[str, ...] = ("position", "joint", "path")
 _WORKSPACE_KEYS = ("link", "parent_link", "axes", "tolerance", "weight")

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from dynfab import runner
-from dynfab.controllers import Controller, StaticFabricController, make_controller
+from dynfab.controllers import FabricController
 from dynfab.experiments import exp1, point_reaching
 from dynfab.robots.robot import Robot
 from dynfab.runner import RunResult, run_scenario
@@ -22,23 +22,11 @@ PANDA_Q0 = [1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0]
 SEEDS = range(10)
 
 
-def run_recording_controller(
-    data: dict[str, Any], monkeypatch: pytest.MonkeyPatch
-) -> tuple[RunResult, StaticFabricController]:
+def run_recording_controller(data: dict[str, Any]) -> tuple[RunResult, FabricController]:
     """Run a scenario mapping and also return the controller the runner built for it."""
-    built: list[Controller] = []
-
-    def recording(scenario: Scenario, robot: Robot) -> Controller:
-        controller = make_controller(scenario, robot)
-        built.append(controller)
-        return controller
-
-    monkeypatch.setattr(runner, "make_controller", recording)
     result = run_scenario(scenario_from_dict(data))
-    assert len(built) == 1
-    controller = built[0]
-    assert isinstance(controller, StaticFabricController)
-    return result, controller
+    assert isinstance(result.controller, FabricController)
+    return result, result.controller
 
 
 def panda_scenario(goal: dict[str, Any], duration: float = 10.0) -> dict[str, Any]:
@@ -54,9 +42,9 @@ def panda_scenario(goal: dict[str, Any], duration: float = 10.0) -> dict[str, An
 
 
 @pytest.mark.parametrize("seed", SEEDS)
-def test_experiment1_panda_reaches_goal_without_collision(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_experiment1_panda_reaches_goal_without_collision(seed: int) -> None:
     data = exp1.scenario(seed)
-    result, controller = run_recording_controller(data, monkeypatch)
+    result, controller = run_recording_controller(data)
     metrics = result.metrics
     assert metrics.success, f"exp1 seed {seed}: {metrics}"
     assert not metrics.collision and metrics.clearance is not None and metrics.clearance > 0.0
@@ -66,9 +54,9 @@ def test_experiment1_panda_reaches_goal_without_collision(seed: int, monkeypatch
 
 
 @pytest.mark.parametrize("seed", SEEDS)
-def test_point_robot_reaches_goal_among_discs(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_point_robot_reaches_goal_among_discs(seed: int) -> None:
     data = point_reaching.scenario(seed)
-    result, controller = run_recording_controller(data, monkeypatch)
+    result, controller = run_recording_controller(data)
     metrics = result.metrics
     assert metrics.success, f"point_reaching seed {seed}: {metrics}"
     assert np.isfinite(result.record.qddot).all()

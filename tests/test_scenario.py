@@ -216,7 +216,7 @@ def test_urdf_robot_resolved_against_scenario_directory(tmp_path: Path) -> None:
         (("obstacles", 0), {"type": "sphere", "radius": 0.1, "trajectory": [1, 2]},
          "obstacles[0].trajectory: expected a mapping, got a list of 2"),
         (("obstacles", 0), {"type": "sphere", "radius": 0.1, "trajectory": {"type": "zigzag"}},
-         "obstacles[0].trajectory.type: expected one of linear, circle, expression, spline, rrt"),
+         "obstacles[0].trajectory.type: expected one of linear, circle, polynomial, expression, spline, rrt"),
     ],
 )
 def test_bad_input_names_the_field(path: tuple[str | int, ...], value: object, expected: str) -> None:

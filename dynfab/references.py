@@ -1,0 +1,113 @@
+"""The goal and obstacle trajectories of a scenario (DESIGN.md section 5).
+
+Static goals and obstacles become trajectories at rest; ``trajectory:`` mappings are built
+by :func:`dynfab.trajectories.trajectory_from_mapping`, except ``{type: rrt, goal: P,
+duration: T}``, which needs the scenario: an RRT (OMPL) plans a path for the goal link
+from its start position to ``P`` around the scenario's static spheres, and a spline
+through that path's waypoints reaches ``P`` at ``T``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from dynfab.controllers import References
+from dynfab.global_planning import GlobalPlanningError, plan_path
+from dynfab.robots.robot import Robot
+from dynfab.scenario import GoalSpec, Scenario, ScenarioError
+from dynfab.trajectories import SplineTrajectory, StaticPoint, Trajectory, TrajectoryError, trajectory_from_mapping
+
+_AXES = "xyz"
+#: extra room around start, goal and spheres for the RRT's bounding box [m]
+RRT_BOUNDS_MARGIN = 0.5
+#: clearance the RRT path keeps from sphere surfaces, for the hand's own size [m]
+RRT_MARGIN = 0.1
+_RRT_KEYS = {"type", "goal", "duration", "seed"}
+
+
+def goal_axes(goal: GoalSpec, robot: Robot) -> list[int]:
+    """Indices of the controlled axes of a position or path goal."""
+    axes = goal.axes if goal.axes is not None else ("xy" if robot.planar else "xyz")
+    return [_AXES.index(a) for a in axes]
+
+
+def scenario_references(scenario: Scenario, robot: Robot) -> References:
+    """Trajectories of every goal (in its coordinates) and obstacle centre.
+
+    Raises:
+        ScenarioError: naming the field of an invalid trajectory, or of an RRT goal that
+            cannot be planned.
+    """
+    goals = tuple(_goal_reference(scenario, robot, i) for i in range(len(scenario.goals)))
+    obstacles = []
+    for k, obstacle in enumerate(scenario.obstacles):
+        if obstacle.trajectory is None:
+            obstacles.append(StaticPoint(tuple(obstacle.position)))
+            continue
+        trajectory = _from_mapping(obstacle.trajectory, f"obstacles[{k}].trajectory")
+        allowed = (2, 3) if robot.planar else (3,)
+        if trajectory.dimension not in allowed:
+            raise ScenarioError(f"obstacles[{k}].trajectory", f"expected {' or '.join(map(str, allowed))} "
+                                f"coordinates, got {trajectory.dimension}")
+        obstacles.append(trajectory)
+    return References(goals, tuple(obstacles))
+
+
+def _goal_reference(scenario: Scenario, robot: Robot, index: int) -> Trajectory:
+    goal = scenario.goals[index]
+    field = f"goal[{index}].trajectory"
+    if goal.type != "path":
+        return StaticPoint(tuple(goal.position))
+    dimension = len(goal_axes(goal, robot))
+    if goal.trajectory.get("type") == "rrt":
+        trajectory = _rrt_reference(scenario, robot, goal, field)
+    else:
+        trajectory = _from_mapping(goal.trajectory, field)
+    if trajectory.dimension != dimension:
+        raise ScenarioError(field, f"expected {dimension} coordinates for this goal, got {trajectory.dimension}")
+    return trajectory
+
+
+def _from_mapping(data: Mapping[str, Any], field: str) -> Trajectory:
+    try:
+        return trajectory_from_mapping(data, field)
+    except TrajectoryError as error:
+        raise ScenarioError(error.field, error.problem) from None
+
+
+def _rrt_reference(scenario: Scenario, robot: Robot, goal: GoalSpec, field: str) -> Trajectory:
+    unknown = sorted(set(goal.trajectory) - _RRT_KEYS)
+    if unknown:
+        raise ScenarioError(f"{field}.{unknown[0]}", "unknown key")
+    target = _numbers(goal.trajectory.get("goal"), f"{field}.goal")
+    duration = goal.trajectory.get("duration")
+    if not isinstance(duration, (int, float)) or isinstance(duration, bool) or not np.isfinite(duration) or duration <= 0:
+        raise ScenarioError(f"{field}.duration", f"expected a positive number of seconds, got {duration!r}")
+    seed = goal.trajectory.get("seed", 0)
+    if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
+        raise ScenarioError(f"{field}.seed", f"expected a non-negative integer, got {seed!r}")
+    axes = goal_axes(goal, robot)
+    start_position = np.asarray(robot.kinematics.position(np.asarray(scenario.initial_state.q), goal.link,
+                                                          parent=goal.parent_link)).ravel()[axes]
+    if len(target) != len(axes):
+        raise ScenarioError(f"{field}.goal", f"expected {len(axes)} numbers, got {len(target)}")
+    spheres = [(np.asarray(o.position, dtype=float)[: len(axes)], o.radius)
+               for o in scenario.obstacles if o.trajectory is None]
+    points = np.vstack([start_position, target] + [centre for centre, _ in spheres])
+    extent = max((radius for _, radius in spheres), default=0.0) + RRT_BOUNDS_MARGIN
+    try:
+        waypoints = plan_path(start_position, target, spheres, margin=RRT_MARGIN, seed=seed,
+                              bounds_low=points.min(axis=0) - extent, bounds_high=points.max(axis=0) + extent)
+    except GlobalPlanningError as error:
+        raise ScenarioError(field, f"RRT found no path: {error}") from None
+    return SplineTrajectory(tuple(map(tuple, waypoints)), float(duration))
+
+
+def _numbers(value: object, field: str) -> tuple[float, ...]:
+    if not isinstance(value, (list, tuple)) or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) for v in value):
+        raise ScenarioError(field, f"expected a list of finite numbers, got {value!r}")
+    return tuple(float(v) for v in value)
