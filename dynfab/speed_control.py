@@ -77,9 +77,13 @@ class SpeedControl:
             goal_distance: ``‖x_goal‖`` of the primary goal [m].
             reference_velocity: ``q̇̃ = J⁺ ẋ̃``, the primary goal reference's velocity pulled
                 to joint space (dynamic fabrics). Energization, speed control and damping
-                then act on the relative velocity ``q̇ − q̇̃`` (paper Lemma "Dynamically
-                energized fabrics": damping ``B ẋ_r``), so following a moving reference is
-                not damped. ``None``: a static goal, ``q̇̃ = 0``.
+                then act on the relative velocity (paper Lemma "Dynamically energized
+                fabrics": damping ``B ẋ_r``), so following a moving reference is not
+                damped. The reference part of that term, ``(β − α_ex) q̇̃``, pushes the robot
+                along the reference; it is applied as a force weighted like the goal, i.e.
+                ``W q̇̃`` with ``W = (M + M_ψ)⁻¹ (c I + M_ψ)``, so the leaves' metrics (an
+                obstacle ahead) scale it down exactly as they scale the goal's forcing;
+                in free space ``W = I``. ``None``: a static goal, ``q̇̃ = 0``.
         """
         qdot = geometry.xdot if reference_velocity is None else geometry.xdot - reference_velocity
         eps = self.regularization
@@ -93,4 +97,8 @@ class SpeedControl:
         alpha_ex = eta * alpha_geometric + (1 - eta) * alpha_forced
         near_goal = 0.5 * (ca.tanh(-self.goal_damping_sharpness * (goal_distance - self.goal_damping_radius)) + 1)
         beta = self.damping + self.goal_damping * near_goal + ca.fmax(0, alpha_ex - alpha_le)
-        return forced + (alpha_ex - beta) * qdot
+        if reference_velocity is None:
+            return forced + (alpha_ex - beta) * qdot
+        goal_weighted = self.base_metric * reference_velocity + ca.mtimes(forcing.M, reference_velocity)
+        steering = cholesky_solve(geometry.M + forcing.M, goal_weighted)
+        return forced + (alpha_ex - beta) * (geometry.xdot - steering)

@@ -6,8 +6,10 @@ energy:
 
 - geometry ``ẍ + h = 0`` with ``h = −k ẋ² / x`` (homogeneous of degree 2 in ``ẋ``): an
   approaching motion decelerates like ``ẋ ∝ x^k`` and never reaches ``x = 0``;
-- energy ``L_e = λ (1 − H(ẋ)) ẋ² / x²`` with the Heaviside gate ``H``: the leaf has metric
-  ``M_e = 2λ (1 − H(ẋ)) / x²`` only while the clearance shrinks, and vanishes otherwise.
+- energy ``L_e = λ (1 − H(ẋ)) ẋ² (1/x − 1/r)₊²`` with the Heaviside gate ``H`` and a range
+  ``r``: the leaf has metric ``M_e = 2λ (1 − H(ẋ)) (1/x − 1/r)₊²`` only while the clearance
+  shrinks and is below ``r``; it grows like ``2λ/x²`` near contact and vanishes (with its
+  derivative) at ``x = r``, so far-away obstacles do not dilute the other leaves' metrics.
 
 ``x`` is clamped below at ``min_clearance`` so metric and forces stay finite when a sphere
 overlaps the robot (the leaf then pushes as hard as its clamp allows).
@@ -34,7 +36,8 @@ class Barrier:
 
     Attributes:
         geometry_gain: ``k`` in ``h = −k ẋ²/x`` [-].
-        energy_gain: ``λ`` in ``L_e = λ (1 − H(ẋ)) ẋ²/x²`` [m²].
+        energy_gain: ``λ`` in ``L_e = λ (1 − H(ẋ)) ẋ² (1/x − 1/r)₊²`` [m²].
+        horizon: the range ``r`` beyond which the leaf is inactive [m or rad].
         min_clearance: clamp of ``x`` used inside ``h`` and ``L_e`` [m or rad].
         geometry: optional replacement ``h(x, ẋ)``; receives the clamped ``x``.
         energy: optional replacement ``L_e(x, ẋ)``; receives the clamped ``x``.
@@ -42,6 +45,7 @@ class Barrier:
 
     geometry_gain: float = 0.5
     energy_gain: float = 0.1
+    horizon: float = 0.5
     min_clearance: float = 1e-3
     geometry: GeometryFunction | None = None
     energy: EnergyFunction | None = None
@@ -51,6 +55,8 @@ class Barrier:
             raise ValueError(f"Barrier.min_clearance must be > 0, got {self.min_clearance}")
         if self.energy_gain < 0 or self.geometry_gain < 0:
             raise ValueError("Barrier gains must be >= 0")
+        if self.horizon <= self.min_clearance:
+            raise ValueError(f"Barrier.horizon must exceed min_clearance, got {self.horizon}")
 
     def weighted_geometry(self) -> WeightedGeometry:
         """The leaf ``(M_e, M_e h)`` with ``f_e`` in fresh 1-D symbols ``x``, ``ẋ``."""
@@ -58,7 +64,7 @@ class Barrier:
         xdot = ca.SX.sym("xdot", 1)
         clearance = ca.fmax(x, self.min_clearance)
         geometry = self.geometry or _default_geometry(self.geometry_gain)
-        energy = self.energy or _default_energy(self.energy_gain)
+        energy = self.energy or _default_energy(self.energy_gain, self.horizon)
         h = geometry(clearance, xdot)
         return WeightedGeometry.from_parts(h, Lagrangian(energy(clearance, xdot), x, xdot))
 
@@ -67,5 +73,5 @@ def _default_geometry(gain: float) -> GeometryFunction:
     return lambda x, xdot: -gain / x * xdot**2
 
 
-def _default_energy(gain: float) -> EnergyFunction:
-    return lambda x, xdot: gain / x**2 * (1 - ca.heaviside(xdot)) * xdot**2
+def _default_energy(gain: float, horizon: float) -> EnergyFunction:
+    return lambda x, xdot: gain * ca.fmax(0, 1 / x - 1 / horizon) ** 2 * (1 - ca.heaviside(xdot)) * xdot**2

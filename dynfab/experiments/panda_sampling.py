@@ -1,0 +1,57 @@
+"""Shared sampling helpers for the Panda experiments: reachable goals, spheres clear of the
+start pose, and the hand's start position."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from dynfab.robots import load_robot
+
+Q0 = (1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0)
+
+
+@dataclass(frozen=True)
+class PandaSampler:
+    """Numeric forward kinematics of the Panda for drawing scenarios."""
+
+    hand: ca.Function
+    spheres: ca.Function
+    sphere_radii: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+
+    @classmethod
+    def create(cls) -> PandaSampler:
+        robot = load_robot("panda")
+        kin = robot.kinematics
+        q = ca.SX.sym("q", kin.dof)
+        hand = ca.Function("hand", [q], [kin.position(q, "panda_hand")])
+        spheres = ca.Function("spheres", [q], [ca.horzcat(*[kin.position(q, s.link, offset=s.center)
+                                                           for s in robot.collision_spheres])])
+        return cls(hand, spheres, np.array([s.radius for s in robot.collision_spheres]), kin.lower, kin.upper)
+
+    def hand_position(self, q: tuple[float, ...] = Q0) -> np.ndarray:
+        return np.array(self.hand(q)).ravel()
+
+    def reachable_goal(self, rng: np.random.Generator, low: np.ndarray, high: np.ndarray,
+                       min_distance_from_start: float = 0.1) -> np.ndarray:
+        """A hand position of a random configuration within the joint limits, inside the
+        box ``[low, high]`` and away from the start hand position."""
+        start = self.hand_position()
+        while True:
+            goal = np.array(self.hand(rng.uniform(self.lower, self.upper))).ravel()
+            if np.all(goal >= low) and np.all(goal <= high) and np.linalg.norm(goal - start) > min_distance_from_start:
+                return goal
+
+    def start_clearance(self, centre: np.ndarray, radius: float) -> float:
+        """Clearance [m] of a sphere to the robot's spheres in the start pose."""
+        centres = np.array(self.spheres(Q0)).T
+        return float(np.min(np.linalg.norm(centres - centre, axis=1) - self.sphere_radii) - radius)
+
+
+def rounded(values: np.ndarray, digits: int = 4) -> list[float]:
+    """Plain floats for a scenario file."""
+    return [round(float(v), digits) for v in values]
