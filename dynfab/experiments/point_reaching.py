@@ -15,7 +15,10 @@ Distribution (all positions in metres, in the 4 m x 4 m square ``[-2, 2]^2``):
   in the square;
 - every disc is redrawn (keeping its radius) until its surface is more than 0.05 m from
   the robot's disc at the start (centre distance > radius + 0.1 + 0.05) and more than
-  0.1 m from the goal point (centre distance > radius + 0.1), as in Experiment 1;
+  0.1 m from the goal point (centre distance > radius + 0.1), as in Experiment 1, and
+  more than the robot's diameter + 0.1 m from every other disc, so that every gap between
+  discs is passable: two discs closer than the robot is wide form a pocket, a local
+  minimum that no reactive planner is expected to leave (the paper's "deadlocks");
 - dt 0.01 s, duration 20 s, static fabric planner unless told otherwise.
 """
 
@@ -32,6 +35,7 @@ BLOCKING_FRACTION = (0.3, 0.7)
 ROBOT_RADIUS = 0.1
 START_MARGIN = 0.05
 GOAL_MARGIN = 0.1
+PASSAGE_MARGIN = 0.1
 TOLERANCE = 0.05
 DT = 0.01
 DURATION = 20.0
@@ -50,15 +54,19 @@ def scenario(seed: int, planner: str = "static-fabric") -> dict[str, Any]:
     rng = np.random.default_rng(seed)
     start = rng.uniform(-HALF_SIDE, HALF_SIDE, 2)
     goal = _goal(rng, start)
-    obstacles = []
+    obstacles: list[dict[str, Any]] = []
+    discs: list[tuple[np.ndarray, float]] = []
     for index in range(int(rng.integers(1, 6))):
         radius = float(rng.uniform(*DISC_RADIUS))
         while True:
             centre = _blocking_centre(rng, start, goal, radius) if index == 0 else rng.uniform(-HALF_SIDE, HALF_SIDE, 2)
             start_gap = np.linalg.norm(centre - start) - radius - ROBOT_RADIUS
             goal_gap = np.linalg.norm(centre - goal) - radius
-            if start_gap > START_MARGIN and goal_gap > GOAL_MARGIN:
+            passable = all(np.linalg.norm(centre - other) - radius - other_radius > 2 * ROBOT_RADIUS + PASSAGE_MARGIN
+                           for other, other_radius in discs)
+            if start_gap > START_MARGIN and goal_gap > GOAL_MARGIN and passable:
                 break
+        discs.append((centre, radius))
         obstacles.append({"type": "sphere", "position": _rounded(centre), "radius": round(radius, 4)})
     return {
         "robot": "point",

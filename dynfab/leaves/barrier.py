@@ -45,7 +45,7 @@ class Barrier:
 
     geometry_gain: float = 0.5
     energy_gain: float = 0.1
-    horizon: float = 0.5
+    horizon: float = 0.3
     min_clearance: float = 1e-3
     geometry: GeometryFunction | None = None
     energy: EnergyFunction | None = None

@@ -31,7 +31,7 @@ class SphereObstacleAvoidance:
             mean clearance 0.28 m, mean time to goal 3.6 s.
     """
 
-    barrier: Barrier = field(default_factory=lambda: Barrier(geometry_gain=1.0, energy_gain=0.5))
+    barrier: Barrier = field(default_factory=lambda: Barrier(geometry_gain=5.0, energy_gain=0.5, horizon=0.3))
 
     def on_point(self, point: ca.SX, point_velocity: ca.SX, obstacle: Reference,
                  obstacle_radius: ca.SX, sphere_radius: float) -> WeightedGeometry:

@@ -24,7 +24,7 @@ class SelfCollisionAvoidance:
         barrier: geometry and energy on the pair's clearance.
     """
 
-    barrier: Barrier = field(default_factory=lambda: Barrier(geometry_gain=0.5, energy_gain=0.1))
+    barrier: Barrier = field(default_factory=lambda: Barrier(geometry_gain=0.5, energy_gain=0.1, horizon=0.2))
 
     def on_pair(self, sphere_a: DifferentialMap, sphere_b: DifferentialMap,
                 radius_a: float, radius_b: float) -> WeightedGeometry:
