@@ -32,7 +32,7 @@ from dynfab.maps import DifferentialMap, Reference, linear_map, selected
 from dynfab.parameters import ParameterLayout, ParameterSymbols, RuntimeParameters
 from dynfab.robots.robot import Robot
 from dynfab.spec import Spec
-from dynfab.speed_control import SpeedControl
+from dynfab.speed_control import EnvironmentMotion, SpeedControl
 
 _AXES = "xyz"
 
@@ -189,15 +189,18 @@ class FabricPlanner:
         params = self._layout.symbols()
         geometry = self.config.speed_control.base(q, qdot)
         sphere_maps = self._sphere_maps(q, qdot)
-        for term in self._obstacle_terms(sphere_maps, params):
+        obstacle_momentum = ca.SX(n, 1)
+        for term, momentum in self._obstacle_terms(sphere_maps, params):
             geometry = geometry + term
+            obstacle_momentum = obstacle_momentum + momentum
         for term in self._self_collision_terms(sphere_maps):
             geometry = geometry + term
         if self.config.joint_limits is not None:
             kin = self.robot.kinematics
             geometry = geometry + self.config.joint_limits.on_joints(q, qdot, kin.lower, kin.upper)
         forcing, goal_distance, reference_velocity = self._forcing(q, qdot, params)
-        qddot = self.config.speed_control.acceleration(geometry, forcing, goal_distance, reference_velocity)
+        motion = EnvironmentMotion(reference_velocity, obstacle_momentum) if self.config.dynamic else None
+        qddot = self.config.speed_control.acceleration(geometry, forcing, goal_distance, motion)
         inner = ca.Function("fabric_parts", [q, qdot, params.vector], [qddot])
         z = ca.SX.sym("z", 2 * n + self._layout.size)
         return ca.Function("fabric", [z], [inner(z[:n], z[n:2 * n], z[2 * n:])], {"cse": True})
@@ -211,9 +214,11 @@ class FabricPlanner:
             maps.append(DifferentialMap.from_expression(position[:dims], q, qdot))
         return maps
 
-    def _obstacle_terms(self, sphere_maps: list[DifferentialMap], params: ParameterSymbols) -> list[WeightedGeometry]:
+    def _obstacle_terms(self, sphere_maps: list[DifferentialMap],
+                        params: ParameterSymbols) -> list[tuple[WeightedGeometry, ca.SX]]:
         """Per robot sphere: the obstacle leaves of all slots summed in the sphere's point
-        space, then pulled once to joint space."""
+        space and pulled once to joint space, with their momentum ``J_pᵀ Σ_o M_o ċ_o``
+        (structurally zero for a static planner)."""
         avoidance = self.config.obstacle_avoidance
         if avoidance is None or self.config.obstacle_slots == 0:
             return []
@@ -231,12 +236,15 @@ class FabricPlanner:
                 continue  # a sphere no joint moves (e.g. on the base) cannot avoid anything
             p = ca.SX.sym("p", dims)
             pdot = ca.SX.sym("pdot", dims)
-            leaves = [avoidance.on_point(p, pdot, _first_axes(obstacle, dims), radius, sphere.radius)
-                      for obstacle, radius in zip(params.obstacles, params.obstacle_radius)]
-            in_point_space = leaves[0]
-            for leaf in leaves[1:]:
-                in_point_space = in_point_space + leaf
-            terms.append(in_point_space.pull(point_map))
+            in_point_space = None
+            momentum = ca.SX(dims, 1)
+            for obstacle, radius in zip(params.obstacles, params.obstacle_radius):
+                planar_obstacle = _first_axes(obstacle, dims)
+                leaf = avoidance.on_point(p, pdot, planar_obstacle, radius, sphere.radius)
+                in_point_space = leaf if in_point_space is None else in_point_space + leaf
+                momentum = momentum + ca.mtimes(leaf.M, planar_obstacle.velocity)
+            (momentum,) = point_map.substitute([momentum], p, pdot)
+            terms.append((in_point_space.pull(point_map), ca.mtimes(point_map.jacobian.T, momentum)))
         return terms
 
     def _self_collision_terms(self, sphere_maps: list[DifferentialMap]) -> list[WeightedGeometry]:

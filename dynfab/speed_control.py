@@ -68,28 +68,34 @@ class SpeedControl:
         return WeightedGeometry(self.base_metric * ca.SX.eye(n), ca.SX(n, 1), ca.SX(n, 1), q, qdot)
 
     def acceleration(self, geometry: WeightedGeometry, forcing: Spec, goal_distance: ca.SX,
-                     reference_velocity: ca.SX | None = None) -> ca.SX:
+                     motion: EnvironmentMotion | None = None) -> ca.SX:
         """``q̈`` of the damped, speed-controlled, forced fabric (module docstring).
 
         Args:
             geometry: summed weighted geometry in joint space (base included).
             forcing: summed forcing spec in joint space.
             goal_distance: ``‖x_goal‖`` of the primary goal [m].
-            reference_velocity: ``q̇̃ = J⁺ ẋ̃``, the primary goal reference's velocity pulled
-                to joint space (dynamic fabrics). Energization, speed control and damping
-                then act on the relative velocity (paper Lemma "Dynamically energized
-                fabrics": damping ``B ẋ_r``), so following a moving reference is not
-                damped. The reference part of that term, ``(β − α_ex) q̇̃``, pushes the robot
-                along the reference; it is applied as a force weighted like the goal, i.e.
-                ``W q̇̃`` with ``W = (M + M_ψ)⁻¹ (c I + M_ψ)``, so the leaves' metrics (an
-                obstacle ahead) scale it down exactly as they scale the goal's forcing;
-                in free space ``W = I``. ``None``: a static goal, ``q̇̃ = 0``.
+            motion: how the goal reference and the obstacles move (dynamic fabrics);
+                ``None``: a static world.
+
+        With ``motion``, energization and speed control act on the velocity relative to
+        the goal reference, ``q̇ − q̇̃`` (paper Lemma "Dynamically energized fabrics":
+        damping ``B ẋ_r``), and damping pulls ``q̇`` toward the metric-weighted velocity
+        of the environment,
+
+            v_env = (M + M_ψ)⁻¹ (c q̇̃ + M_ψ q̇̃ + Σ J_pᵀ M_o ċ_o),
+
+        which is the goal reference's velocity where the goal's metric dominates (so a
+        moving goal is followed without lag), a moving obstacle's velocity where that
+        obstacle's metric dominates (so a robot pushed by an obstacle is not damped into
+        it), and rest where the base metric dominates. In a static world ``v_env = 0``.
         """
-        qdot = geometry.xdot if reference_velocity is None else geometry.xdot - reference_velocity
+        qdot = geometry.xdot if motion is None else geometry.xdot - motion.reference_velocity
         eps = self.regularization
         speed_squared = ca.dot(qdot, qdot)
+        total_metric = geometry.M + forcing.M
         geometric = -cholesky_solve(geometry.M, geometry.f_geometry)
-        forced = -cholesky_solve(geometry.M + forcing.M, geometry.f_geometry + forcing.f)
+        forced = -cholesky_solve(total_metric, geometry.f_geometry + forcing.f)
         alpha_le = energization_coefficient(geometry.M, geometry.f_geometry, geometry.f_energy, qdot, eps)
         alpha_geometric = -ca.dot(qdot, geometric) / (speed_squared + eps)
         alpha_forced = -ca.dot(qdot, forced) / (speed_squared + eps)
@@ -97,8 +103,23 @@ class SpeedControl:
         alpha_ex = eta * alpha_geometric + (1 - eta) * alpha_forced
         near_goal = 0.5 * (ca.tanh(-self.goal_damping_sharpness * (goal_distance - self.goal_damping_radius)) + 1)
         beta = self.damping + self.goal_damping * near_goal + ca.fmax(0, alpha_ex - alpha_le)
-        if reference_velocity is None:
+        if motion is None:
             return forced + (alpha_ex - beta) * qdot
-        goal_weighted = self.base_metric * reference_velocity + ca.mtimes(forcing.M, reference_velocity)
-        steering = cholesky_solve(geometry.M + forcing.M, goal_weighted)
-        return forced + (alpha_ex - beta) * (geometry.xdot - steering)
+        reference = motion.reference_velocity
+        momentum = self.base_metric * reference + ca.mtimes(forcing.M, reference) + motion.obstacle_momentum
+        environment_velocity = cholesky_solve(total_metric, momentum)
+        return forced + (alpha_ex - beta) * (geometry.xdot - environment_velocity)
+
+
+@dataclass(frozen=True)
+class EnvironmentMotion:
+    """How the goal reference and the obstacles move, seen from joint space.
+
+    Attributes:
+        reference_velocity: ``q̇̃ = J⁺ ẋ̃`` of the primary goal (n, 1) [rad/s].
+        obstacle_momentum: ``Σ J_pᵀ M_o ċ_o`` over robot spheres ``p`` and moving
+            obstacles ``o`` (n, 1): each obstacle's velocity weighted by its leaf metric.
+    """
+
+    reference_velocity: ca.SX
+    obstacle_momentum: ca.SX

@@ -30,7 +30,7 @@ from dynfab.references import RRT_MARGIN
 
 CIRCLE_CENTER = np.array([0.45, 0.0, 0.55])
 CIRCLE_RADIUS = 0.2
-CIRCLE_SPEED = 0.4  # [rad/s]
+CIRCLE_SPEED = 0.6  # [rad/s]
 ANALYTIC_DURATION = 20.0
 ANALYTIC_SPHERE_RADIUS = 0.1
 ANALYTIC_LOW, ANALYTIC_HIGH = np.array([0.0, -0.6, 0.2]), np.array([0.8, 0.6, 1.0])
