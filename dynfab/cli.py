@@ -1,4 +1,4 @@
-"""The ``dynfab`` command: ``run`` a scenario file, or the ``demo``.
+"""The ``dynfab`` command: ``run`` a scenario file, or a ``demo``.
 
 Exit codes: 0 success (the run finished, whatever its metrics), 2 invalid input (one
 line on stderr naming the field), 1 unexpected failure.
@@ -7,15 +7,21 @@ line on stderr naming the field), 1 unexpected failure.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 from importlib.resources import files
 from pathlib import Path
 
 from dynfab.runner import RunResult, run_scenario
-from dynfab.scenario import ScenarioError, load_scenario
+from dynfab.scenario import PLANNERS, Scenario, ScenarioError, load_scenario
 
-DEMO_SCENARIO = "panda_spheres.yaml"
+#: ``dynfab demo NAME``: the bundled scenario, and whether the demo also runs the static
+#: baseline on it for comparison.
+DEMOS = {
+    "spheres": ("panda_spheres.yaml", False),
+    "dynamic": ("panda_dynamic.yaml", True),
+}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -23,24 +29,37 @@ def main(argv: list[str] | None = None) -> int:
     commands = parser.add_subparsers(dest="command", required=True)
     run = commands.add_parser("run", help="run a scenario file in the embedded simulator")
     run.add_argument("file", type=Path, help="scenario YAML file")
+    run.add_argument("--planner", choices=PLANNERS, help="override the scenario's planner")
     _output_options(run)
-    demo = commands.add_parser("demo", help="the Panda reaching a goal among spheres")
+    demo = commands.add_parser("demo", help="spheres: the Panda reaching a goal among spheres (default); "
+                                            "dynamic: following a circle past a moving sphere, DF vs SF")
+    demo.add_argument("name", nargs="?", choices=sorted(DEMOS), default="spheres")
     _output_options(demo, default_plot=Path("dynfab-demo.png"))
     args = parser.parse_args(argv)
-    path = args.file if args.command == "run" else Path(str(files("dynfab.scenarios") / DEMO_SCENARIO))
+    if args.command == "run":
+        path, planners = args.file, [args.planner]
+    else:
+        filename, compare = DEMOS[args.name]
+        path = Path(str(files("dynfab.scenarios") / filename))
+        planners = [None, "static-fabric"] if compare else [None]
     try:
         scenario = load_scenario(path)
-        header = (f"dynfab: {path.name}: robot {scenario.robot if isinstance(scenario.robot, str) else 'urdf'}, "
-                  f"planner {scenario.planner}, {scenario.duration:g} s at dt {scenario.dt:g} s")
-        result = run_scenario(scenario, progress=_ProgressBar(header))
+        results = [_run(path, scenario if planner is None else dataclasses.replace(scenario, planner=planner))
+                   for planner in planners]
     except ScenarioError as error:
         print(f"dynfab: error: {error}", file=sys.stderr)
         return 2
-    _report(result, args.json)
+    _report(results, args.json)
     if args.plot is not None:
-        _plot(result, args.plot)
+        _plot(results[0], args.plot)
         print(f"dynfab: plot written to {args.plot}", file=sys.stderr)
     return 0
+
+
+def _run(path: Path, scenario: Scenario) -> RunResult:
+    header = (f"dynfab: {path.name}: robot {scenario.robot if isinstance(scenario.robot, str) else 'urdf'}, "
+              f"planner {scenario.planner}, {scenario.duration:g} s at dt {scenario.dt:g} s")
+    return run_scenario(scenario, progress=_ProgressBar(header))
 
 
 def _output_options(parser: argparse.ArgumentParser, default_plot: Path | None = None) -> None:
@@ -73,14 +92,23 @@ class _ProgressBar:
             print(f"  simulating [{bar:<25}] {percent:3d}%", file=sys.stderr)
 
 
-def _report(result: RunResult, as_json: bool) -> None:
-    metrics = result.metrics.to_dict()
+def _report(results: list[RunResult], as_json: bool) -> None:
+    """One run: its metrics (JSON or a table). Several: one column (or JSON key) each."""
+    metrics = [result.metrics.to_dict() for result in results]
     if as_json:
-        print(json.dumps(metrics))
+        if len(results) == 1:
+            print(json.dumps(metrics[0]))
+        else:
+            print(json.dumps({result.scenario.planner: m for result, m in zip(results, metrics)}))
         return
-    for key, value in metrics.items():
-        shown = f"{value:.4g}" if isinstance(value, float) else value
-        print(f"{key:>15}: {shown}")
+    if len(results) > 1:
+        print(f"{'':>15}  " + "".join(f"{result.scenario.planner:>16}" for result in results))
+    for key in metrics[0]:
+        print(f"{key:>15}: " + "".join(f"{_shown(m[key]):>16}" for m in metrics))
+
+
+def _shown(value: object) -> str:
+    return f"{value:.4g}" if isinstance(value, float) else str(value)
 
 
 def _plot(result: RunResult, path: Path) -> None:

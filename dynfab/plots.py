@@ -58,29 +58,50 @@ def plot_run(
     radii = np.asarray(obstacle_radii, dtype=float)
     markers = [(np.asarray(goal, dtype=float), float(tol)) for goal, tol in goals]
     has_clearance = clearance_over_time is not None
+    reference = markers[0][0] if markers and markers[0][0].ndim == 2 else None
     if planar:
-        figure = Figure(figsize=(11.0 if has_clearance else 6.0, 5.0), layout="constrained")
-        grid = figure.add_gridspec(1, 2 if has_clearance else 1)
+        panels = 1 + has_clearance + (reference is not None)
+        figure = Figure(figsize=(5.5 * panels, 5.0), layout="constrained")
+        grid = figure.add_gridspec(1, panels)
         top = figure.add_subplot(grid[0, 0])
         _draw_projection(top, (0, 1), positions, markers, obstacles, radii)
         top.legend(loc="best", fontsize="small")
-        clearance_slot = grid[0, 1] if has_clearance else None
+        extra = [grid[0, k] for k in range(1, panels)]
     else:
-        size = (12.0, 10.0) if has_clearance else (16.0, 5.0)
-        figure = Figure(figsize=size, layout="constrained")
-        grid = figure.add_gridspec(2 if has_clearance else 1, 2 if has_clearance else 3)
+        figure = Figure(figsize=(16.0, 10.0), layout="constrained")
+        grid = figure.add_gridspec(2, 3)
         view = figure.add_subplot(grid[0, 0], projection="3d")
         _draw_3d(view, positions, markers, obstacles, radii)
-        top = figure.add_subplot(grid[0, 1])
-        _draw_projection(top, (0, 1), positions, markers, obstacles, radii)
-        top.legend(loc="best", fontsize="small")
-        side = figure.add_subplot(grid[1, 0] if has_clearance else grid[0, 2])
-        _draw_projection(side, (0, 2), positions, markers, obstacles, radii)
-        clearance_slot = grid[1, 1] if has_clearance else None
-    if clearance_slot is not None and clearance_over_time is not None:
-        _draw_clearance(figure.add_subplot(clearance_slot), clearance_over_time, times)
+        for slot, axes in ((grid[0, 1], (0, 1)), (grid[0, 2], (1, 2)), (grid[1, 0], (0, 2))):
+            ax = figure.add_subplot(slot)
+            _draw_projection(ax, axes, positions, markers, obstacles, radii)
+            if axes == (0, 1):
+                ax.legend(loc="best", fontsize="small")
+        extra = [grid[1, 1], grid[1, 2]]
+    if clearance_over_time is not None:
+        _draw_clearance(figure.add_subplot(extra.pop(0)), clearance_over_time, times)
+    if reference is not None:
+        _draw_tracking_error(figure.add_subplot(extra.pop(0)), positions, reference, markers[0][1], times)
     figure.suptitle(title)
     figure.savefig(Path(path), dpi=100)
+
+
+def _draw_tracking_error(ax: Axes, positions: NDArray[np.float64], reference: NDArray[np.float64],
+                         tolerance: float, times: ArrayLike | None) -> None:
+    """Distance between the goal link and its moving reference over time."""
+    error = np.linalg.norm(positions - reference[:, : positions.shape[1]], axis=1)
+    x = np.arange(error.size) if times is None else np.asarray(times, dtype=float)
+    ax.plot(x, error, color=_PATH_COLOR)
+    ax.axhline(tolerance, color=_GOAL_COLOR, linestyle="--", linewidth=1, label="tolerance")
+    ax.set_xlabel("time [s]" if times is not None else "step")
+    ax.set_ylabel("tracking error [m]")
+    ax.set_title(f"tracking error (mean {error.mean():.3f} m)")
+    ax.set_yscale("log")
+    ax.legend(loc="best", fontsize="small")
+    ax.grid(True, alpha=0.3)
+
+
+_VIEW_NAMES = {(0, 1): "top (x-y)", (1, 2): "front (y-z)", (0, 2): "side (x-z)"}
 
 
 def _draw_projection(
@@ -116,7 +137,7 @@ def _draw_projection(
     ax.plot(positions[0, i], positions[0, j], "o", color=_PATH_COLOR, label="start")
     ax.set_xlabel(f"{_AXIS_NAMES[i]} [m]")
     ax.set_ylabel(f"{_AXIS_NAMES[j]} [m]")
-    ax.set_title("top (x-y)" if axes == (0, 1) else "side (x-z)")
+    ax.set_title(_VIEW_NAMES[axes])
     ax.set_aspect("equal", adjustable="datalim")
     ax.grid(True, alpha=0.3)
 
