@@ -30,19 +30,25 @@ PANDA_URDF = BENCH_DIR.parent / "dynfab" / "robots" / "data" / "panda.urdf"
 Q0 = np.array([1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0])
 
 
-def measure_ours(spheres: int, steps: int) -> dict:
-    """Build the planner and time ``compute`` (run in a fresh interpreter by :func:`main`)."""
+def measure_ours(spheres: int, steps: int, dynamic: bool = False) -> dict:
+    """Build the planner and time ``compute`` (run in a fresh interpreter by :func:`main`).
+    ``dynamic``: the dynamic-fabric planner (goal and obstacles with velocities and
+    accelerations), with moving obstacles."""
     from dynfab.planner import FabricPlanner, GoalConfig, PlannerConfig
     from dynfab.robots import load_robot
 
     start = time.perf_counter()
     robot = load_robot("panda")
-    planner = FabricPlanner(robot, PlannerConfig(goals=(GoalConfig(link="panda_hand"),), obstacle_slots=spheres))
+    planner = FabricPlanner(robot, PlannerConfig(goals=(GoalConfig(link="panda_hand"),), obstacle_slots=spheres,
+                                                 dynamic=dynamic))
     build_s = time.perf_counter() - start
     rng = np.random.default_rng(0)
     planner.parameters.goal_position[0][:] = [0.5, -0.4, 0.3]
     planner.parameters.obstacle_position[:] = rng.uniform([-0.6, -0.8, 0.05], [0.8, 0.8, 1.0], size=(spheres, 3))
     planner.parameters.obstacle_radius[:] = 0.15
+    if dynamic:
+        planner.parameters.obstacle_velocity[:] = rng.normal(0, 0.2, size=(spheres, 3))
+        planner.parameters.goal_velocity[0][:] = [0.05, 0.0, 0.0]
     states = [(Q0 + rng.normal(0, 0.01, 7), rng.normal(0, 0.1, 7)) for _ in range(steps)]
     for q, qdot in states[:20]:
         planner.compute(q, qdot)
@@ -57,9 +63,9 @@ def measure_ours(spheres: int, steps: int) -> dict:
             "nan_fraction": non_finite / steps}
 
 
-def _ours_in_fresh_process(spheres: int, steps: int) -> dict:
+def _ours_in_fresh_process(spheres: int, steps: int, dynamic: bool = False) -> dict:
     code = ("import json, sys; sys.path.insert(0, %r); from bench_planner import measure_ours; "
-            "print(json.dumps(measure_ours(%d, %d)))" % (str(BENCH_DIR), spheres, steps))
+            "print(json.dumps(measure_ours(%d, %d, %r)))" % (str(BENCH_DIR), spheres, steps, dynamic))
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
@@ -85,6 +91,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{n:>7} | {ours['build_s']:>7.2f} vs {ref['build_s']:>6.2f} | {ours['step_ms_median']:>9.4f} vs "
               f"{ref['step_ms_median']:>8.4f} | {ours['n_instructions']:>8} vs {ref['n_instructions']:>7} | {ratio:>6.1f}x")
     print("(ours vs reference fabrics 0.10.0; NaN fraction ours 0 by construction)")
+    print()
+    print("dynamic fabrics (moving goal and obstacles), ours only:")
+    for n in args.spheres:
+        dyn = _ours_in_fresh_process(n, args.steps, dynamic=True)
+        print(f"{n:>7} spheres | build {dyn['build_s']:.2f} s | step median {dyn['step_ms_median']:.4f} ms | "
+              f"{dyn['n_instructions']} SX instructions")
     if missing:
         print(REFERENCE_MISSING_MESSAGE)
     return 0

@@ -59,14 +59,35 @@ class Barrier:
             raise ValueError(f"Barrier.horizon must exceed min_clearance, got {self.horizon}")
 
     def weighted_geometry(self) -> WeightedGeometry:
-        """The leaf ``(M_e, M_e h)`` with ``f_e`` in fresh 1-D symbols ``x``, ``ẋ``."""
+        """The leaf ``(M_e, M_e h)`` with ``f_e`` in fresh 1-D symbols ``x``, ``ẋ``.
+
+        A user energy goes through the Euler-Lagrange equation (:class:`Lagrangian`);
+        the default energy's spec is written out in closed form (the same result, checked
+        in the tests, in half the instructions: this leaf is evaluated for every robot
+        sphere and obstacle slot): with ``u = (1/x − 1/r)₊`` and ``s = 1 − H(ẋ)``,
+        ``M_e = 2λ u² s`` and ``f_e = ∂L_e/∂x``-terms ``= −2λ u s ẋ² / x²``.
+        """
         x = ca.SX.sym("x", 1)
         xdot = ca.SX.sym("xdot", 1)
         clearance = ca.fmax(x, self.min_clearance)
         geometry = self.geometry or _default_geometry(self.geometry_gain)
-        energy = self.energy or _default_energy(self.energy_gain, self.horizon)
         h = geometry(clearance, xdot)
-        return WeightedGeometry.from_parts(h, Lagrangian(energy(clearance, xdot), x, xdot))
+        if self.energy is not None:
+            return WeightedGeometry.from_parts(h, Lagrangian(self.energy(clearance, xdot), x, xdot))
+        inverse = 1 / clearance
+        reach = ca.fmax(0, inverse - 1 / self.horizon)
+        gate = 1 - ca.heaviside(xdot)
+        metric = 2 * self.energy_gain * reach**2 * gate
+        unclamped = x > self.min_clearance
+        f_energy = -2 * self.energy_gain * reach * gate * xdot**2 * inverse**2 * unclamped
+        return WeightedGeometry(metric, metric * h, f_energy, x, xdot)
+
+    def lagrangian(self) -> Lagrangian:
+        """The energy ``L_e(x, ẋ)`` (default or user-given) in fresh 1-D symbols."""
+        x = ca.SX.sym("x", 1)
+        xdot = ca.SX.sym("xdot", 1)
+        energy = self.energy or _default_energy(self.energy_gain, self.horizon)
+        return Lagrangian(energy(ca.fmax(x, self.min_clearance), xdot), x, xdot)
 
 
 def _default_geometry(gain: float) -> GeometryFunction:

@@ -50,5 +50,5 @@ class SphereObstacleAvoidance:
         relative_velocity = ca.SX.sym("p_rel_dot", d)
         distance = sphere_distance_map(relative, relative_velocity, ca.SX(d, 1), obstacle_radius + sphere_radius)
         active = obstacle_radius > 0
-        in_obstacle_frame = self.barrier.weighted_geometry().pull(distance)
-        return in_obstacle_frame.dynamic_pull(point, point_velocity, obstacle).scaled(active)
+        in_obstacle_frame = self.barrier.weighted_geometry().scaled(active).pull(distance)
+        return in_obstacle_frame.dynamic_pull(point, point_velocity, obstacle)

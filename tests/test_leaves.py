@@ -1,0 +1,47 @@
+"""The leaves' closed forms agree with the general Euler-Lagrange path, and their shapes."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from dynfab.energy import WeightedGeometry
+from dynfab.leaves.barrier import Barrier
+
+RNG = np.random.default_rng(5)
+
+
+@pytest.mark.parametrize("barrier", [Barrier(), Barrier(geometry_gain=5.0, energy_gain=0.5, horizon=0.2),
+                                     Barrier(geometry=lambda x, xdot: -1.0 / x**2 * xdot**2, horizon=1.0)])
+def test_default_barrier_closed_form_equals_euler_lagrange(barrier: Barrier) -> None:
+    closed = barrier.weighted_geometry()
+    lagrangian = barrier.lagrangian()
+    h = closed.f_geometry / ca.fmax(closed.M, 1e-300)  # recover h where the metric is active
+    general = WeightedGeometry.from_parts(ca.substitute(h, closed.x, lagrangian.x), lagrangian)
+    f = ca.Function("f", [closed.x, closed.xdot, lagrangian.x, lagrangian.xdot],
+                    [closed.M, closed.f_geometry, closed.f_energy, general.M, general.f_geometry, general.f_energy])
+    for _ in range(200):
+        x = RNG.uniform(-0.05, 1.2 * barrier.horizon)
+        xdot = RNG.normal()
+        values = [float(v) for v in f(x, xdot, x, xdot)]
+        for a, b in zip(values[:3], values[3:]):
+            assert a == pytest.approx(b, rel=1e-9, abs=1e-9)
+
+
+def test_barrier_metric_active_only_while_approaching_within_range() -> None:
+    barrier = Barrier(energy_gain=0.5, horizon=0.2)
+    leaf = barrier.weighted_geometry()
+    metric = ca.Function("m", [leaf.x, leaf.xdot], [leaf.M])
+    assert float(metric(0.1, -0.3)) == pytest.approx(2 * 0.5 * (10 - 5) ** 2)
+    assert float(metric(0.1, 0.3)) == 0.0
+    assert float(metric(0.25, -0.3)) == 0.0
+    assert np.isfinite(float(metric(-0.5, -1.0)))
+
+
+@pytest.mark.parametrize(("kwargs", "message"), [
+    ({"min_clearance": 0.0}, "min_clearance"), ({"energy_gain": -1.0}, "gains"),
+    ({"horizon": 1e-4}, "horizon")])
+def test_barrier_rejects_bad_parameters(kwargs: dict, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        Barrier(**kwargs)
