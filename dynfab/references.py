@@ -89,13 +89,22 @@ def _rrt_reference(scenario: Scenario, robot: Robot, goal: GoalSpec, field: str)
     seed = goal.trajectory.get("seed", 0)
     if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
         raise ScenarioError(f"{field}.seed", f"expected a non-negative integer, got {seed!r}")
+    if goal.parent_link is not None:
+        raise ScenarioError(f"goal[{scenario.goals.index(goal)}].parent_link",
+                            "rrt paths are planned in the world frame; remove parent_link")
     axes = goal_axes(goal, robot)
-    start_position = np.asarray(robot.kinematics.position(np.asarray(scenario.initial_state.q), goal.link,
-                                                          parent=goal.parent_link)).ravel()[axes]
+    start_position = np.asarray(robot.kinematics.position(np.asarray(scenario.initial_state.q),
+                                                          goal.link)).ravel()[axes]
     if len(target) != len(axes):
         raise ScenarioError(f"{field}.goal", f"expected {len(axes)} numbers, got {len(target)}")
-    spheres = [(np.asarray(o.position, dtype=float)[: len(axes)], o.radius)
+    spheres = [(np.asarray(o.position, dtype=float)[axes], o.radius)
                for o in scenario.obstacles if o.trajectory is None]
+    for k, (centre, radius) in enumerate(spheres):
+        for name, point, where in (("start", start_position, field), ("goal", target, f"{field}.goal")):
+            gap = float(np.linalg.norm(point - centre)) - radius
+            if gap < RRT_MARGIN:
+                raise ScenarioError(where, f"the path's {name} {np.round(point, 3).tolist()} is {gap:.3f} m from "
+                                    f"the surface of static sphere {k}; the RRT keeps {RRT_MARGIN} m")
     points = np.vstack([start_position, target] + [centre for centre, _ in spheres])
     extent = max((radius for _, radius in spheres), default=0.0) + RRT_BOUNDS_MARGIN
     try:
