@@ -110,7 +110,7 @@ def test_wrong_command_shape_is_a_controller_error() -> None:
 @pytest.mark.parametrize(
     ("q0", "qdot0", "dt", "duration", "substeps", "match"),
     [
-        ([0.0], [0.0, 0.0], 0.1, 1.0, 1, "equal length"),
+        ([0.0], [0.0, 0.0], 0.1, 1.0, 1, "1 positions and 1 velocities"),
         ([np.inf], [0.0], 0.1, 1.0, 1, "finite"),
         ([0.0], [0.0], 0.0, 1.0, 1, "dt must be a positive"),
         ([0.0], [0.0], 0.1, 0.05, 1, "duration must be at least dt"),
@@ -128,3 +128,34 @@ def test_n_steps_absorbs_round_off() -> None:
     assert n_steps_for(30.0, 0.01) == 3000
     assert n_steps_for(0.3, 0.1) == 3
     assert n_steps_for(1.05, 0.1) == 10
+
+
+def test_differential_drive_follows_an_exact_arc_at_constant_speeds() -> None:
+    """Constant v, ω: the base moves on the circle of radius v/ω, whatever the sub-steps."""
+    from dynfab.sim import DifferentialDrive
+
+    v, omega = 0.5, 0.4
+    record = simulate(lambda t, q, u: np.zeros(3), [0.0, 0.0, 0.0, 0.2], [v, omega, 0.1], 0.01, 5.0,
+                      substeps=3, model=DifferentialDrive())
+    heading = omega * record.t
+    np.testing.assert_allclose(record.q[:, 2], heading, atol=1e-12)
+    np.testing.assert_allclose(record.q[:, 0], v / omega * np.sin(heading), atol=1e-12)
+    np.testing.assert_allclose(record.q[:, 1], v / omega * (1 - np.cos(heading)), atol=1e-12)
+    np.testing.assert_allclose(record.q[:, 3], 0.2 + 0.1 * record.t, atol=1e-12)
+
+
+def test_differential_drive_never_slides_sideways() -> None:
+    """Each sub-step's displacement lies along the chord of an arc tangent to the heading:
+    its component normal to the mean heading vanishes to machine precision."""
+    from dynfab.sim.models import DifferentialDrive
+
+    rng = np.random.default_rng(4)
+    model = DifferentialDrive()
+    q, u = np.array([0.3, -0.2, 0.7]), np.array([0.4, -0.3])
+    for _ in range(2000):
+        acceleration = rng.normal(0, 2.0, 2)
+        new_q, u = model.step(q, u, acceleration, 0.01)
+        dx, dy = new_q[:2] - q[:2]
+        middle = 0.5 * (q[2] + new_q[2])
+        assert abs(-dx * np.sin(middle) + dy * np.cos(middle)) <= 4 * np.finfo(float).eps * (1 + np.abs(q[:2]).max())
+        q = new_q

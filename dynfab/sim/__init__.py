@@ -1,5 +1,6 @@
 """Embedded simulators that close the loop around a controller."""
 
+from dynfab.sim.models import DifferentialDrive, DoubleIntegrator, MotionModel
 from dynfab.sim.simulator import (
     Controller,
     ControllerError,
@@ -13,6 +14,9 @@ from dynfab.sim.simulator import (
 __all__ = [
     "Controller",
     "ControllerError",
+    "DifferentialDrive",
+    "DoubleIntegrator",
+    "MotionModel",
     "ProgressCallback",
     "Record",
     "StopPredicate",

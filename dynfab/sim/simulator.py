@@ -1,11 +1,15 @@
-"""Embedded kinematic simulator for holonomic robots (a double integrator per joint).
+"""Embedded kinematic simulator: closes the loop around a controller.
 
 Each control period the controller is asked for an acceleration, which is held constant
-over the period (zero-order hold) and integrated exactly in ``substeps`` sub-steps of
-length h = dt / substeps:
+over the period (zero-order hold) and integrated in ``substeps`` sub-steps of length
+h = dt / substeps by a motion model (:mod:`dynfab.sim.models`): exactly for holonomic
+joints (a double integrator per joint),
 
     q    <- q + qdot h + 1/2 qddot h^2
-    qdot <- qdot + qddot h
+    qdot <- qdot + qddot h,
+
+and along arcs for a differential-drive base, whose velocity coordinates are then
+``(v, ω, arm rates)`` instead of ``q̇``.
 """
 
 from __future__ import annotations
@@ -17,6 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+from dynfab.sim.models import DoubleIntegrator, MotionModel
 
 Controller = Callable[[float, NDArray[np.float64], NDArray[np.float64]], ArrayLike]
 """``(t [s], q, qdot) -> qddot``: commanded joint accelerations [rad/s^2 or m/s^2]."""
@@ -41,8 +47,9 @@ class Record:
     Attributes:
         t: Times of the states, shape (N + 1,) [s]; t[0] = 0.
         q: Joint positions, shape (N + 1, n).
-        qdot: Joint velocities, shape (N + 1, n).
-        qddot: Commanded accelerations, shape (N, n).
+        qdot: Velocity coordinates, shape (N + 1, m): joint velocities (m = n), or
+            ``(v, ω, arm rates)`` for a differential-drive base (m = n − 1).
+        qddot: Commanded accelerations of the velocity coordinates, shape (N, m).
         solver_time: Wall time of each controller call, shape (N,) [s].
     """
 
@@ -74,6 +81,7 @@ def simulate(
     duration: float,
     *,
     substeps: int = 1,
+    model: MotionModel = DoubleIntegrator(),
     stop_when: StopPredicate | None = None,
     progress: ProgressCallback | None = None,
 ) -> Record:
@@ -86,6 +94,7 @@ def simulate(
         dt: Control period [s] (> 0).
         duration: Simulated time [s]; the run has ``n_steps_for(duration, dt)`` steps.
         substeps: Integration sub-steps per control period (>= 1).
+        model: How a command moves the robot (default: holonomic joints).
         stop_when: Optional predicate on the new state after each step; True stops the
             run early. Without it the full duration is simulated.
         progress: Optional ``(step, n_steps)`` callback after each step.
@@ -99,10 +108,10 @@ def simulate(
     """
     q = np.array(q0, dtype=float)
     qdot = np.array(qdot0, dtype=float)
-    _check_arguments(q, qdot, dt, duration, substeps)
+    _check_arguments(q, qdot, dt, duration, substeps, model)
     n_steps = n_steps_for(duration, dt)
-    n = q.shape[0]
-    qs = np.empty((n_steps + 1, n))
+    n = qdot.shape[0]
+    qs = np.empty((n_steps + 1, q.shape[0]))
     qdots = np.empty((n_steps + 1, n))
     qddots = np.empty((n_steps, n))
     solver_time = np.empty(n_steps)
@@ -116,8 +125,7 @@ def simulate(
         solver_time[k] = time.perf_counter() - start
         qddot = _checked_command(command, n, t, k)
         for _ in range(substeps):
-            q = q + qdot * h + 0.5 * qddot * h * h
-            qdot = qdot + qddot * h
+            q, qdot = model.step(q, qdot, qddot, h)
         qs[k + 1], qdots[k + 1], qddots[k] = q, qdot, qddot
         if progress is not None:
             progress(k + 1, n_steps)
@@ -128,12 +136,14 @@ def simulate(
 
 
 def _check_arguments(
-    q: NDArray[np.float64], qdot: NDArray[np.float64], dt: float, duration: float, substeps: int
+    q: NDArray[np.float64], qdot: NDArray[np.float64], dt: float, duration: float, substeps: int,
+    model: MotionModel,
 ) -> None:
     """Raise ValueError on an invalid simulation setup."""
-    if q.ndim != 1 or q.shape != qdot.shape:
+    if q.ndim != 1 or qdot.ndim != 1 or qdot.shape[0] != model.velocity_size(q.shape[0]):
         raise ValueError(
-            f"q0 and qdot0 must be vectors of equal length, got {q.shape} and {qdot.shape}"
+            f"q0 and qdot0 must be vectors of {q.shape[0] if q.ndim == 1 else '?'} positions and "
+            f"{model.velocity_size(q.shape[0]) if q.ndim == 1 else '?'} velocities, got {q.shape} and {qdot.shape}"
         )
     if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qdot))):
         raise ValueError("the initial state must be finite")
