@@ -29,6 +29,7 @@ from dynfab.leaves.obstacle import SphereObstacleAvoidance
 from dynfab.leaves.self_collision import SelfCollisionAvoidance
 from dynfab.linalg import cholesky_solve
 from dynfab.maps import DifferentialMap, Reference, linear_map, selected
+from dynfab.nonholonomic import least_squares_acceleration, velocity_map, velocity_map_derivative
 from dynfab.parameters import ParameterLayout, ParameterSymbols, RuntimeParameters
 from dynfab.robots.robot import Robot
 from dynfab.spec import Spec
@@ -116,16 +117,17 @@ class FabricPlanner:
         self.robot = robot
         self.config = config
         self._n = robot.kinematics.dof
+        self._nv = self._n - 1 if robot.base is not None else self._n
         goal_dimensions = tuple(len(self._goal_axes(goal)) if goal.link else len(self._goal_joints(goal))
                                 for goal in config.goals)
         self._layout = ParameterLayout(goal_dimensions, config.obstacle_slots, config.dynamic)
         self.function = self._build()
-        self._input = np.zeros(2 * self._n + self._layout.size)
-        self._output = np.zeros(self._n)
+        self._input = np.zeros(self._n + self._nv + self._layout.size)
+        self._output = np.zeros(self._nv)
         self._buffer, self._evaluate = self.function.buffer()
         self._buffer.set_arg(0, memoryview(self._input))
         self._buffer.set_res(0, memoryview(self._output))
-        self.parameters: RuntimeParameters = self._layout.views(self._input[2 * self._n:])
+        self.parameters: RuntimeParameters = self._layout.views(self._input[self._n + self._nv:])
         for i, goal in enumerate(config.goals):
             self.parameters.goal_weight[i] = goal.weight
         self.fallback_count = 0
@@ -137,21 +139,30 @@ class FabricPlanner:
         return self.function.n_instructions()
 
     def compute(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
-        """``q̈`` for the joint state, with the current parameters. Always finite.
+        """The commanded acceleration for the state, with the current parameters. Always
+        finite.
+
+        Args:
+            q: configuration (n,); for a differential-drive base ``(x, y, θ, arm...)``.
+            qdot: velocity coordinates: ``q̇`` (n,), or for a differential-drive base the
+                actuated velocities ``(v, ω, arm rates...)`` (n − 1,).
+
+        Returns:
+            ``q̈`` (n,), or ``(v̇, ω̇, arm accelerations...)`` (n − 1,) for a base.
 
         Raises:
             ValueError: if ``q`` or ``q̇`` has the wrong shape, or the state or a
                 parameter is not finite.
         """
-        n = self._n
+        n, nv = self._n, self._nv
         q = np.asarray(q, dtype=float)
         qdot = np.asarray(qdot, dtype=float)
         if q.shape != (n,):
             raise ValueError(f"q must have shape ({n},), got {q.shape}")
-        if qdot.shape != (n,):
-            raise ValueError(f"qdot must have shape ({n},), got {qdot.shape}")
+        if qdot.shape != (nv,):
+            raise ValueError(f"qdot must have shape ({nv},), got {qdot.shape}")
         self._input[:n] = q
-        self._input[n:2 * n] = qdot
+        self._input[n:n + nv] = qdot
         if not np.isfinite(self._input).all():
             raise ValueError(self._describe_non_finite_input())
         self._evaluate()
@@ -161,10 +172,10 @@ class FabricPlanner:
         return -self.config.fallback_braking * qdot
 
     def _describe_non_finite_input(self) -> str:
-        n = self._n
+        n, nv = self._n, self._nv
         if not np.isfinite(self._input[:n]).all():
             return "q contains NaN or infinity"
-        if not np.isfinite(self._input[n:2 * n]).all():
+        if not np.isfinite(self._input[n:n + nv]).all():
             return "qdot contains NaN or infinity"
         return "a planner parameter (goal or obstacle) contains NaN or infinity"
 
@@ -201,9 +212,17 @@ class FabricPlanner:
         forcing, goal_distance, reference_velocity = self._forcing(q, qdot, params)
         motion = EnvironmentMotion(reference_velocity, obstacle_momentum) if self.config.dynamic else None
         qddot = self.config.speed_control.acceleration(geometry, forcing, goal_distance, motion)
-        inner = ca.Function("fabric_parts", [q, qdot, params.vector], [qddot])
-        z = ca.SX.sym("z", 2 * n + self._layout.size)
-        return ca.Function("fabric", [z], [inner(z[:n], z[n:2 * n], z[2 * n:])], {"cse": True})
+        if self.robot.base is None:
+            velocity = qdot
+        else:  # paper section V: least squares in the actuated accelerations
+            velocity = ca.SX.sym("u", self._nv)
+            jacobian = velocity_map(q)
+            jdot_u = velocity_map_derivative(q, velocity)
+            qddot = least_squares_acceleration(geometry.M + forcing.M, qddot, jacobian, jdot_u)
+            qddot = ca.substitute(qddot, qdot, ca.mtimes(jacobian, velocity))
+        inner = ca.Function("fabric_parts", [q, velocity, params.vector], [qddot])
+        z = ca.SX.sym("z", n + self._nv + self._layout.size)
+        return ca.Function("fabric", [z], [inner(z[:n], z[n:n + self._nv], z[n + self._nv:])], {"cse": True})
 
     def _sphere_maps(self, q: ca.SX, qdot: ca.SX) -> list[DifferentialMap]:
         kin = self.robot.kinematics

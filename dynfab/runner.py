@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -15,7 +16,10 @@ from dynfab.robots import load_robot, robot_from_urdf
 from dynfab.robots.builtin import UnknownRobotError
 from dynfab.robots.robot import CollisionSphere, Robot
 from dynfab.scenario import Scenario, ScenarioError, UrdfRobotSpec, validate_for_robot
-from dynfab.sim import Record, simulate
+from dynfab.sim import DifferentialDrive, DoubleIntegrator, Record, simulate
+
+#: integration sub-steps per control period for a differential-drive base (arcs)
+BASE_SUBSTEPS = 10
 
 
 @dataclass(frozen=True)
@@ -73,7 +77,10 @@ def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None
     references = scenario_references(scenario, robot)
     controller = make_controller(scenario, robot, references)
     state = scenario.initial_state
-    record = simulate(controller, state.q, state.qdot, scenario.dt, scenario.duration, progress=progress)
+    model = DoubleIntegrator() if robot.base is None else DifferentialDrive()
+    substeps = 1 if robot.base is None else BASE_SUBSTEPS
+    record = simulate(controller, state.q, state.qdot, scenario.dt, scenario.duration, substeps=substeps,
+                      model=model, progress=progress)
     samples = record.q.shape[0]
     goal = scenario.goals[0]
     goal_positions = _goal_coordinates(robot, scenario, record.q)
@@ -87,6 +94,9 @@ def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None
     metrics = compute_metrics(record, goal_positions, goal_reference, goal.tolerance,
                               centres, radii, obstacle_centers, obstacle_radii, planar=robot.planar,
                               path_goal=goal.type == "path")
+    solve_times = getattr(controller, "solve_times", None)
+    if solve_times:  # a planner that re-plans less often than it is called (MPC)
+        metrics = dataclasses.replace(metrics, solver_time_ms=1e3 * float(np.mean(solve_times)))
     clearance = clearance_over_time(centres, radii, obstacle_centers, obstacle_radii, planar=robot.planar)
     return RunResult(scenario, robot, record, metrics, goal_positions, goal_reference, obstacle_centers, clearance,
                      controller)

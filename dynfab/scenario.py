@@ -53,11 +53,14 @@ class InitialState:
 
     Attributes:
         q: Joint positions [rad or m], base pose (x, y, yaw) first for mobile bases.
-        qdot: Joint velocities [rad/s or m/s]; zeros when the file omits them.
+        qdot: Velocity coordinates: joint velocities [rad/s or m/s], or for a robot on a
+            differential-drive base ``(v, ω, arm rates...)`` (forward speed [m/s], yaw
+            rate [rad/s]); ``None`` when the file omits them, and zeros of the robot's
+            size after :func:`validate_for_robot`.
     """
 
     q: tuple[float, ...]
-    qdot: tuple[float, ...]
+    qdot: tuple[float, ...] | None
 
 
 @dataclass(frozen=True)
@@ -234,7 +237,9 @@ def scenario_from_dict(data: object, base_dir: str | Path = ".") -> Scenario:
 def validate_for_robot(scenario: Scenario, robot: Robot) -> Scenario:
     """Check the robot-dependent shapes and names, and fill in default goal links.
 
-    Checks: ``initial_state.q``/``qdot`` have ``robot.kinematics.dof`` entries; goal
+    Checks: ``initial_state.q`` has ``robot.kinematics.dof`` entries and ``qdot`` one per
+    velocity coordinate (``dof``, or ``dof − 1`` on a differential-drive base; omitted:
+    zeros); goal
     positions have 2 numbers for planar robots and 3 otherwise (or one per axis of
     ``axes``, which must not contain z for planar robots); joint goals have ``dof``
     entries; obstacle positions have 3 numbers (planar robots: 2 or 3); every link
@@ -253,10 +258,13 @@ def validate_for_robot(scenario: Scenario, robot: Robot) -> Scenario:
         ScenarioError: Naming the first field that does not fit the robot.
     """
     dof = robot.kinematics.dof
+    velocities = dof - 1 if robot.base is not None else dof
     links = tuple(robot.kinematics.link_names)
     state = scenario.initial_state
     _check_length(state.q, "initial_state.q", (dof,))
-    _check_length(state.qdot, "initial_state.qdot", (dof,))
+    if state.qdot is None:
+        state = dataclasses.replace(state, qdot=(0.0,) * velocities)
+    _check_length(state.qdot, "initial_state.qdot", (velocities,))
     if isinstance(scenario.robot, UrdfRobotSpec):
         _check_link(scenario.robot.goal_link, "robot.goal_link", links)
         for i, sphere in enumerate(scenario.robot.collision_spheres):
@@ -269,7 +277,7 @@ def validate_for_robot(scenario: Scenario, robot: Robot) -> Scenario:
     for i, obstacle in enumerate(scenario.obstacles):
         if obstacle.position is not None:
             _check_length(obstacle.position, f"obstacles[{i}].position", obstacle_lengths)
-    return dataclasses.replace(scenario, goals=goals)
+    return dataclasses.replace(scenario, goals=goals, initial_state=state)
 
 
 def _goal_for_robot(
@@ -377,9 +385,8 @@ def _initial_state(value: object, field: str) -> InitialState:
     _check_keys(data, field, required=("q",), optional=("qdot",))
     q = _vector(data["q"], f"{field}.q")
     if "qdot" not in data:
-        return InitialState(q=q, qdot=(0.0,) * len(q))
-    qdot = _vector(data["qdot"], f"{field}.qdot", (len(q),))
-    return InitialState(q=q, qdot=qdot)
+        return InitialState(q=q, qdot=None)
+    return InitialState(q=q, qdot=_vector(data["qdot"], f"{field}.qdot"))
 
 
 def _goal(value: object, field: str) -> GoalSpec:

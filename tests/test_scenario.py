@@ -10,8 +10,10 @@ from typing import Any
 
 import pytest
 
+from dynfab.robots import load_robot
 from dynfab.scenario import (
     GoalSpec,
+    InitialState,
     ScenarioError,
     UrdfRobotSpec,
     load_scenario,
@@ -76,7 +78,7 @@ def _fake_robot(dof: int = 7, planar: bool = False, links: tuple[str, ...] = PAN
                 goal_link: str = "panda_hand") -> SimpleNamespace:
     """Stand-in exposing the Robot attributes validate_for_robot reads."""
     return SimpleNamespace(
-        kinematics=SimpleNamespace(dof=dof, link_names=links), planar=planar, goal_link=goal_link
+        kinematics=SimpleNamespace(dof=dof, link_names=links), planar=planar, goal_link=goal_link, base=None
     )
 
 
@@ -116,7 +118,11 @@ def test_defaults_and_optional_keys() -> None:
     data["goal"][0] = {"type": "position", "position": [0.5, 0.0]}
     scenario = scenario_from_dict(data)
     assert scenario.obstacles == ()
-    assert scenario.initial_state.qdot == (0.0,) * 7
+    assert scenario.initial_state.qdot is None  # zeros of the robot's size once validated
+    reach = dataclasses.replace(scenario, goals=(GoalSpec("position", position=(0.5, 0.0, 0.3)),))
+    assert validate_for_robot(reach, load_robot("panda")).initial_state.qdot == (0.0,) * 7
+    on_a_base = dataclasses.replace(scenario, robot="boxer", initial_state=InitialState((0.0, 0.0, 0.0), None))
+    assert validate_for_robot(on_a_base, load_robot("boxer")).initial_state.qdot == (0.0, 0.0)
     goal = scenario.goals[0]
     assert goal.link is None and goal.tolerance == 0.05 and goal.weight == 1.0
     assert goal.parent_link is None and goal.axes is None
@@ -184,7 +190,6 @@ def test_urdf_robot_resolved_against_scenario_directory(tmp_path: Path) -> None:
         (("initial_state", "q"), 1.0, "initial_state.q: expected a list"),
         (("initial_state", "q"), [], "initial_state.q: expected numbers, got an empty list"),
         (("initial_state", "q", 2), None, "initial_state.q[2]: expected a number, got null"),
-        (("initial_state", "qdot"), [0.0] * 6, "initial_state.qdot: expected 7 numbers, got 6"),
         (("initial_state", "v"), [0.0], "initial_state.v: unknown key"),
         (("goal",), [], "goal: expected at least one goal"),
         (("goal",), {"type": "position"}, "goal: expected a list, got a mapping"),
@@ -303,6 +308,7 @@ def test_validate_for_robot_accepts_planar_shapes() -> None:
     ("path", "value", "robot", "expected"),
     [
         (("initial_state", "q"), [0.0] * 6, _fake_robot(), "initial_state.q: expected 7 numbers, got 6"),
+        (("initial_state", "qdot"), [0.0] * 6, _fake_robot(), "initial_state.qdot: expected 7 numbers, got 6"),
         (("goal", 0, "position"), [0.5, 0.1], _fake_robot(), "goal[0].position: expected 3 numbers, got 2"),
         (("goal", 0, "link"), "gripper", _fake_robot(), "goal[0].link: unknown link 'gripper'"),
         (("goal", 0, "parent_link"), "table", _fake_robot(), "goal[0].parent_link: unknown link 'table'"),

@@ -1,4 +1,5 @@
-"""Built-in robots (``panda``, ``point``) and robots from a user's URDF file."""
+"""Built-in robots (``panda``, ``point``, ``boxer``, ``boxer-panda``) and robots from a
+user's URDF file."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from importlib import resources
 import numpy as np
 
 from .kinematics import Kinematics
-from .robot import CollisionSphere, Robot
+from .robot import CollisionSphere, DifferentialDriveBase, Robot
 from .urdf import UrdfError, parse_urdf
 
 __all__ = ["BUILTIN_ROBOTS", "UnknownRobotError", "load_robot", "robot_from_urdf"]
@@ -57,12 +58,50 @@ _PANDA_SELF_COLLISION: tuple[tuple[str, str], ...] = tuple(
     + [("upper_arm", high) for high in _PANDA_TIP])
 
 
+#: Boxer drive: wheel radius 0.080 m and separation 2 x 0.2436 m from Clearpath's
+#: boxer_description (wheels_and_casters.urdf.xacro), speed limits 1.9 m/s and
+#: 2.0 rad/s from its diff_drive_controller configuration (boxer_control/config/
+#: control.yaml); see the header of data/boxer.urdf.
+BOXER_BASE = DifferentialDriveBase(wheel_radius=0.08, wheel_separation=0.4872,
+                                   max_forward_speed=1.9, max_yaw_rate=2.0)
+
+#: Boxer-panda default: base at the origin, the Panda's default pose (elbow bent, hand
+#: pointing down ahead of and left of the base, 0.93 m above the floor; every arm
+#: sphere beyond the shoulder is >= 0.3 m from the base spheres).
+BOXER_PANDA_DEFAULT_Q = (0.0, 0.0, 0.0) + PANDA_DEFAULT_Q
+
+# Boxer body spheres: (label, centre in chassis_link [m]). chassis_link is the centre of
+# the chassis' bottom face; the body is the box |x| <= 0.3707, |y| <= 0.2755,
+# 0 <= z <= 0.2884 (Clearpath's 0.74143 x 0.55093 x 0.2884 m collision box). A 3 x 2
+# grid at mid-height: every point of the footprint is within 0.188 m of a centre in x-y
+# (planar discs of radius 0.19 cover it), every point of the box within 0.237 m in 3-D
+# (spheres of radius 0.24 cover it).
+_BOXER_BODY: tuple[tuple[str, tuple[float, float, float]], ...] = tuple(
+    (f"body_{row}_{side}", (x, y, 0.1442))
+    for row, x in (("front", 0.25), ("mid", 0.0), ("rear", -0.25))
+    for side, y in (("left", 0.14), ("right", -0.14)))
+#: Radius of the Boxer's footprint discs (planar ``boxer``) [m].
+BOXER_DISC_RADIUS = 0.19
+#: Radius of the Boxer's body spheres (3-D ``boxer-panda``) [m].
+BOXER_SPHERE_RADIUS = 0.24
+
+# Arm spheres that can reach the Boxer's body spheres within the joint limits: from the
+# closest of 100,000 random arm configurations, every body sphere can be penetrated by
+# each of these (clearance -0.06 to -0.31 m), while the elbow and the upper arm stay at
+# least 0.02 m away and are left out. At BOXER_PANDA_DEFAULT_Q all these pairs are
+# more than 0.3 m apart.
+_ARM_VS_BODY = ("forearm_low", "forearm_high", "wrist", "flange") + _PANDA_TIP
+
+
 def load_robot(name: str) -> Robot:
     """A built-in robot by name.
 
     Args:
-        name: ``"panda"`` (Franka Panda, goal link ``panda_hand``, 7 joints) or
-            ``"point"`` (planar point robot, goal link ``point``, q = [x, y]).
+        name: ``"panda"`` (Franka Panda, goal link ``panda_hand``, 7 joints),
+            ``"point"`` (planar point robot, goal link ``point``, q = [x, y]),
+            ``"boxer"`` (Clearpath Boxer, differential drive, goal link ``base_link``,
+            q = [x, y, yaw], planar) or ``"boxer-panda"`` (the Panda on a Boxer, goal
+            link ``panda_hand``, q = [x, y, yaw, 7 arm joints]).
 
     Raises:
         UnknownRobotError: ``name`` is not built in; the message lists valid names.
@@ -78,7 +117,8 @@ def robot_from_urdf(path: str | os.PathLike[str], goal_link: str,
                     spheres: Sequence[CollisionSphere],
                     self_collision_pairs: Sequence[tuple[int, int]] = (),
                     planar: bool = False,
-                    default_q: Sequence[float] | np.ndarray | None = None) -> Robot:
+                    default_q: Sequence[float] | np.ndarray | None = None,
+                    base: DifferentialDriveBase | None = None) -> Robot:
     """A robot from a URDF file with user-given collision spheres.
 
     Args:
@@ -88,12 +128,16 @@ def robot_from_urdf(path: str | os.PathLike[str], goal_link: str,
         self_collision_pairs: Index pairs into ``spheres`` kept apart.
         planar: True if the robot moves in the xy-plane.
         default_q: Default configuration; zeros clipped into the joint limits if None.
+        base: The robot's differential-drive base, if it has one; then its URDF must
+            start with the joints ``base_x``, ``base_y``, ``base_yaw`` (see
+            :class:`~dynfab.robots.robot.Robot`).
 
     Raises:
         OSError: The file cannot be read.
         UrdfError: The file is not a valid URDF.
         UnknownLinkError: ``goal_link`` or a sphere's link is not in the URDF.
-        ValueError: Wrong ``default_q`` size or a pair index out of range.
+        ValueError: Wrong ``default_q`` size, a pair index out of range, or a ``base``
+            without the three base joints first.
     """
     with open(path, encoding="utf-8") as file:
         text = file.read()
@@ -108,7 +152,7 @@ def robot_from_urdf(path: str | os.PathLike[str], goal_link: str,
                  kinematics=kinematics, goal_link=goal_link,
                  collision_spheres=tuple(spheres),
                  self_collision_pairs=tuple(self_collision_pairs), planar=planar,
-                 default_q=np.asarray(default_q, dtype=float))
+                 default_q=np.asarray(default_q, dtype=float), base=base)
 
 
 def _builtin_kinematics(filename: str) -> Kinematics:
@@ -137,5 +181,37 @@ def _point() -> Robot:
                  self_collision_pairs=(), planar=True, default_q=np.zeros(2))
 
 
+def _boxer() -> Robot:
+    """The Clearpath Boxer as a planar robot: six footprint discs, q = [x, y, yaw]."""
+    spheres = tuple(CollisionSphere("chassis_link", center, BOXER_DISC_RADIUS)
+                    for _, center in _BOXER_BODY)
+    return Robot(name="boxer", kinematics=_builtin_kinematics("boxer.urdf"),
+                 goal_link="base_link", collision_spheres=spheres,
+                 self_collision_pairs=(), planar=True, default_q=np.zeros(3),
+                 base=BOXER_BASE)
+
+
+def _boxer_panda() -> Robot:
+    """The Panda on a Boxer: six body spheres, then the Panda's spheres.
+
+    Self-collision pairs: the Panda's own, plus its forearm, wrist and hand spheres
+    against every body sphere.
+    """
+    body = [(label, "chassis_link", center, BOXER_SPHERE_RADIUS)
+            for label, center in _BOXER_BODY]
+    table = body + list(_PANDA_SPHERES)
+    labels = [label for label, *_ in table]
+    spheres = tuple(CollisionSphere(link, center, radius)
+                    for _, link, center, radius in table)
+    named = list(_PANDA_SELF_COLLISION) + [(label, arm) for label, _ in _BOXER_BODY
+                                           for arm in _ARM_VS_BODY]
+    pairs = tuple((labels.index(a), labels.index(b)) for a, b in named)
+    return Robot(name="boxer-panda", kinematics=_builtin_kinematics("boxer_panda.urdf"),
+                 goal_link="panda_hand", collision_spheres=spheres,
+                 self_collision_pairs=pairs, planar=False,
+                 default_q=np.array(BOXER_PANDA_DEFAULT_Q), base=BOXER_BASE)
+
+
 #: Built-in robot names and their constructors.
-BUILTIN_ROBOTS: dict[str, Callable[[], Robot]] = {"panda": _panda, "point": _point}
+BUILTIN_ROBOTS: dict[str, Callable[[], Robot]] = {
+    "panda": _panda, "point": _point, "boxer": _boxer, "boxer-panda": _boxer_panda}

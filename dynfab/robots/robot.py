@@ -10,7 +10,12 @@ import numpy as np
 
 from .kinematics import CasadiLike, Kinematics, UnknownLinkError
 
-__all__ = ["CollisionSphere", "Robot"]
+__all__ = ["BASE_JOINTS", "CollisionSphere", "DifferentialDriveBase", "Robot"]
+
+#: Names of the three planar base joints a robot with a mobile base has first, in order:
+#: ``base_x`` (prismatic along world x), ``base_y`` (prismatic along world y),
+#: ``base_yaw`` (revolute or continuous about z).
+BASE_JOINTS: tuple[str, str, str] = ("base_x", "base_y", "base_yaw")
 
 
 @dataclass(frozen=True)
@@ -39,6 +44,63 @@ class CollisionSphere:
         object.__setattr__(self, "radius", float(self.radius))
 
 
+@dataclass(frozen=True)
+class DifferentialDriveBase:
+    """A differential-drive mobile base: two driven wheels on a common axle.
+
+    The base's pose is the planar pose ``(x, y, yaw)`` of the axle midpoint; its
+    actuated velocities are the forward speed ``v`` along the heading and the yaw rate
+    ``omega`` (unicycle model), which the two wheels realise without slip as
+    ``omega_left = (v - omega b / 2) / r`` and ``omega_right = (v + omega b / 2) / r``
+    (``r`` wheel radius, ``b`` wheel separation; see e.g. Siegwart, Nourbakhsh and
+    Scaramuzza, *Introduction to Autonomous Mobile Robots*, 2nd ed., chapter 3).
+
+    Attributes:
+        wheel_radius: Radius of the driven wheels [m], positive.
+        wheel_separation: Distance between the two driven wheels' contact points
+            along the axle (track width) [m], positive.
+        max_forward_speed: Largest absolute forward speed ``|v|`` [m/s], positive.
+        max_yaw_rate: Largest absolute yaw rate ``|omega|`` [rad/s], positive.
+    """
+
+    wheel_radius: float
+    wheel_separation: float
+    max_forward_speed: float
+    max_yaw_rate: float
+
+    def __post_init__(self) -> None:
+        for name in ("wheel_radius", "wheel_separation", "max_forward_speed",
+                     "max_yaw_rate"):
+            value = getattr(self, name)
+            try:
+                number = float(value)
+            except (TypeError, ValueError):
+                number = math.nan
+            if not (math.isfinite(number) and number > 0.0):
+                raise ValueError(f"differential-drive base: {name} must be a positive "
+                                 f"finite number, got {value!r}")
+            object.__setattr__(self, name, number)
+
+    def wheel_speeds(self, forward_speed: float, yaw_rate: float) -> tuple[float, float]:
+        """Wheel angular velocities ``(left, right)`` [rad/s] for a body velocity.
+
+        Args:
+            forward_speed: ``v`` along the heading [m/s].
+            yaw_rate: ``omega``, counter-clockwise positive [rad/s].
+        """
+        half = 0.5 * self.wheel_separation * yaw_rate
+        return ((forward_speed - half) / self.wheel_radius,
+                (forward_speed + half) / self.wheel_radius)
+
+    def body_velocity(self, left: float, right: float) -> tuple[float, float]:
+        """Forward speed [m/s] and yaw rate [rad/s] of wheel velocities [rad/s].
+
+        The inverse of :meth:`wheel_speeds`.
+        """
+        return (0.5 * self.wheel_radius * (left + right),
+                self.wheel_radius * (right - left) / self.wheel_separation)
+
+
 @dataclass(frozen=True, eq=False)
 class Robot:
     """A robot as the planner sees it.
@@ -53,6 +115,26 @@ class Robot:
         planar: If True the workspace is the xy-plane: goals are [x, y] and obstacles
             act as discs.
         default_q: Default configuration, shape (dof,) [rad or m], read-only.
+        base: The differential-drive base the robot stands on, or None for a
+            holonomic robot (fixed arm, point robot): then every configuration
+            variable is actuated and velocities are ``qdot``.
+
+    Convention for a robot with a ``base``: its first three joints (in the order of
+    ``kinematics.joint_names``) are ``base_x`` (prismatic along world x), ``base_y``
+    (prismatic along world y) and ``base_yaw`` (revolute or continuous about z), each a
+    child of the previous one with zero origin rotation and no x-y origin offset, so that
+
+        q = (x, y, yaw, arm...)   [m, m, rad, rad...]
+
+    is the planar pose of the base frame (the frame below ``base_yaw``, at the drive-axle
+    midpoint for a differential drive) followed by the arm's joints. Its actuated velocities are
+
+        qdot_u = (v, omega, arm rates...)   [m/s, rad/s, rad/s...],
+
+    ``v`` the forward speed along the base's heading and ``omega`` its yaw rate,
+    related to the configuration velocity by the non-holonomic constraint
+    ``qdot = J_nh(yaw) qdot_u`` with ``J_nh = blockdiag([[cos yaw, 0], [sin yaw, 0],
+    [0, 1]], I)`` (paper section V, "Extension to non-Holonomic Constraints").
     """
 
     name: str
@@ -62,9 +144,15 @@ class Robot:
     self_collision_pairs: tuple[tuple[int, int], ...]
     planar: bool
     default_q: np.ndarray
+    base: DifferentialDriveBase | None = None
 
     def __post_init__(self) -> None:
         kin = self.kinematics
+        if self.base is not None:
+            if not isinstance(self.base, DifferentialDriveBase):
+                raise TypeError(f"robot '{self.name}': base must be a "
+                                f"DifferentialDriveBase or None, got {type(self.base).__name__}")
+            _check_base_joints(self.name, kin)
         for link in [self.goal_link] + [s.link for s in self.collision_spheres]:
             if link not in kin.link_names:
                 raise UnknownLinkError(f"robot '{self.name}': unknown link '{link}'; "
@@ -106,3 +194,37 @@ class Robot:
         if isinstance(q, (ca.SX, ca.MX)):
             return centers
         return np.array(centers, dtype=float).reshape(len(points), 3)
+
+
+def _check_base_joints(name: str, kin: Kinematics) -> None:
+    """Raise ValueError unless the first three joints are the planar base joints.
+
+    Checks names and order (``BASE_JOINTS``), types, axes (world x, world y, z), the
+    chain (``base_x`` hangs from the root link, each next joint from the previous
+    joint's child) and origins without rotation or x-y offset (a z offset, the base's
+    height, is allowed).
+    """
+    first = kin.joint_names[:3]
+    if first != BASE_JOINTS:
+        raise ValueError(f"robot '{name}': a robot with a differential-drive base must "
+                         f"have the joints {', '.join(BASE_JOINTS)} first, in this order; "
+                         f"its first joints are {', '.join(first) or 'none'}")
+    joints = {joint.name: joint for joint in kin.model.joints}
+    expected = (("prismatic",), ("prismatic",), ("revolute", "continuous"))
+    axes = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+    parent = kin.root_link
+    for joint_name, types, axis in zip(BASE_JOINTS, expected, axes):
+        joint = joints[joint_name]
+        problem = None
+        if joint.type not in types:
+            problem = f"type must be {' or '.join(types)}, got {joint.type}"
+        elif not np.allclose(joint.axis, axis, rtol=0.0, atol=1e-9):
+            problem = f"axis must be {axis}, got {joint.axis}"
+        elif joint.parent != parent:
+            problem = f"parent link must be '{parent}', got '{joint.parent}'"
+        elif (not np.allclose(joint.origin.rpy, 0.0, rtol=0.0, atol=1e-12)
+              or not np.allclose(joint.origin.xyz[:2], 0.0, rtol=0.0, atol=1e-12)):
+            problem = "origin must have no rotation and no x-y offset"
+        if problem is not None:
+            raise ValueError(f"robot '{name}': base joint '{joint_name}': {problem}")
+        parent = joint.child
