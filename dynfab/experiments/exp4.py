@@ -1,0 +1,65 @@
+"""Experiment 4 scenarios: the Clearpath Boxer (differential drive) drives to a random
+goal among 5 spheres (``shared/EXPERIMENTS.md``, Experiment 4).
+
+The paper randomizes the initial pose, the goal and the 5 spheres without giving ranges;
+the choices:
+
+- start: pose ``(x, y)`` uniform in ``[-3, 3]²`` m, yaw uniform in ``[-π, π)``, at rest;
+- goal: the ``base_link`` position uniform in ``[-3, 3]²``, 2-5 m from the start,
+  tolerance 0.1 m;
+- 5 spheres (discs in the plane) of radius uniform in ``[0.3, 0.5]`` m, centres uniform in
+  ``[-3.5, 3.5]²``, at least 0.3 m of surface clearance from the robot's footprint at the
+  start and from the goal, and at least the robot's width (0.6 m) apart from each other,
+  so that every gap is passable;
+- dt 0.01 s, 40 s.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from dynfab.robots import load_robot
+
+AREA = 3.0
+OBSTACLE_AREA = 3.5
+GOAL_DISTANCE = (2.0, 5.0)
+RADIUS = (0.3, 0.5)
+START_MARGIN = 0.3
+GOAL_MARGIN = 0.3
+PASSAGE = 0.6
+DURATION = 40.0
+
+
+def scenario(seed: int, planner: str = "static-fabric") -> dict[str, Any]:
+    """Experiment 4, run ``seed``."""
+    rng = np.random.default_rng(seed)
+    robot = load_robot("boxer")
+    pose = np.array([*rng.uniform(-AREA, AREA, 2), rng.uniform(-np.pi, np.pi)])
+    footprint = np.asarray(robot.sphere_centers(pose))[:, :2]
+    radii = np.array([s.radius for s in robot.collision_spheres])
+    while True:
+        goal = rng.uniform(-AREA, AREA, 2)
+        if GOAL_DISTANCE[0] <= np.linalg.norm(goal - pose[:2]) <= GOAL_DISTANCE[1]:
+            break
+    discs: list[tuple[np.ndarray, float]] = []
+    while len(discs) < 5:
+        radius = float(rng.uniform(*RADIUS))
+        centre = rng.uniform(-OBSTACLE_AREA, OBSTACLE_AREA, 2)
+        start_gap = np.min(np.linalg.norm(footprint - centre, axis=1) - radii) - radius
+        goal_gap = np.linalg.norm(goal - centre) - radius
+        apart = all(np.linalg.norm(centre - c) - radius - r > PASSAGE for c, r in discs)
+        if start_gap > START_MARGIN and goal_gap > GOAL_MARGIN and apart:
+            discs.append((centre, radius))
+    return {
+        "robot": "boxer",
+        "planner": planner,
+        "dt": 0.01,
+        "duration": DURATION,
+        "initial_state": {"q": [round(float(v), 4) for v in pose]},
+        "goal": [{"type": "position", "link": "base_link", "position": [round(float(v), 4) for v in goal],
+                  "tolerance": 0.1}],
+        "obstacles": [{"type": "sphere", "position": [round(float(v), 4) for v in c], "radius": round(r, 4)}
+                      for c, r in discs],
+    }
