@@ -21,6 +21,8 @@ from dynfab.scenario import PLANNERS, Scenario, ScenarioError, load_scenario
 DEMOS = {
     "spheres": ("panda_spheres.yaml", False),
     "dynamic": ("panda_dynamic.yaml", True),
+    "boxer": ("boxer_spheres.yaml", False),
+    "mobile": ("boxer_panda_room.yaml", False),
 }
 
 
@@ -32,7 +34,9 @@ def main(argv: list[str] | None = None) -> int:
     run.add_argument("--planner", choices=PLANNERS, help="override the scenario's planner")
     _output_options(run)
     demo = commands.add_parser("demo", help="spheres: the Panda reaching a goal among spheres (default); "
-                                            "dynamic: following a circle past a moving sphere, DF vs SF")
+                                            "dynamic: following a circle past a moving sphere, DF vs SF; "
+                                            "boxer: a differential-drive base among discs; "
+                                            "mobile: the Boxer+Panda mobile manipulator in a room")
     demo.add_argument("name", nargs="?", choices=sorted(DEMOS), default="spheres")
     _output_options(demo, default_plot=Path("dynfab-demo.png"))
     args = parser.parse_args(argv)
@@ -119,7 +123,8 @@ def _plot(result: RunResult, path: Path) -> None:
     radii = [o.radius for o in result.scenario.obstacles]
     plot_run(path, result.goal_positions, goals, result.obstacle_centers, radii, result.robot.planar,
              clearance_over_time=result.clearance if radii else None, times=result.record.t,
-             title=f"{result.robot.name}: {'success' if result.metrics.success else 'failure'}")
+             title=f"{result.robot.name}: {'success' if result.metrics.success else 'failure'}",
+             base_path=None if result.robot.base is None else result.record.q[:, :2])
 
 
 if __name__ == "__main__":

@@ -34,6 +34,7 @@ def plot_run(
     clearance_over_time: ArrayLike | None = None,
     times: ArrayLike | None = None,
     title: str = "dynfab run",
+    base_path: ArrayLike | None = None,
 ) -> None:
     """Save a PNG of a run.
 
@@ -52,6 +53,7 @@ def plot_run(
         clearance_over_time: Clearance at each sample, shape (T,) [m].
         times: Sample times, shape (T,) [s], for the clearance axis (else step indices).
         title: Figure title.
+        base_path: Positions (T, 2) of a mobile base [m], drawn in the top view.
     """
     positions = np.asarray(goal_link_positions, dtype=float)
     obstacles = np.asarray(obstacles_over_time, dtype=float)
@@ -65,6 +67,7 @@ def plot_run(
         grid = figure.add_gridspec(1, panels)
         top = figure.add_subplot(grid[0, 0])
         _draw_projection(top, (0, 1), positions, markers, obstacles, radii)
+        _draw_base(top, base_path)
         top.legend(loc="best", fontsize="small")
         extra = [grid[0, k] for k in range(1, panels)]
     else:
@@ -76,6 +79,7 @@ def plot_run(
             ax = figure.add_subplot(slot)
             _draw_projection(ax, axes, positions, markers, obstacles, radii)
             if axes == (0, 1):
+                _draw_base(ax, base_path)
                 ax.legend(loc="best", fontsize="small")
         extra = [grid[1, 1], grid[1, 2]]
     if clearance_over_time is not None:
@@ -84,6 +88,15 @@ def plot_run(
         _draw_tracking_error(figure.add_subplot(extra.pop(0)), positions, reference, markers[0][1], times)
     figure.suptitle(title)
     figure.savefig(Path(path), dpi=100)
+
+
+def _draw_base(ax: Axes, base_path: ArrayLike | None) -> None:
+    """The path of a mobile base's axle in the top view."""
+    if base_path is None:
+        return
+    points = np.asarray(base_path, dtype=float)
+    ax.plot(points[:, 0], points[:, 1], color="0.45", linewidth=1.5, label="base")
+    ax.plot(points[-1, 0], points[-1, 1], "s", color="0.45", markersize=5)
 
 
 def _draw_tracking_error(ax: Axes, positions: NDArray[np.float64], reference: NDArray[np.float64],

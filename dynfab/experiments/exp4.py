@@ -9,7 +9,8 @@ the choices:
   tolerance 0.1 m;
 - 5 spheres (discs in the plane) of radius uniform in ``[0.3, 0.5]`` m, centres uniform in
   ``[-3.5, 3.5]²``, at least 0.3 m of surface clearance from the robot's footprint at the
-  start and from the goal, and at least the robot's width (0.6 m) apart from each other,
+  start and from the goal, and at least 0.9 m apart from each other (the footprint is
+  0.66 m wide),
   so that every gap is passable;
 - dt 0.01 s, 40 s.
 """
@@ -28,7 +29,7 @@ GOAL_DISTANCE = (2.0, 5.0)
 RADIUS = (0.3, 0.5)
 START_MARGIN = 0.3
 GOAL_MARGIN = 0.3
-PASSAGE = 0.6
+PASSAGE = 0.9
 DURATION = 40.0
 
 
