@@ -1,4 +1,4 @@
-"""Static vs dynamic fabrics on seeded scenarios of the paper's Experiments 1, 2a, 2b and 3.
+"""Static vs dynamic fabrics on seeded scenarios of the paper's Experiments 1-5.
 
     .venv/bin/python bench/compare_planners.py [--runs 50] [--experiments 1 2a 2b 3]
 
@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from dynfab.experiments import exp1, exp2, exp3
+from dynfab.experiments import exp1, exp2, exp3, exp4, exp5
 from dynfab.metrics import Metrics
 from dynfab.runner import run_scenario
 from dynfab.scenario import scenario_from_dict
@@ -30,6 +30,8 @@ EXPERIMENTS: dict[str, tuple[Callable[[int, str], dict[str, Any]], tuple[str, ..
     "2a": (exp2.analytic_scenario, ("static-fabric", "dynamic-fabric")),
     "2b": (exp2.rrt_scenario, ("static-fabric", "dynamic-fabric")),
     "3": (exp3.scenario, ("static-fabric", "dynamic-fabric")),
+    "4": (exp4.scenario, ("static-fabric",)),
+    "5": (exp5.scenario, ("static-fabric",)),
 }
 
 
