@@ -91,8 +91,13 @@ def make_controller(scenario: Scenario, robot: Robot, references: References) ->
     Raises:
         ScenarioError: if the scenario asks for something this planner cannot do.
     """
+    if scenario.planner == "mpc":
+        from dynfab.mpc import make_mpc_controller  # dynfab.mpc imports References from here
+
+        return make_mpc_controller(scenario, robot, references)
     if scenario.planner not in _FABRIC_PLANNERS:
-        raise ScenarioError("planner", f"{scenario.planner!r} is not available yet; use static-fabric or dynamic-fabric")
+        raise ScenarioError("planner", f"{scenario.planner!r} is not available yet; use static-fabric, dynamic-fabric "
+                            "or mpc")
     config = PlannerConfig(goals=tuple(_goal_config(goal) for goal in scenario.goals),
                            obstacle_slots=len(scenario.obstacles), dynamic=_FABRIC_PLANNERS[scenario.planner])
     planner = FabricPlanner(robot, config)

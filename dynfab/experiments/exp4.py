@@ -9,7 +9,8 @@ the choices:
   tolerance 0.1 m;
 - 5 spheres (discs in the plane) of radius uniform in ``[0.3, 0.5]`` m, centres uniform in
   ``[-3.5, 3.5]²``, at least 0.3 m of surface clearance from the robot's footprint at the
-  start and from the goal, and at least 0.9 m apart from each other (the footprint is
+  start, 0.6 m from the goal (the footprint reaches 0.44 m ahead of ``base_link``, so the
+  base can stand on its goal in any heading), and at least 0.9 m apart from each other (the footprint is
   0.66 m wide),
   so that every gap is passable;
 - dt 0.01 s, 40 s.
@@ -28,7 +29,7 @@ OBSTACLE_AREA = 3.5
 GOAL_DISTANCE = (2.0, 5.0)
 RADIUS = (0.3, 0.5)
 START_MARGIN = 0.3
-GOAL_MARGIN = 0.3
+GOAL_MARGIN = 0.6
 PASSAGE = 0.9
 DURATION = 40.0
 

@@ -1,0 +1,141 @@
+"""The receding-horizon MPC controller ``(t, q, q̇) ↦ q̈`` and its factory for scenarios.
+
+Every ``solve_period`` of simulated time the controller solves
+:class:`~dynfab.mpc.problem.MpcProblem` from the measured state, with the goal and
+obstacle references sampled at the stage times ``t + k h`` (k = 1..H) and the previous
+plan, shifted to the current time, as initial guess. Between solves it executes the
+plan: a call at time ``t`` returns the acceleration of the stage that contains ``t``,
+``q̈ = plan.q̈_k`` with ``k = ⌊(t − t_plan) / h⌋``.
+
+Safe action when a solve fails (the solver did not converge or returned non-finite
+numbers): keep executing the last successful plan, i.e. that plan shifted to the current
+time; once the time runs past its horizon, or if there never was one, brake:
+``q̈ = −k_b q̇`` (``k_b = MpcConfig.braking_gain`` [1/s]). Failures are counted.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from dynfab.controllers import References
+from dynfab.mpc.config import MpcConfig
+from dynfab.mpc.problem import GoalTerm, MpcProblem, Plan
+from dynfab.references import goal_axes
+from dynfab.robots.robot import Robot
+from dynfab.scenario import GoalSpec, Scenario, ScenarioError
+
+#: tolerance on "a solve period has elapsed", for times accumulated in floating point [s]
+_TIME_TOLERANCE = 1e-9
+
+
+class MpcController:
+    """MPC re-solved every ``config.solve_period`` (see module docstring).
+
+    Attributes:
+        problem: the NLP, built once.
+        references: goal and obstacle trajectories of the scenario.
+        obstacle_radii: radius of each obstacle, shape (m,) [m].
+        solve_times: wall time of each solve, including the parameter packing [s].
+        iterations: solver iterations of each solve.
+        failures: number of solves that failed.
+    """
+
+    def __init__(self, problem: MpcProblem, references: References, obstacle_radii: np.ndarray) -> None:
+        if len(references.obstacles) != problem.obstacles or len(references.goals) != len(problem.goals):
+            raise ValueError("MpcController: references do not match the problem's goals and obstacles")
+        self.problem = problem
+        self.references = references
+        self.obstacle_radii = np.asarray(obstacle_radii, dtype=float)
+        self.solve_times: list[float] = []
+        self.iterations: list[int] = []
+        self.failures = 0
+        self._plan: Plan | None = None
+        self._plan_time = 0.0
+        self._last_attempt: float | None = None
+
+    @property
+    def config(self) -> MpcConfig:
+        """Horizon, weights and solver."""
+        return self.problem.config
+
+    @property
+    def plan(self) -> Plan | None:
+        """The plan being executed (the last successful one), if any."""
+        return self._plan
+
+    def __call__(self, t: float, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
+        """``q̈`` at time ``t`` [s] for the measured state; always finite.
+
+        Raises:
+            ValueError: if ``q`` or ``q̇`` has the wrong shape or is not finite.
+        """
+        q = np.asarray(q, dtype=float)
+        qdot = np.asarray(qdot, dtype=float)
+        n = self.problem.robot.dof
+        if q.shape != (n,) or qdot.shape != (n,):
+            raise ValueError(f"q and qdot must have shape ({n},), got {q.shape} and {qdot.shape}")
+        if not (np.isfinite(q).all() and np.isfinite(qdot).all()):
+            raise ValueError("q or qdot contains NaN or infinity")
+        if self._last_attempt is None or t >= self._last_attempt + self.config.solve_period - _TIME_TOLERANCE:
+            self._replan(t, q, qdot)
+        return self._command(t, qdot)
+
+    def _replan(self, t: float, q: np.ndarray, qdot: np.ndarray) -> None:
+        """Solve from ``(q, q̇)`` at ``t``; keep the plan if the solve succeeded."""
+        self._last_attempt = t
+        h, horizon = self.config.stage_length, self.config.stages
+        times = t + h * np.arange(1, horizon + 1)
+        dims = 2 if self.problem.robot.planar else 3
+        goals = [reference.sample(times)[0] for reference in self.references.goals]
+        centres = np.zeros((self.problem.obstacles, horizon, dims))
+        for o, reference in enumerate(self.references.obstacles):
+            centres[o] = reference.sample(times)[0][:, :dims]
+        guess = None
+        if self._plan is not None:
+            guess = self._plan.shifted(round((t - self._plan_time) / h), h)
+        start = time.perf_counter()
+        result = self.problem.solve(q, qdot, goals, centres, self.obstacle_radii, guess)
+        self.solve_times.append(time.perf_counter() - start)
+        self.iterations.append(result.iterations)
+        if result.success:
+            self._plan, self._plan_time = result.plan, t
+        else:
+            self.failures += 1
+
+    def _command(self, t: float, qdot: np.ndarray) -> np.ndarray:
+        """The executed plan's acceleration at ``t``, or the braking action."""
+        if self._plan is not None:
+            stage = math.floor((t - self._plan_time) / self.config.stage_length + _TIME_TOLERANCE)
+            if 0 <= stage < self.config.stages:
+                return self._plan.qddot[stage].copy()
+        return -self.config.braking_gain * qdot
+
+
+def make_mpc_controller(scenario: Scenario, robot: Robot, references: References,
+                        config: MpcConfig | None = None) -> MpcController:
+    """The MPC baseline for a scenario validated for ``robot``.
+
+    Args:
+        scenario: the scenario (goals, obstacle radii).
+        robot: a holonomic robot.
+        references: the scenario's goal and obstacle trajectories.
+        config: horizon, weights and solver; the benchmark's defaults if ``None``.
+
+    Raises:
+        ScenarioError: for robots with a non-holonomic base.
+    """
+    if getattr(robot, "base", None) is not None:
+        raise ScenarioError("planner", "mpc for non-holonomic robots is not available yet")
+    goals = tuple(_goal_term(goal, robot) for goal in scenario.goals)
+    problem = MpcProblem(robot, goals, len(scenario.obstacles), config or MpcConfig())
+    return MpcController(problem, references, np.array([o.radius for o in scenario.obstacles]))
+
+
+def _goal_term(goal: GoalSpec, robot: Robot) -> GoalTerm:
+    if goal.type == "joint":
+        return GoalTerm(link=None, weight=goal.weight)
+    return GoalTerm(link=goal.link or robot.goal_link, axes=tuple(goal_axes(goal, robot)),
+                    parent_link=goal.parent_link, weight=goal.weight)
