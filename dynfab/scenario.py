@@ -22,6 +22,8 @@ from typing import TYPE_CHECKING, Any, Literal, cast
 
 import yaml
 
+from dynfab.describe import describe
+
 if TYPE_CHECKING:
     from dynfab.robots.robot import Robot
 
@@ -338,7 +340,7 @@ def _robot(value: object, field: str, base_dir: Path) -> str | UrdfRobotSpec:
     )
     planar = data.get("planar", False)
     if not isinstance(planar, bool):
-        raise ScenarioError(f"{field}.planar", f"expected true or false, got {_describe(planar)}")
+        raise ScenarioError(f"{field}.planar", f"expected true or false, got {describe(planar)}")
     return UrdfRobotSpec(
         urdf=urdf,
         goal_link=_string(data["goal_link"], f"{field}.goal_link"),
@@ -368,7 +370,7 @@ def _sphere_pair(value: object, field: str, n_spheres: int) -> tuple[int, int]:
     indices = []
     for k, index in enumerate(pair):
         if isinstance(index, bool) or not isinstance(index, int):
-            raise ScenarioError(f"{field}[{k}]", f"expected an integer, got {_describe(index)}")
+            raise ScenarioError(f"{field}[{k}]", f"expected an integer, got {describe(index)}")
         if not 0 <= index < n_spheres:
             raise ScenarioError(
                 f"{field}[{k}]", f"sphere index {index} out of range (0 to {n_spheres - 1})"
@@ -482,10 +484,10 @@ def _freeze(value: object) -> object:
 def _mapping(value: object, field: str, expected: str = "a mapping") -> Mapping[str, Any]:
     """Return ``value`` if it is a mapping with string keys."""
     if not isinstance(value, Mapping):
-        raise ScenarioError(field or "scenario", f"expected {expected}, got {_describe(value)}")
+        raise ScenarioError(field or "scenario", f"expected {expected}, got {describe(value)}")
     for key in value:
         if not isinstance(key, str):
-            raise ScenarioError(field or "scenario", f"keys must be text, got {_describe(key)}")
+            raise ScenarioError(field or "scenario", f"keys must be text, got {describe(key)}")
     return value
 
 
@@ -511,14 +513,14 @@ def _join(field: str, key: str) -> str:
 def _list(value: object, field: str) -> list[Any]:
     """Return ``value`` if it is a list."""
     if not isinstance(value, list | tuple):
-        raise ScenarioError(field, f"expected a list, got {_describe(value)}")
+        raise ScenarioError(field, f"expected a list, got {describe(value)}")
     return list(value)
 
 
 def _string(value: object, field: str) -> str:
     """Return ``value`` if it is a non-empty string."""
     if not isinstance(value, str) or not value:
-        raise ScenarioError(field, f"expected a non-empty text, got {_describe(value)}")
+        raise ScenarioError(field, f"expected a non-empty text, got {describe(value)}")
     return value
 
 
@@ -530,7 +532,7 @@ def _optional_string(data: Mapping[str, Any], key: str, field: str) -> str | Non
 def _choice(value: object, field: str, options: tuple[str, ...]) -> str:
     """Return ``value`` if it is one of ``options``."""
     if not isinstance(value, str) or value not in options:
-        raise ScenarioError(field, f"expected one of {', '.join(options)}; got {_describe(value)}")
+        raise ScenarioError(field, f"expected one of {', '.join(options)}; got {describe(value)}")
     return value
 
 
@@ -540,7 +542,7 @@ def _number(value: object, field: str) -> float:
         hint = ""
         if isinstance(value, str) and _is_float_text(value):
             hint = " (YAML reads 1e-3 as text: write 1.0e-3)"
-        raise ScenarioError(field, f"expected a number, got {_describe(value)}{hint}")
+        raise ScenarioError(field, f"expected a number, got {describe(value)}{hint}")
     number = float(value)
     if not math.isfinite(number):
         raise ScenarioError(field, f"expected a finite number, got {number}")
@@ -572,22 +574,6 @@ def _vector(value: object, field: str, lengths: tuple[int, ...] | None = None) -
     if lengths is not None:
         _check_length(items, field, lengths)
     return tuple(_number(item, f"{field}[{i}]") for i, item in enumerate(items))
-
-
-def _describe(value: object) -> str:
-    """Short one-line description of a YAML value for error messages."""
-    if value is None:
-        return "null"
-    if isinstance(value, bool):
-        return f"boolean {str(value).lower()}"
-    if isinstance(value, list | tuple):
-        return f"a list of {len(value)}"
-    if isinstance(value, Mapping):
-        return "a mapping"
-    text = repr(value)
-    if len(text) > 40:
-        text = text[:37] + "..."
-    return f"{type(value).__name__} {text}"
 
 
 def _yaml_problem(error: yaml.YAMLError) -> str:

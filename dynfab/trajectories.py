@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.interpolate import CubicSpline
 
+from dynfab.describe import describe
 from dynfab.expression import ExpressionError, parse_expression
 
 Samples = tuple[np.ndarray, np.ndarray, np.ndarray]
@@ -430,7 +431,7 @@ def trajectory_from_mapping(data: Mapping[str, Any], field: str) -> Trajectory:
             ``obstacles[1].trajectory.velocity: expected 3 numbers, got 2``.
     """
     if not isinstance(data, Mapping):
-        raise TrajectoryError(field, f"expected a mapping, got {_describe(data)}")
+        raise TrajectoryError(field, f"expected a mapping, got {describe(data)}")
     kind = data.get("type")
     if kind == "rrt":
         problem = "rrt must be resolved by the caller (it plans around the scenario's obstacles)"
@@ -438,7 +439,7 @@ def trajectory_from_mapping(data: Mapping[str, Any], field: str) -> Trajectory:
     if "type" not in data:
         raise TrajectoryError(_join(field, "type"), "missing required key")
     if not isinstance(kind, str) or kind not in _KINDS:
-        problem = f"expected one of {', '.join(_KINDS)}, rrt; got {_describe(kind)}"
+        problem = f"expected one of {', '.join(_KINDS)}, rrt; got {describe(kind)}"
         raise TrajectoryError(_join(field, "type"), problem)
     cls, required, optional = _KINDS[kind]
     allowed = ("type", *required, *optional)
@@ -480,7 +481,7 @@ def _sequence(value: object, field: str) -> list[Any]:
     if isinstance(value, np.ndarray):
         return list(value)
     if not isinstance(value, list | tuple):
-        raise TrajectoryError(field, f"expected a list, got {_describe(value)}")
+        raise TrajectoryError(field, f"expected a list, got {describe(value)}")
     return list(value)
 
 
@@ -505,7 +506,7 @@ def _point(value: object, field: str) -> np.ndarray:
 def _scalar(value: object, field: str) -> float:
     """A finite real number (booleans and text are not numbers)."""
     if isinstance(value, bool | np.bool_) or not isinstance(value, Real):
-        raise TrajectoryError(field, f"expected a number, got {_describe(value)}")
+        raise TrajectoryError(field, f"expected a number, got {describe(value)}")
     number = float(value)
     if not math.isfinite(number):
         raise TrajectoryError(field, f"expected a finite number, got {number}")
@@ -529,19 +530,3 @@ def _plane_basis(normal: np.ndarray, dimension: int) -> np.ndarray:
     u = axis - (axis @ n) * n
     u /= np.linalg.norm(u)
     return np.stack([u, np.cross(n, u)])
-
-
-def _describe(value: object) -> str:
-    """Short one-line description of a value for error messages."""
-    if value is None:
-        return "null"
-    if isinstance(value, bool):
-        return f"boolean {str(value).lower()}"
-    if isinstance(value, list | tuple):
-        return f"a list of {len(value)}"
-    if isinstance(value, Mapping):
-        return "a mapping"
-    text = repr(value)
-    if len(text) > 40:
-        text = text[:37] + "..."
-    return f"{type(value).__name__} {text}"
