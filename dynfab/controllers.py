@@ -98,8 +98,8 @@ def make_controller(scenario: Scenario, robot: Robot, references: References) ->
     if scenario.planner not in _FABRIC_PLANNERS:
         raise ScenarioError("planner", f"{scenario.planner!r} is not available yet; use static-fabric, dynamic-fabric "
                             "or mpc")
-    config = PlannerConfig(goals=tuple(_goal_config(goal) for goal in scenario.goals),
-                           obstacle_slots=len(scenario.obstacles), dynamic=_FABRIC_PLANNERS[scenario.planner])
+    config = PlannerConfig.for_robot(robot, tuple(_goal_config(goal) for goal in scenario.goals),
+                                     len(scenario.obstacles), _FABRIC_PLANNERS[scenario.planner])
     planner = FabricPlanner(robot, config)
     for k, obstacle in enumerate(scenario.obstacles):
         planner.parameters.obstacle_radius[k] = obstacle.radius

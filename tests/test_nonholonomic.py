@@ -60,3 +60,22 @@ def test_velocity_map_and_its_derivative_match_finite_differences() -> None:
         plus = np.array(f(qv + h * qdot, uv)[0]).ravel()
         minus = np.array(f(qv - h * qdot, uv)[0]).ravel()
         np.testing.assert_allclose(jdot_u, (plus - minus) / (2 * h), atol=1e-7)
+
+
+def test_steering_term_turns_a_base_toward_a_lateral_goal_direction() -> None:
+    """With the base at rest and the fabric asking for a purely lateral acceleration, the
+    plain least squares cannot do anything (ω̇ = 0), while the look-ahead term turns the
+    base toward that side (ω̇ > 0 for a leftward request)."""
+    from dynfab.nonholonomic import Steering
+
+    n = 3
+    q, u = ca.SX.sym("q", n), ca.SX.sym("u", n - 1)
+    jacobian, jdot_u = velocity_map(q), velocity_map_derivative(q, u)
+    M = ca.SX.eye(n)
+    left = ca.DM([0.0, 1.0, 0.0])  # heading along x: "left" is +y
+    plain = ca.Function("p", [q, u], [least_squares_acceleration(M, left, jacobian, jdot_u)])
+    steered = ca.Function("s", [q, u], [least_squares_acceleration(M, left, jacobian, jdot_u, Steering(0.5, 1.0), q)])
+    at_rest = ([0.0, 0.0, 0.0], [0.0, 0.0])
+    np.testing.assert_allclose(np.array(plain(*at_rest)).ravel(), 0.0, atol=1e-12)
+    forward, turn = np.array(steered(*at_rest)).ravel()
+    assert abs(forward) < 1e-12 and turn > 0.1
