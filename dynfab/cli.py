@@ -13,7 +13,7 @@ import sys
 from importlib.resources import files
 from pathlib import Path
 
-from dynfab.runner import RunResult, run_scenario
+from dynfab.runner import RunResult, link_path, run_scenario
 from dynfab.scenario import PLANNERS, Scenario, ScenarioError, load_scenario
 
 #: ``dynfab demo NAME``: the bundled scenario, and whether the demo also runs the static
@@ -39,7 +39,16 @@ def main(argv: list[str] | None = None) -> int:
                                             "mobile: the Boxer+Panda mobile manipulator in a room")
     demo.add_argument("name", nargs="?", choices=sorted(DEMOS), default="spheres")
     _output_options(demo, default_plot=Path("dynfab-demo.png"))
+    experiment = commands.add_parser("experiment", help="run one of the paper's experiments as a seeded series "
+                                                        "(parallel, resumable) and summarize it beside the paper")
+    experiment.add_argument("name", help="exp1, exp2a, exp2b, exp3, exp4, exp5 or exp6")
+    experiment.add_argument("--runs", type=_at_least_one, default=50, help="number of seeds (default 50)")
+    experiment.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
+    experiment.add_argument("--out", type=Path, help="output directory (default dynfab-experiments/NAME)")
+    experiment.add_argument("--jobs", type=_at_least_one, help="worker processes (default: the number of CPUs)")
     args = parser.parse_args(argv)
+    if args.command == "experiment":
+        return _experiment(args.name, args.runs, args.seed, args.out, args.jobs)
     if args.command == "run":
         path, planners = args.file, [args.planner]
     else:
@@ -57,6 +66,42 @@ def main(argv: list[str] | None = None) -> int:
     if args.plot is not None:
         _plot(results[0], args.plot)
         print(f"dynfab: plot written to {args.plot}", file=sys.stderr)
+    return 0
+
+
+def _at_least_one(text: str) -> int:
+    """An integer >= 1 from the command line."""
+    if not text.isdigit() or int(text) < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return int(text)
+
+
+def _experiment(name: str, runs: int, seed: int, out: Path | None, jobs: int | None) -> int:
+    """``dynfab experiment``: run the series, print its summary; 2 for an unknown name or an
+    output directory of another series, 1 if a run failed, 130 on Ctrl-C (resumable)."""
+    from dynfab.experiments.registry import EXPERIMENTS
+    from dynfab.experiments.series import RunError, SeriesError, run_series
+
+    if name not in EXPERIMENTS:
+        print(f"dynfab: error: unknown experiment {name!r} (expected one of {', '.join(EXPERIMENTS)})",
+              file=sys.stderr)
+        return 2
+    out = Path("dynfab-experiments") / name if out is None else out
+    try:
+        result = run_series(EXPERIMENTS[name], runs, seed, out, jobs, progress=sys.stderr)
+    except SeriesError as error:
+        print(f"dynfab: error: {error}", file=sys.stderr)
+        return 2
+    except RunError as error:
+        print(f"dynfab: run failed: {error}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"\ndynfab: interrupted; finished runs are in {out / 'runs.jsonl'}, rerun the same command to resume",
+              file=sys.stderr)
+        return 130
+    print((out / "summary.md").read_text(encoding="utf-8"), end="")
+    print(f"dynfab: {result.executed} runs executed; wrote {out}/runs.jsonl, runs.csv, summary.md, summary.json, "
+          f"scenarios/ and plots/", file=sys.stderr)
     return 0
 
 
@@ -116,12 +161,21 @@ def _shown(value: object) -> str:
 
 
 def _plot(result: RunResult, path: Path) -> None:
+    """Plot the goal link's workspace path; a goal given in other coordinates (joint
+    goals, a subset of axes) is not drawn, the link's full path is."""
     from dynfab.plots import plot_run
 
-    goals = [(result.goal_reference if result.scenario.goals[0].type == "path" else result.scenario.goals[0].position,
-              result.scenario.goals[0].tolerance)]
+    goal = result.scenario.goals[0]
+    dimension = 2 if result.robot.planar else 3
+    if goal.type != "joint" and result.goal_positions.shape[1] == dimension:
+        positions = result.goal_positions
+        markers = [(result.goal_reference if goal.type == "path" else goal.position, goal.tolerance)]
+    else:
+        link = goal.link if goal.type != "joint" else result.robot.goal_link
+        positions = link_path(result.robot, link, result.record.q)[:, :dimension]
+        markers = []
     radii = [o.radius for o in result.scenario.obstacles]
-    plot_run(path, result.goal_positions, goals, result.obstacle_centers, radii, result.robot.planar,
+    plot_run(path, positions, markers, result.obstacle_centers, radii, result.robot.planar,
              clearance_over_time=result.clearance if radii else None, times=result.record.t,
              title=f"{result.robot.name}: {'success' if result.metrics.success else 'failure'}",
              base_path=None if result.robot.base is None else result.record.q[:, :2])

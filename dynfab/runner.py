@@ -112,6 +112,12 @@ def _goal_coordinates(robot: Robot, scenario: Scenario, qs: np.ndarray) -> np.nd
     return _evaluate_over(q, position[goal_axes(goal, robot)], qs)
 
 
+def link_path(robot: Robot, link: str, qs: np.ndarray) -> np.ndarray:
+    """Positions (T, 3) [m] of ``link``'s origin at the configurations ``qs`` (T, n)."""
+    q = ca.SX.sym("q", robot.kinematics.dof)
+    return _evaluate_over(q, robot.kinematics.position(q, link), qs)
+
+
 def _sphere_centres(robot: Robot, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     q = ca.SX.sym("q", robot.kinematics.dof)
     spheres = robot.collision_spheres

@@ -162,3 +162,12 @@ def test_bad_file_as_subprocess_has_no_traceback(tmp_path: Path) -> None:
     assert completed.returncode == 2
     assert completed.stdout == ""
     assert completed.stderr.splitlines() == ["dynfab: error: obstacles[0].radius: must be positive, got -0.1"]
+
+
+@pytest.mark.parametrize("example", ["panda_joint_goal.yaml", "boxer_panda_base_goal.yaml"])
+def test_plot_of_goals_not_in_workspace_coordinates(example: str, tmp_path: Path) -> None:
+    """Joint goals and goals on a subset of axes plot the goal link's full path."""
+    plot = tmp_path / "run.png"
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    assert main(["run", str(examples / example), "--plot", str(plot)]) == 0
+    assert plot.stat().st_size > 10_000
