@@ -1,1 +1,1 @@
-"""The paper's experiments: scenario distributions (and, later, the runner)."""
+"""The paper's experiments: scenario distributions, the registry and the series runner."""

@@ -95,7 +95,8 @@ def rrt_scenario(seed: int, planner: str = "dynamic-fabric") -> dict[str, Any]:
         break
     duration = round(max(4.0, path_duration(path, RRT_SPEED)), 2)
     obstacles = [{"type": "sphere", "position": rounded(c), "radius": RRT_SPHERE_RADIUS} for c in spheres]
-    return _scenario(planner, duration + 5.0, {"type": "rrt", "goal": rounded(goal), "duration": duration}, obstacles)
+    return _scenario(planner, round(duration + 5.0, 2), {"type": "rrt", "goal": rounded(goal), "duration": duration},
+                     obstacles)
 
 
 def _blocking_centre(rng: np.random.Generator, start: np.ndarray, goal: np.ndarray) -> np.ndarray:
