@@ -1,4 +1,4 @@
-"""The static fabric planner: leaves composed into the root and compiled into one function.
+"""The fabric planner: leaves composed into the root and compiled into one function.
 
 ``FabricPlanner(robot, config)`` builds, in CasADi SX, the joint-space fabric
 
@@ -6,10 +6,13 @@
 - obstacle leaves summed in each sphere's point space, then pulled once per sphere;
 - self-collision leaves on sphere pairs, joint-limit leaves on joints, a base energy;
 - goal forcing on the goal links (or joints);
-- the root of :mod:`dynfab.speed_control`;
+- the root of :mod:`dynfab.speed_control` (static, or dynamic with goal and obstacle
+  velocities and accelerations);
+- for a differential-drive base, the least-squares solve of :mod:`dynfab.nonholonomic`;
 
-and compiles ONE function ``z = [q, q̇, p] ↦ q̈``. The runtime parameters ``p`` (goals,
-weights, obstacle slots) are written through :attr:`FabricPlanner.parameters`; calling
+and compiles ONE function ``z = [q, q̇, p] ↦ q̈`` (``[q, q̇_u, p] ↦ q̈_u`` on a base). The
+runtime parameters ``p`` (goals, weights, obstacle slots) are written through
+:attr:`FabricPlanner.parameters`; calling
 :meth:`FabricPlanner.compute` then costs one buffer evaluation, with no per-argument
 conversion.
 """
@@ -119,7 +122,8 @@ class PlannerConfig:
 
 
 class FabricPlanner:
-    """Static optimization fabric for one robot (see module docstring).
+    """An optimization fabric for one robot: static or dynamic, holonomic or on a
+    differential-drive base (see module docstring).
 
     Attributes:
         robot: the robot.
@@ -303,7 +307,8 @@ class FabricPlanner:
             reference = params.goals[i]
             if goal.link is not None:
                 position = kin.position(q, goal.link, parent=goal.parent_link)
-                task = selected(DifferentialMap.from_expression(position, q, qdot), self._goal_axes(goal), ca.SX(len(self._goal_axes(goal)), 1))
+                axes = self._goal_axes(goal)
+                task = selected(DifferentialMap.from_expression(position, q, qdot), axes, ca.SX(len(axes), 1))
             else:
                 joints = self._goal_joints(goal)
                 selector = np.zeros((len(joints), self._n))
