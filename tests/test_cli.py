@@ -105,10 +105,6 @@ BAD_SCENARIOS: dict[str, tuple[dict[str, Any], str]] = {
     "negative radius": (changed(("obstacles", 0, "radius"), -0.1), "obstacles[0].radius"),
     "NaN": (changed(("dt",), float("nan")), "dt"),
     "infinity": (changed(("goal", 0, "position"), [0.5, float("inf"), 0.4]), "goal[0].position[1]"),
-    "mpc on a differential-drive base": ({**changed(("planner",), "mpc"), "robot": "boxer",
-                                          "initial_state": {"q": [0.0, 0.0, 0.0]},
-                                          "goal": [{"type": "position", "position": [1.0, 0.0]}],
-                                          "obstacles": []}, "planner"),
 }
 
 

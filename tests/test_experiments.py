@@ -166,7 +166,7 @@ def test_registry_figures_belong_to_the_planners_compared() -> None:
             assert {ratio.numerator, ratio.denominator} <= set(experiment.planners)
     assert EXPERIMENTS["exp1"].planners == ("static-fabric", "mpc")
     assert EXPERIMENTS["exp2a"].figure("summed_error", "dynamic-fabric").value == 0.0792
-    assert "not available" in EXPERIMENTS["exp4"].notes
+    assert EXPERIMENTS["exp4"].planners == ("static-fabric", "mpc")
 
 
 @pytest.mark.parametrize("seed", range(5))

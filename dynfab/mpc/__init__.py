@@ -1,8 +1,12 @@
 """The MPC baseline of the paper's benchmark: a receding-horizon optimal control problem
-on a joint-space double integrator, re-solved at 10 Hz with CasADi (IPOPT or fatrop)."""
+on a joint-space double integrator (holonomic robots) or a unicycle base carrying double-
+integrator joints (robots on a differential-drive base), re-solved at 10 Hz with CasADi
+(IPOPT or fatrop)."""
 
 from dynfab.mpc.config import MpcConfig
 from dynfab.mpc.controller import MpcController, make_mpc_controller
+from dynfab.mpc.model import PredictionModel
 from dynfab.mpc.problem import GoalTerm, MpcProblem, Plan, SolveResult
 
-__all__ = ["GoalTerm", "MpcConfig", "MpcController", "MpcProblem", "Plan", "SolveResult", "make_mpc_controller"]
+__all__ = ["GoalTerm", "MpcConfig", "MpcController", "MpcProblem", "Plan", "PredictionModel", "SolveResult",
+           "make_mpc_controller"]

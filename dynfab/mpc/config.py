@@ -21,11 +21,12 @@ class MpcConfig:
 
     The optimal control problem over stages k = 0..H with stage length h = T / H is
 
-        min   Σ_{k=1..H} [ w_g Σ_i ω_i ||e_i(q_k, t_k)||² + w_v ||q̇_k||² + w_s s_k ]
-            + Σ_{k=0..H-1} w_u ||q̈_k||²
+        min   Σ_{k=1..H} [ w_g Σ_i ω_i ||e_i(q_k, t_k)||² + w_v ||u_k||² + w_s s_k ]
+            + Σ_{k=0..H-1} w_u ||u̇_k||²
 
     with ``e_i`` the error of goal ``i`` (weight ``ω_i`` from the scenario) at the stage
-    time ``t_k``; see :mod:`dynfab.mpc.problem` for the constraints.
+    time ``t_k`` and ``u`` the velocity coordinates (``q̇``, or ``(v, ω, arm rates)`` on a
+    differential-drive base); see :mod:`dynfab.mpc.problem` for the constraints.
 
     Attributes:
         horizon: T, the time the plan looks ahead [s].
@@ -33,15 +34,19 @@ class MpcConfig:
         solve_period: re-solve period in simulated time [s]; between solves the
             controller executes the last plan.
         goal_weight: w_g, weight of the squared goal error [1/m²] (joint goals: [1/rad²]).
-        input_weight: w_u, weight of the squared joint accelerations [s⁴/rad²].
-        velocity_weight: w_v, weight of the squared joint velocities [s²/rad²].
+        input_weight: w_u, weight of the squared accelerations ``u̇`` [s⁴/rad²].
+        velocity_weight: w_v, weight of the squared velocities ``u`` [s²/rad²].
         slack_weight: w_s, weight of the (linear) collision slack [1/m].
+        collision_margin: δ, clearance the collision rows ask for at the stage times,
+            ``gap ≥ δ − s`` [m]. 0 is the benchmark's formulation; a positive δ covers
+            the graze between stage times (about ``(u_max h)² / (8 (r_j + r_o))``, see
+            :mod:`dynfab.mpc.problem`).
         solver: ``"ipopt"`` (interior point, general sparse) or ``"fatrop"``
             (interior point exploiting the stage structure, ``structure_detection:
             auto``).
         max_iter: iteration limit of one solve.
         tolerance: convergence tolerance of the solver (its ``tol``).
-        braking_gain: k of the safe action ``q̈ = −k q̇`` used when no plan is
+        braking_gain: k of the safe action ``u̇ = −k u`` used when no plan is
             available [1/s].
     """
 
@@ -56,6 +61,7 @@ class MpcConfig:
     max_iter: int = 100
     tolerance: float = 1e-4
     braking_gain: float = 5.0
+    collision_margin: float = 0.0
 
     def __post_init__(self) -> None:
         positive = {"horizon": self.horizon, "solve_period": self.solve_period, "tolerance": self.tolerance}
@@ -64,7 +70,7 @@ class MpcConfig:
                 raise ValueError(f"MpcConfig.{name} must be a positive number, got {value}")
         weights = {"goal_weight": self.goal_weight, "input_weight": self.input_weight,
                    "velocity_weight": self.velocity_weight, "slack_weight": self.slack_weight,
-                   "braking_gain": self.braking_gain}
+                   "braking_gain": self.braking_gain, "collision_margin": self.collision_margin}
         for name, value in weights.items():
             if not (math.isfinite(value) and value >= 0.0):
                 raise ValueError(f"MpcConfig.{name} must be a non-negative number, got {value}")

@@ -1,16 +1,20 @@
-"""The receding-horizon MPC controller ``(t, q, q̇) ↦ q̈`` and its factory for scenarios.
+"""The receding-horizon MPC controller ``(t, q, u) ↦ u̇`` and its factory for scenarios.
+
+``u`` are the robot's velocity coordinates, as the simulator integrates them: the joint
+velocities ``q̇`` of a holonomic robot (``u̇ = q̈``), or ``(v, ω, arm rates)`` of a robot
+on a differential-drive base (n − 1 numbers for ``q = (x, y, θ, arm)``).
 
 Every ``solve_period`` of simulated time the controller solves
 :class:`~dynfab.mpc.problem.MpcProblem` from the measured state, with the goal and
 obstacle references sampled at the stage times ``t + k h`` (k = 1..H) and the previous
 plan, shifted to the current time, as initial guess. Between solves it executes the
 plan: a call at time ``t`` returns the acceleration of the stage that contains ``t``,
-``q̈ = plan.q̈_k`` with ``k = ⌊(t − t_plan) / h⌋``.
+``u̇ = plan.u̇_k`` with ``k = ⌊(t − t_plan) / h⌋``.
 
 Safe action when a solve fails (the solver did not converge or returned non-finite
 numbers): keep executing the last successful plan, i.e. that plan shifted to the current
 time; once the time runs past its horizon, or if there never was one, brake:
-``q̈ = −k_b q̇`` (``k_b = MpcConfig.braking_gain`` [1/s]). Failures are counted.
+``u̇ = −k_b u`` (``k_b = MpcConfig.braking_gain`` [1/s]). Failures are counted.
 """
 
 from __future__ import annotations
@@ -25,7 +29,7 @@ from dynfab.mpc.config import MpcConfig
 from dynfab.mpc.problem import GoalTerm, MpcProblem, Plan
 from dynfab.references import goal_axes
 from dynfab.robots.robot import Robot
-from dynfab.scenario import GoalSpec, Scenario, ScenarioError
+from dynfab.scenario import GoalSpec, Scenario
 
 #: tolerance on "a solve period has elapsed", for times accumulated in floating point [s]
 _TIME_TOLERANCE = 1e-9
@@ -67,16 +71,17 @@ class MpcController:
         return self._plan
 
     def __call__(self, t: float, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
-        """``q̈`` at time ``t`` [s] for the measured state; always finite.
+        """``u̇`` at time ``t`` [s] for the measured configuration ``q`` (n,) and velocity
+        coordinates ``qdot`` = ``u`` (m,); always finite, shape (m,).
 
         Raises:
-            ValueError: if ``q`` or ``q̇`` has the wrong shape or is not finite.
+            ValueError: if ``q`` or ``u`` has the wrong shape or is not finite.
         """
         q = np.asarray(q, dtype=float)
         qdot = np.asarray(qdot, dtype=float)
-        n = self.problem.robot.dof
-        if q.shape != (n,) or qdot.shape != (n,):
-            raise ValueError(f"q and qdot must have shape ({n},), got {q.shape} and {qdot.shape}")
+        n, m = self.problem.robot.dof, self.problem.model.velocity_size
+        if q.shape != (n,) or qdot.shape != (m,):
+            raise ValueError(f"q and qdot must have shapes ({n},) and ({m},), got {q.shape} and {qdot.shape}")
         if not (np.isfinite(q).all() and np.isfinite(qdot).all()):
             raise ValueError("q or qdot contains NaN or infinity")
         if self._last_attempt is None or t >= self._last_attempt + self.config.solve_period - _TIME_TOLERANCE:
@@ -95,7 +100,7 @@ class MpcController:
             centres[o] = reference.sample(times)[0][:, :dims]
         guess = None
         if self._plan is not None:
-            guess = self._plan.shifted(round((t - self._plan_time) / h), h)
+            guess = self._plan.shifted(round((t - self._plan_time) / h), h, self.problem.model.simulator)
         start = time.perf_counter()
         result = self.problem.solve(q, qdot, goals, centres, self.obstacle_radii, guess)
         self.solve_times.append(time.perf_counter() - start)
@@ -106,7 +111,7 @@ class MpcController:
             self.failures += 1
 
     def _command(self, t: float, qdot: np.ndarray) -> np.ndarray:
-        """The executed plan's acceleration at ``t``, or the braking action."""
+        """The executed plan's acceleration ``u̇`` at ``t``, or the braking action ``−k_b u``."""
         if self._plan is not None:
             stage = math.floor((t - self._plan_time) / self.config.stage_length + _TIME_TOLERANCE)
             if 0 <= stage < self.config.stages:
@@ -120,15 +125,11 @@ def make_mpc_controller(scenario: Scenario, robot: Robot, references: References
 
     Args:
         scenario: the scenario (goals, obstacle radii).
-        robot: a holonomic robot.
+        robot: any robot: holonomic (double-integrator model) or on a differential-drive
+            base (unicycle model, :mod:`dynfab.mpc.model`).
         references: the scenario's goal and obstacle trajectories.
         config: horizon, weights and solver; the benchmark's defaults if ``None``.
-
-    Raises:
-        ScenarioError: for robots with a non-holonomic base.
     """
-    if getattr(robot, "base", None) is not None:
-        raise ScenarioError("planner", "mpc for non-holonomic robots is not available yet")
     goals = tuple(_goal_term(goal, robot) for goal in scenario.goals)
     problem = MpcProblem(robot, goals, len(scenario.obstacles), config or MpcConfig())
     return MpcController(problem, references, np.array([o.radius for o in scenario.obstacles]))

@@ -1,33 +1,48 @@
 """The MPC baseline's nonlinear program, built once and solved with IPOPT or fatrop.
 
-Model: a second-order integrator per joint, state ``x = (q, q̇)``, input ``u = q̈``,
-discretised exactly for an input held constant over each stage of length h [s]:
+Model (:mod:`dynfab.mpc.model`): state ``x = (q, u)`` with ``u`` the robot's velocity
+coordinates, input ``u̇`` held constant over each stage of length h [s],
+``x_{k+1} = F(x_k, u̇_k)``:
 
-    q_{k+1} = q_k + h q̇_k + ½ h² q̈_k,        q̇_{k+1} = q̇_k + h q̈_k.
+- holonomic robots, ``u = q̇``, a second-order integrator per joint (exact):
+
+      q_{k+1} = q_k + h q̇_k + ½ h² q̈_k,        q̇_{k+1} = q̇_k + h q̈_k;
+
+- robots on a differential-drive base, ``q = (x, y, θ, arm)``, ``u = (v, ω, arm rates)``:
+  ``u_{k+1} = u_k + h u̇_k``, the arm as above, the base pose along the unicycle arc of
+  the stage's mid-point speeds (``ẏ cos θ − ẋ sin θ = 0`` holds by construction).
 
 Over stages k = 0..H at times t_k = t + k h, with one slack ``s_k ≥ 0`` per stage:
 
-    min   Σ_{k=1..H} [ w_g Σ_i ω_i ||e_i(q_k) − r_i(t_k)||² + w_v ||q̇_k||² + w_s s_k ]
-        + Σ_{k=0..H-1} w_u ||q̈_k||²
-    s.t.  (q_0, q̇_0) = (q(t), q̇(t))                                      initial state
-          the dynamics above,                                            k = 0..H-1
-          ||p_j(q_k) − c_o(t_k)|| − r_j − r_o ≥ −s_k   every robot sphere j, obstacle o
-          q_min ≤ q_k ≤ q_max,  |q̇_k| ≤ q̇_max                           k = 1..H
+    min   Σ_{k=1..H} [ w_g Σ_i ω_i ||e_i(q_k) − r_i(t_k)||² + w_v ||u_k||² + w_s s_k ]
+        + Σ_{k=0..H-1} w_u ||u̇_k||²
+    s.t.  (q_0, u_0) = (q(t), u(t))                                        initial state
+          x_{k+1} = F(x_k, u̇_k),                                          k = 0..H-1
+          ||p_j(q_k) − c_o(t_k)|| − r_j − r_o ≥ δ − s_k  every robot sphere j, obstacle o
+          q_min ≤ q_k ≤ q_max,  |u_k| ≤ u_max                             k = 1..H
 
 ``e_i`` is the goal link's position on the goal's axes in its parent link's frame [m]
 (or the joint vector for joint goals [rad]), ``r_i(t_k)`` the goal's reference at the
 stage time, ``p_j`` a collision sphere's centre and ``c_o(t_k)`` an obstacle's centre
-at the stage time; planar robots measure distances in x-y only. Stage 0 carries no
-collision or limit constraint and no goal cost: its state is fixed by the measurement,
-so they could only make the problem infeasible. Spheres that no joint moves are left
-out for the same reason. Distances are smoothed, ``sqrt(||d||² + ε²)`` with
-ε = 1e-6 m, so that their gradient exists at ``d = 0``. As in the benchmark, collisions
-are constrained at the stage times only: in between, a sphere moving a distance L per
-stage past an obstacle at the constraint's boundary can cut up to about L² / (8 (r_j + r_o))
-into it (millimetres at 1 m/s).
+at the stage time, ``δ ≥ 0`` the collision margin (``MpcConfig.collision_margin``,
+0 in the benchmark); planar robots (the point robot, ``boxer``) measure distances in x-y
+only. ``q_min``, ``q_max`` are the URDF's joint limits (infinite ones left out: on a base,
+the yaw is free and x, y keep the URDF's ±10 m); ``u_max`` is the joint velocity limit,
+on a base ``(max_forward_speed, max_yaw_rate)`` of its
+:class:`~dynfab.robots.robot.DifferentialDriveBase` followed by the arm's limits.
+Stage 0 carries no collision or limit constraint and no goal cost: its state is fixed
+by the measurement, so they could only make the problem infeasible. Spheres that no
+joint moves are left out for the same reason. Distances are smoothed,
+``sqrt(||d||² + ε²)`` with ε = 1e-6 m, so that their gradient exists at ``d = 0``. As in
+the benchmark, collisions are constrained at the stage times only: in between, a sphere
+moving a distance L per stage past an obstacle at the constraint's boundary can cut up
+to about L² / (8 (r_j + r_o)) into it (millimetres at 1 m/s; a turning base moves its
+front discs faster than ``v``: in Experiment 4 up to 2.1 m/s, L = 0.21 m, up to 11 mm
+past a disc of 0.3 m; measured at most 7.3 mm on seeds 0..9). ``MpcConfig.collision_margin``
+can ask for that much clearance at the stage times instead.
 
-Decision variables and constraints are ordered stage by stage (x_0, u_0, x_1, u_1, ...,
-gap-closing rows ``x_{k+1} − F(x_k, u_k) = 0`` first in each stage), the layout fatrop's
+Decision variables and constraints are ordered stage by stage (x_0, u̇_0, x_1, u̇_1, ...,
+gap-closing rows ``x_{k+1} − F(x_k, u̇_k) = 0`` first in each stage), the layout fatrop's
 ``structure_detection: auto`` recognises; IPOPT does not care.
 
 Scaling of the slack: the solver's variable is ``s̃ = s / σ`` with ``σ = min(1, 1e4 / w_s)``
@@ -48,7 +63,9 @@ import casadi as ca
 import numpy as np
 
 from dynfab.mpc.config import MpcConfig
+from dynfab.mpc.model import PredictionModel
 from dynfab.robots.robot import Robot
+from dynfab.sim.models import DoubleIntegrator, MotionModel
 
 _DISTANCE_SMOOTHING = 1e-6  # ε [m]
 _SLACK_COST = 1e4  # w_s σ, the slack variable's cost coefficient (module docstring)
@@ -76,9 +93,12 @@ class Plan:
     """A solution over the horizon, stage k at time ``t_0 + k h``.
 
     Attributes:
-        q: joint positions q_0..q_H, shape (H + 1, n) [rad or m].
-        qdot: joint velocities, shape (H + 1, n) [rad/s or m/s].
-        qddot: accelerations held over each stage, shape (H, n) [rad/s² or m/s²].
+        q: configurations q_0..q_H, shape (H + 1, n) [rad or m].
+        qdot: velocity coordinates u_0..u_H, shape (H + 1, m): the joint velocities
+            (m = n), or ``(v, ω, arm rates)`` on a differential-drive base (m = n − 1)
+            [m/s, rad/s].
+        qddot: their accelerations ``u̇`` held over each stage, shape (H, m)
+            [rad/s² or m/s²].
         slack: collision slacks s_1..s_H, shape (H,) [m].
     """
 
@@ -87,16 +107,21 @@ class Plan:
     qddot: np.ndarray
     slack: np.ndarray
 
-    def shifted(self, stages: int, stage_length: float) -> Plan:
-        """The plan from stage ``stages`` on, extended at the end with ``q̈ = 0``.
+    def shifted(self, stages: int, stage_length: float, model: MotionModel = DoubleIntegrator()) -> Plan:
+        """The plan from stage ``stages`` on, extended at the end with ``u̇ = 0``.
 
-        The extension keeps the dynamics: ``q ← q + h q̇`` per added stage.
+        The extension keeps the dynamics of ``model`` (the prediction model's numeric
+        twin, :attr:`PredictionModel.simulator`): per added stage
+        ``q ← model.step(q, u, 0, h)`` at constant ``u``, i.e. ``q ← q + h q̇`` for a
+        double integrator, a straight line or circular arc for a differential-drive base.
         """
         horizon = self.qddot.shape[0]
         stages = min(stages, horizon)
         q, qdot = self.q[stages:], self.qdot[stages:]
-        added = np.arange(1, stages + 1)[:, None] * stage_length
-        return Plan(q=np.vstack([q, q[-1] + added * qdot[-1]]),
+        extension = [q[-1]]
+        for _ in range(stages):
+            extension.append(model.step(extension[-1], qdot[-1], np.zeros_like(qdot[-1]), stage_length)[0])
+        return Plan(q=np.vstack([q, *extension[1:]]),
                     qdot=np.vstack([qdot, np.repeat(qdot[-1:], stages, axis=0)]),
                     qddot=np.vstack([self.qddot[stages:], np.zeros((stages, self.qddot.shape[1]))]),
                     slack=np.concatenate([self.slack[stages:], np.zeros(stages)]))
@@ -135,6 +160,8 @@ class MpcProblem:
         goals: the goal terms.
         obstacles: number of obstacle spheres.
         config: horizon, weights and solver.
+        model: the prediction model (double integrator, or differential drive for a
+            robot with a ``base``).
         solver: the CasADi ``nlpsol`` function.
     """
 
@@ -145,7 +172,9 @@ class MpcProblem:
         self.goals = tuple(goals)
         self.obstacles = obstacles
         self.config = config
+        self.model = PredictionModel.for_robot(robot)
         self._n = robot.dof
+        self._m = self.model.velocity_size
         self._dims = 2 if robot.planar else 3
         self._goal_dims = tuple(len(g.axes) if g.link is not None else self._n for g in self.goals)
         self._slack_unit = min(1.0, _SLACK_COST / config.slack_weight) if config.slack_weight > 0 else 1.0
@@ -162,15 +191,22 @@ class MpcProblem:
         """Solve from the measured state.
 
         Args:
-            q: current joint positions, shape (n,).
-            qdot: current joint velocities, shape (n,).
+            q: current configuration, shape (n,).
+            qdot: current velocity coordinates ``u``, shape (m,): joint velocities, or
+                ``(v, ω, arm rates)`` on a differential-drive base.
             goal_references: per goal, its reference at t_1..t_H, shape (H, d_i).
-            obstacle_centres: obstacle centres at t_1..t_H, shape (m, H, 2 or 3) [m]
-                (planar robots use the first two coordinates).
-            obstacle_radii: shape (m,) [m].
+            obstacle_centres: obstacle centres at t_1..t_H, shape (obstacles, H, 2 or 3)
+                [m] (planar robots use the first two coordinates).
+            obstacle_radii: shape (obstacles,) [m].
             guess: initial guess (e.g. the previous plan shifted); ``None``: rest at ``q``.
+
+        Raises:
+            ValueError: if ``q``, ``qdot`` or ``obstacle_centres`` has the wrong shape.
         """
         horizon = self.config.stages
+        q, qdot = np.asarray(q, dtype=float), np.asarray(qdot, dtype=float)
+        if q.shape != (self._n,) or qdot.shape != (self._m,):
+            raise ValueError(f"q and qdot must have shapes ({self._n},) and ({self._m},), got {q.shape} and {qdot.shape}")
         centres = np.asarray(obstacle_centres, dtype=float)[..., :self._dims]
         if centres.shape != (self.obstacles, horizon, self._dims):
             raise ValueError(f"obstacle_centres must have shape ({self.obstacles}, {horizon}, {self._dims}), "
@@ -194,23 +230,23 @@ class MpcProblem:
 
     def _build(self) -> _Nlp:
         """The NLP of the module docstring, its rows stage by stage."""
-        n, horizon, h, cfg = self._n, self.config.stages, self.config.stage_length, self.config
+        n, m, horizon, h, cfg = self._n, self._m, self.config.stages, self.config.stage_length, self.config
         q: list[ca.SX] = []
         qdot: list[ca.SX] = []
         qddot: list[ca.SX] = []
         slack: list[ca.SX] = []
         variables: list[ca.SX] = []
-        for k in range(horizon + 1):  # stage k: x_k = (q_k, q̇_k), u_k = (q̈_k, s_k)
+        for k in range(horizon + 1):  # stage k: state (q_k, u_k), controls (u̇_k, s_k)
             q.append(self._variable("q", n))
-            qdot.append(self._variable("qdot", n))
+            qdot.append(self._variable("qdot", m))
             variables += [q[k], qdot[k]]
             if k < horizon:
-                qddot.append(self._variable("qddot", n))
+                qddot.append(self._variable("qddot", m))
                 variables.append(qddot[k])
             if k > 0:
                 slack.append(self._variable("slack", 1))
                 variables.append(slack[k - 1])
-        state_init = ca.SX.sym("x_init", 2 * n)
+        state_init = ca.SX.sym("x_init", n + m)
         references = [ca.SX.sym(f"goal_{i}", d, horizon) for i, d in enumerate(self._goal_dims)]
         centres = [ca.SX.sym(f"obstacle_{o}", self._dims, horizon) for o in range(self.obstacles)]
         radii = ca.SX.sym("radii", self.obstacles)
@@ -218,14 +254,16 @@ class MpcProblem:
         gaps = [_clearance(spheres, q[k], [c[:, k - 1] for c in centres], radii) for k in range(1, horizon + 1)]
         unit = self._slack_unit
         rows = _Rows()
+        q_sym, u_sym, udot_sym = ca.SX.sym("q", n), ca.SX.sym("u", m), ca.SX.sym("udot", m)
+        step = ca.Function("step", [q_sym, u_sym, udot_sym], [self.model.step(q_sym, u_sym, udot_sym, h)])
         for k in range(horizon):
-            rows.add(q[k + 1] - (q[k] + h * qdot[k] + 0.5 * h * h * qddot[k]), 0.0, 0.0, equality=True)
+            rows.add(q[k + 1] - step(q[k], qdot[k], qddot[k]), 0.0, 0.0, equality=True)
             rows.add(qdot[k + 1] - (qdot[k] + h * qddot[k]), 0.0, 0.0, equality=True)
             if k == 0:
                 rows.add(ca.vertcat(q[0], qdot[0]) - state_init, 0.0, 0.0, equality=True)
             else:
-                rows.add(gaps[k - 1] + unit * slack[k - 1], 0.0, ca.inf)
-        rows.add(gaps[-1] + unit * slack[-1], 0.0, ca.inf)
+                rows.add(gaps[k - 1] + unit * slack[k - 1], cfg.collision_margin, ca.inf)
+        rows.add(gaps[-1] + unit * slack[-1], cfg.collision_margin, ca.inf)
         goal_functions = self._goal_functions()
         cost = cfg.input_weight * sum(ca.sumsqr(u) for u in qddot)
         for k in range(1, horizon + 1):
@@ -260,13 +298,14 @@ class MpcProblem:
         return functions
 
     def _bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """Joint and velocity limits on stages 1..H, ``s ≥ 0``; everything else free."""
+        """Joint limits ``q_min ≤ q_k ≤ q_max`` and velocity limits ``|u_k| ≤ u_max`` on
+        stages 1..H, ``s ≥ 0``; everything else free."""
         lower, upper = np.full(self._size, -np.inf), np.full(self._size, np.inf)
         kin = self.robot.kinematics
         for index in self._index["q"][1:]:
             lower[index], upper[index] = kin.lower, kin.upper
         for index in self._index["qdot"][1:]:
-            lower[index], upper[index] = -kin.velocity_limits, kin.velocity_limits
+            lower[index], upper[index] = -self.model.velocity_limits, self.model.velocity_limits
         for index in self._index["slack"]:
             lower[index] = 0.0
         return lower, upper
@@ -276,16 +315,17 @@ class MpcProblem:
     def _initial_point(self, q: np.ndarray, qdot: np.ndarray, guess: Plan | None, parameters: np.ndarray) -> np.ndarray:
         """The decision vector the solver starts from: ``guess`` (rest at ``q`` if None)
         with its first state replaced by the measured one and each slack raised to make
-        its stage's collision rows feasible, ``s_k ≥ −min_{j,o} gap_{jo}(q_k)``."""
-        horizon, n = self.config.stages, self._n
+        its stage's collision rows feasible, ``s_k ≥ δ − min_{j,o} gap_{jo}(q_k)``."""
+        horizon, m = self.config.stages, self._m
         if guess is None:
-            guess = Plan(q=np.tile(q, (horizon + 1, 1)), qdot=np.zeros((horizon + 1, n)),
-                         qddot=np.zeros((horizon, n)), slack=np.zeros(horizon))
+            guess = Plan(q=np.tile(q, (horizon + 1, 1)), qdot=np.zeros((horizon + 1, m)),
+                         qddot=np.zeros((horizon, m)), slack=np.zeros(horizon))
         start_q, start_qdot = guess.q.copy(), guess.qdot.copy()
         start_q[0], start_qdot[0] = q, qdot
         vector = self._pack(Plan(q=start_q, qdot=start_qdot, qddot=guess.qddot, slack=np.zeros(horizon)))
         worst = np.asarray(self._worst_clearance(vector, parameters)).ravel()
-        return self._pack(Plan(q=start_q, qdot=start_qdot, qddot=guess.qddot, slack=np.maximum(guess.slack, -worst)))
+        slack = np.maximum(guess.slack, self.config.collision_margin - worst)
+        return self._pack(Plan(q=start_q, qdot=start_qdot, qddot=guess.qddot, slack=slack))
 
     def _pack(self, plan: Plan) -> np.ndarray:
         vector = np.empty(self._size)
