@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from dynfab.experiments.panda_sampling import Q0, PandaSampler, rounded
+from dynfab.experiments.panda_sampling import PandaSampler, panda_scenario, rounded
 
 GOAL_LOW, GOAL_HIGH = np.array([-0.4, -0.4, 0.1]), np.array([0.7, 0.0, 1.1])
 OBSTACLE_LOW, OBSTACLE_HIGH = np.array([-1.0, -1.0, 0.0]), np.array([1.0, 0.3, 1.0])
@@ -42,12 +42,5 @@ def scenario(seed: int, planner: str = "static-fabric") -> dict[str, Any]:
                     and np.linalg.norm(goal - centre) - OBSTACLE_RADIUS > GOAL_MARGIN):
                 break
         obstacles.append({"type": "sphere", "position": rounded(centre), "radius": OBSTACLE_RADIUS})
-    return {
-        "robot": "panda",
-        "planner": planner,
-        "dt": 0.01,
-        "duration": DURATION,
-        "initial_state": {"q": list(Q0)},
-        "goal": [{"type": "position", "link": "panda_hand", "position": rounded(goal), "tolerance": 0.05}],
-        "obstacles": obstacles,
-    }
+    goal_spec = {"type": "position", "position": rounded(goal), "tolerance": 0.05}
+    return panda_scenario(planner, DURATION, goal_spec, obstacles)

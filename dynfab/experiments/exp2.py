@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from dynfab.experiments.panda_sampling import Q0, PandaSampler, rounded
+from dynfab.experiments.panda_sampling import PandaSampler, panda_scenario, rounded
 from dynfab.global_planning import GlobalPlanningError, plan_path, path_duration
 from dynfab.references import RRT_MARGIN
 
@@ -109,12 +109,4 @@ def _blocking_centre(rng: np.random.Generator, start: np.ndarray, goal: np.ndarr
 
 
 def _scenario(planner: str, duration: float, trajectory: dict[str, Any], obstacles: list[dict[str, Any]]) -> dict[str, Any]:
-    return {
-        "robot": "panda",
-        "planner": planner,
-        "dt": 0.01,
-        "duration": duration,
-        "initial_state": {"q": list(Q0)},
-        "goal": [{"type": "path", "link": "panda_hand", "tolerance": 0.05, "trajectory": trajectory}],
-        "obstacles": obstacles,
-    }
+    return panda_scenario(planner, duration, {"type": "path", "tolerance": 0.05, "trajectory": trajectory}, obstacles)

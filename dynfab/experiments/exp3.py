@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from dynfab.experiments.panda_sampling import Q0, PandaSampler, rounded
+from dynfab.experiments.panda_sampling import PandaSampler, panda_scenario, rounded
 
 GOAL_LOW, GOAL_HIGH = np.array([0.3, -0.6, 0.25]), np.array([0.7, 0.6, 1.1])
 DURATION = 70.0
@@ -29,12 +29,5 @@ def scenario(seed: int, planner: str = "dynamic-fabric") -> dict[str, Any]:
     """Experiment 3, run ``seed``."""
     rng = np.random.default_rng(seed)
     goal = PandaSampler.create().reachable_goal(rng, GOAL_LOW, GOAL_HIGH)
-    return {
-        "robot": "panda",
-        "planner": planner,
-        "dt": 0.01,
-        "duration": DURATION,
-        "initial_state": {"q": list(Q0)},
-        "goal": [{"type": "position", "link": "panda_hand", "position": rounded(goal), "tolerance": 0.02}],
-        "obstacles": [dict(o) for o in OBSTACLES],
-    }
+    goal_spec = {"type": "position", "position": rounded(goal), "tolerance": 0.02}
+    return panda_scenario(planner, DURATION, goal_spec, [dict(o) for o in OBSTACLES])

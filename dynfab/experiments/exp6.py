@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 from scipy.optimize import least_squares
 
-from dynfab.experiments.panda_sampling import Q0, PandaSampler, rounded
+from dynfab.experiments.panda_sampling import Q0, PandaSampler, panda_scenario, rounded
 from dynfab.trajectories import SplineTrajectory
 
 GOAL = np.array([0.5, 0.0, 0.5])
@@ -94,15 +94,8 @@ def scenario(seed: int, planner: str = "dynamic-fabric") -> dict[str, Any]:
             break
     hand = {"type": "sphere", "radius": HAND_RADIUS,
             "trajectory": {"type": "spline", "waypoints": [rounded(p) for p in waypoints], "duration": duration}}
-    return {
-        "robot": "panda",
-        "planner": planner,
-        "dt": 0.01,
-        "duration": DURATION,
-        "initial_state": {"q": list(Q0)},
-        "goal": [{"type": "position", "link": "panda_hand", "position": rounded(GOAL), "tolerance": TOLERANCE}],
-        "obstacles": [hand],
-    }
+    goal_spec = {"type": "position", "position": rounded(GOAL), "tolerance": TOLERANCE}
+    return panda_scenario(planner, DURATION, goal_spec, [hand])
 
 
 def _pass_point(rng: np.random.Generator, centre: np.ndarray, radius: float, gap: float, side: float) -> np.ndarray:

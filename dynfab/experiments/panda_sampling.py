@@ -4,6 +4,7 @@ start pose, and the hand's start position."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -50,6 +51,21 @@ class PandaSampler:
         """Clearance [m] of a sphere to the robot's spheres in the start pose."""
         centres = np.array(self.spheres(Q0)).T
         return float(np.min(np.linalg.norm(centres - centre, axis=1) - self.sphere_radii) - radius)
+
+
+def panda_scenario(planner: str, duration: float, goal: dict[str, Any],
+                   obstacles: list[dict[str, Any]]) -> dict[str, Any]:
+    """A Panda scenario mapping: at rest in ``Q0``, dt 0.01 s, one goal for ``panda_hand``
+    (``goal`` gives its type, position or trajectory, and tolerance)."""
+    return {
+        "robot": "panda",
+        "planner": planner,
+        "dt": 0.01,
+        "duration": duration,
+        "initial_state": {"q": list(Q0)},
+        "goal": [{"link": "panda_hand", **goal}],
+        "obstacles": obstacles,
+    }
 
 
 def rounded(values: np.ndarray, digits: int = 4) -> list[float]:
