@@ -19,7 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from dynfab.experiments.panda_sampling import PandaSampler, panda_scenario, rounded
+from dynfab.experiments.panda_sampling import PandaSampler, panda_scenario
+from dynfab.experiments.sampling import rounded
 
 GOAL_LOW, GOAL_HIGH = np.array([-0.4, -0.4, 0.1]), np.array([0.7, 0.0, 1.1])
 OBSTACLE_LOW, OBSTACLE_HIGH = np.array([-1.0, -1.0, 0.0]), np.array([1.0, 0.3, 1.0])

@@ -28,7 +28,8 @@ from typing import Any
 
 import numpy as np
 
-from dynfab.experiments.panda_sampling import PandaSampler, panda_scenario, rounded
+from dynfab.experiments.panda_sampling import PandaSampler, panda_scenario
+from dynfab.experiments.sampling import rounded
 from dynfab.global_planning import GlobalPlanningError, plan_path, path_duration
 from dynfab.references import RRT_MARGIN
 

@@ -15,7 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from dynfab.experiments.panda_sampling import PandaSampler, panda_scenario, rounded
+from dynfab.experiments.panda_sampling import PandaSampler, panda_scenario
+from dynfab.experiments.sampling import rounded
 
 GOAL_LOW, GOAL_HIGH = np.array([0.3, -0.6, 0.25]), np.array([0.7, 0.6, 1.1])
 DURATION = 70.0

@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from dynfab.experiments.sampling import rounded, scatter_spheres
 from dynfab.robots import load_robot
 
 AREA = 3.0
@@ -45,23 +46,14 @@ def scenario(seed: int, planner: str = "static-fabric") -> dict[str, Any]:
         goal = rng.uniform(-AREA, AREA, 2)
         if GOAL_DISTANCE[0] <= np.linalg.norm(goal - pose[:2]) <= GOAL_DISTANCE[1]:
             break
-    discs: list[tuple[np.ndarray, float]] = []
-    while len(discs) < 5:
-        radius = float(rng.uniform(*RADIUS))
-        centre = rng.uniform(-OBSTACLE_AREA, OBSTACLE_AREA, 2)
-        start_gap = np.min(np.linalg.norm(footprint - centre, axis=1) - radii) - radius
-        goal_gap = np.linalg.norm(goal - centre) - radius
-        apart = all(np.linalg.norm(centre - c) - radius - r > PASSAGE for c, r in discs)
-        if start_gap > START_MARGIN and goal_gap > GOAL_MARGIN and apart:
-            discs.append((centre, radius))
+    discs = scatter_spheres(rng, 5, RADIUS, lambda: rng.uniform(-OBSTACLE_AREA, OBSTACLE_AREA, 2), footprint,
+                            radii, goal, START_MARGIN, GOAL_MARGIN, PASSAGE)
     return {
         "robot": "boxer",
         "planner": planner,
         "dt": 0.01,
         "duration": DURATION,
-        "initial_state": {"q": [round(float(v), 4) for v in pose]},
-        "goal": [{"type": "position", "link": "base_link", "position": [round(float(v), 4) for v in goal],
-                  "tolerance": 0.1}],
-        "obstacles": [{"type": "sphere", "position": [round(float(v), 4) for v in c], "radius": round(r, 4)}
-                      for c, r in discs],
+        "initial_state": {"q": rounded(pose)},
+        "goal": [{"type": "position", "link": "base_link", "position": rounded(goal), "tolerance": 0.1}],
+        "obstacles": [{"type": "sphere", "position": rounded(c), "radius": round(r, 4)} for c, r in discs],
     }

@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from dynfab.experiments.sampling import rounded, scatter_spheres
 from dynfab.robots import load_robot
 
 HALF_ROOM = 3.5
@@ -45,23 +46,15 @@ def scenario(seed: int, planner: str = "static-fabric") -> dict[str, Any]:
         goal = np.array([*rng.uniform(-HALF_ROOM, HALF_ROOM, 2), rng.uniform(*GOAL_HEIGHT)])
         if GOAL_DISTANCE[0] <= np.linalg.norm(goal[:2]) <= GOAL_DISTANCE[1]:
             break
-    spheres: list[tuple[np.ndarray, float]] = []
-    while len(spheres) < 8:
-        radius = float(rng.uniform(*RADIUS))
-        centre = np.array([*rng.uniform(-HALF_ROOM, HALF_ROOM, 2), rng.uniform(*HEIGHT)])
-        start_gap = np.min(np.linalg.norm(centres - centre, axis=1) - radii) - radius
-        goal_gap = np.linalg.norm(goal - centre) - radius
-        apart = all(np.linalg.norm(centre - c) - radius - r > PASSAGE for c, r in spheres)
-        if start_gap > START_MARGIN and goal_gap > GOAL_MARGIN and apart:
-            spheres.append((centre, radius))
+    spheres = scatter_spheres(
+        rng, 8, RADIUS, lambda: np.array([*rng.uniform(-HALF_ROOM, HALF_ROOM, 2), rng.uniform(*HEIGHT)]),
+        centres, radii, goal, START_MARGIN, GOAL_MARGIN, PASSAGE)
     return {
         "robot": "boxer-panda",
         "planner": planner,
         "dt": 0.01,
         "duration": DURATION,
-        "initial_state": {"q": [round(float(v), 4) for v in q0]},
-        "goal": [{"type": "position", "link": "panda_hand", "position": [round(float(v), 4) for v in goal],
-                  "tolerance": 0.05}],
-        "obstacles": [{"type": "sphere", "position": [round(float(v), 4) for v in c], "radius": round(r, 4)}
-                      for c, r in spheres],
+        "initial_state": {"q": rounded(q0)},
+        "goal": [{"type": "position", "link": "panda_hand", "position": rounded(goal), "tolerance": 0.05}],
+        "obstacles": [{"type": "sphere", "position": rounded(c), "radius": round(r, 4)} for c, r in spheres],
     }

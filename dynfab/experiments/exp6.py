@@ -31,7 +31,8 @@ from typing import Any
 import numpy as np
 from scipy.optimize import least_squares
 
-from dynfab.experiments.panda_sampling import Q0, PandaSampler, panda_scenario, rounded
+from dynfab.experiments.panda_sampling import Q0, PandaSampler, panda_scenario
+from dynfab.experiments.sampling import rounded
 from dynfab.trajectories import SplineTrajectory
 
 GOAL = np.array([0.5, 0.0, 0.5])

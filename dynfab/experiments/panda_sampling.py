@@ -9,6 +9,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from dynfab.experiments.sampling import rounded
 from dynfab.robots import load_robot
 
 Q0 = (1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0)
@@ -66,8 +67,3 @@ def panda_scenario(planner: str, duration: float, goal: dict[str, Any],
         "goal": [{"link": "panda_hand", **goal}],
         "obstacles": obstacles,
     }
-
-
-def rounded(values: np.ndarray, digits: int = 4) -> list[float]:
-    """Plain floats for a scenario file."""
-    return [round(float(v), digits) for v in values]

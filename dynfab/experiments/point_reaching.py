@@ -28,6 +28,8 @@ from typing import Any
 
 import numpy as np
 
+from dynfab.experiments.sampling import rounded
+
 HALF_SIDE = 2.0
 GOAL_DISTANCE = (1.5, 3.0)
 DISC_RADIUS = (0.2, 0.4)
@@ -67,14 +69,14 @@ def scenario(seed: int, planner: str = "static-fabric") -> dict[str, Any]:
             if start_gap > START_MARGIN and goal_gap > GOAL_MARGIN and passable:
                 break
         discs.append((centre, radius))
-        obstacles.append({"type": "sphere", "position": _rounded(centre), "radius": round(radius, 4)})
+        obstacles.append({"type": "sphere", "position": rounded(centre), "radius": round(radius, 4)})
     return {
         "robot": "point",
         "planner": planner,
         "dt": DT,
         "duration": DURATION,
-        "initial_state": {"q": _rounded(start)},
-        "goal": [{"type": "position", "link": "point", "position": _rounded(goal), "tolerance": TOLERANCE}],
+        "initial_state": {"q": rounded(start)},
+        "goal": [{"type": "position", "link": "point", "position": rounded(goal), "tolerance": TOLERANCE}],
         "obstacles": obstacles,
     }
 
@@ -94,8 +96,3 @@ def _blocking_centre(rng: np.random.Generator, start: np.ndarray, goal: np.ndarr
     normal = np.array([-direction[1], direction[0]])
     along = start + rng.uniform(*BLOCKING_FRACTION) * (goal - start)
     return along + rng.uniform(-0.5, 0.5) * radius * normal
-
-
-def _rounded(point: np.ndarray) -> list[float]:
-    """Coordinates rounded to 0.1 mm, as plain floats for YAML and JSON."""
-    return [round(float(x), 4) for x in point]
