@@ -120,12 +120,11 @@ def link_path(robot: Robot, link: str, qs: np.ndarray) -> np.ndarray:
 
 def _sphere_centres(robot: Robot, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     q = ca.SX.sym("q", robot.kinematics.dof)
-    spheres = robot.collision_spheres
-    if not spheres:
+    k = len(robot.collision_spheres)
+    if k == 0:
         return np.zeros((qs.shape[0], 0, 3)), np.zeros(0)
-    centres = ca.vertcat(*[robot.kinematics.position(q, s.link, offset=s.center) for s in spheres])
-    flat = _evaluate_over(q, centres, qs)
-    return flat.reshape(qs.shape[0], len(spheres), 3), np.array([s.radius for s in spheres])
+    flat = _evaluate_over(q, ca.reshape(robot.sphere_centers(q).T, 3 * k, 1), qs)
+    return flat.reshape(qs.shape[0], k, 3), robot.sphere_radii
 
 
 def _evaluate_over(q: ca.SX, expression: ca.SX, qs: np.ndarray) -> np.ndarray:

@@ -64,12 +64,6 @@ class Spec:
         return Spec(self.M, self.f + ca.gradient(potential, self.x), self.x, self.xdot)
 
 
-def zero_spec(x: ca.SX, xdot: ca.SX) -> Spec:
-    """The neutral element of summation on the space of ``x``."""
-    m = x.shape[0]
-    return Spec(ca.SX(m, m), ca.SX(m, 1), x, xdot)
-
-
 def _require_same_space(a: Spec, b: Spec) -> None:
     if a.x.shape != b.x.shape or not ca.is_equal(a.x, b.x) or not ca.is_equal(a.xdot, b.xdot):
         raise ValueError("specs live on different spaces; pull them to a common space first")

@@ -57,9 +57,8 @@ def _pin_placements(text: str, q_pin: np.ndarray) -> tuple[pin.Model, pin.Data]:
     return model, data
 
 
-def _to_pin_q(text: str, kin: Kinematics, q: np.ndarray) -> np.ndarray:
+def to_pinocchio_q(model: pin.Model, kin: Kinematics, q: np.ndarray) -> np.ndarray:
     """Our q (one angle per joint) as pinocchio's q (cos, sin for continuous joints)."""
-    model = pin.buildModelFromXML(text)
     q_pin = np.zeros(model.nq)
     for name, value in zip(kin.joint_names, q):
         joint = model.joints[model.getJointId(name)]
@@ -137,7 +136,7 @@ def test_small_urdf_prismatic_continuous_matches_pinocchio() -> None:
     rng = np.random.default_rng(2)
     for _ in range(20):
         q = _random_q(kin, rng) * 2.0  # continuous joint beyond +-pi too
-        model, data = _pin_placements(SMALL_TEXT, _to_pin_q(SMALL_TEXT, kin, q))
+        model, data = _pin_placements(SMALL_TEXT, to_pinocchio_q(pin.buildModelFromXML(SMALL_TEXT), kin, q))
         for link in kin.link_names:
             expected = data.oMf[model.getFrameId(link)]
             transform = np.array(kin.transform(q, link))

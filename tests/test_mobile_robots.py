@@ -14,6 +14,7 @@ from dynfab.robots import Kinematics, Robot, UnknownRobotError, load_robot, pars
 from dynfab.robots.builtin import (BOXER_BASE, BOXER_DISC_RADIUS, BOXER_SPHERE_RADIUS,
                                    PANDA_DEFAULT_Q)
 from dynfab.robots.robot import BASE_JOINTS, DifferentialDriveBase
+from test_kinematics import to_pinocchio_q
 
 DATA = resources.files("dynfab.robots").joinpath("data")
 TEXTS = {"boxer": DATA.joinpath("boxer.urdf").read_text(),
@@ -124,18 +125,6 @@ def test_fixed_robots_have_no_base() -> None:
     assert load_robot("point").base is None
 
 
-def _to_pin_q(model: pin.Model, kin: Kinematics, q: np.ndarray) -> np.ndarray:
-    """Our q (one angle per joint) as pinocchio's (cos, sin for continuous joints)."""
-    q_pin = np.zeros(model.nq)
-    for name, value in zip(kin.joint_names, q):
-        joint = model.joints[model.getJointId(name)]
-        if joint.nq == 2:
-            q_pin[joint.idx_q:joint.idx_q + 2] = (np.cos(value), np.sin(value))
-        else:
-            q_pin[joint.idx_q] = value
-    return q_pin
-
-
 @pytest.mark.parametrize("name", ["boxer", "boxer-panda"])
 def test_every_link_matches_pinocchio(name: str) -> None:
     robot = load_robot(name)
@@ -146,7 +135,7 @@ def test_every_link_matches_pinocchio(name: str) -> None:
     rng = np.random.default_rng(11)
     for q in [robot.default_q, np.zeros(kin.dof)] + [_random_q(robot, rng)
                                                       for _ in range(25)]:
-        pin.forwardKinematics(model, data, _to_pin_q(model, kin, q))
+        pin.forwardKinematics(model, data, to_pinocchio_q(model, kin, q))
         pin.updateFramePlacements(model, data)
         for link in kin.link_names:
             expected = data.oMf[model.getFrameId(link)]

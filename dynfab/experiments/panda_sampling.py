@@ -31,9 +31,8 @@ class PandaSampler:
         kin = robot.kinematics
         q = ca.SX.sym("q", kin.dof)
         hand = ca.Function("hand", [q], [kin.position(q, "panda_hand")])
-        spheres = ca.Function("spheres", [q], [ca.horzcat(*[kin.position(q, s.link, offset=s.center)
-                                                           for s in robot.collision_spheres])])
-        return cls(hand, spheres, np.array([s.radius for s in robot.collision_spheres]), kin.lower, kin.upper)
+        spheres = ca.Function("spheres", [q], [robot.sphere_centers(q).T])
+        return cls(hand, spheres, robot.sphere_radii, kin.lower, kin.upper)
 
     def hand_position(self, q: tuple[float, ...] = Q0) -> np.ndarray:
         return np.array(self.hand(q)).ravel()
