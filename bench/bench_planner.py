@@ -34,7 +34,7 @@ def measure_ours(spheres: int, steps: int, dynamic: bool = False) -> dict:
     """Build the planner and time ``compute`` (run in a fresh interpreter by :func:`main`).
     ``dynamic``: the dynamic-fabric planner (goal and obstacles with velocities and
     accelerations), with moving obstacles."""
-    from dynfab.planner import FabricPlanner, GoalConfig, PlannerConfig
+    from dynfab.fabric.planner import FabricPlanner, GoalConfig, PlannerConfig
     from dynfab.robots import load_robot
 
     start = time.perf_counter()

@@ -13,8 +13,8 @@ import sys
 from importlib.resources import files
 from pathlib import Path
 
-from dynfab.runner import RunResult, link_path, run_scenario
-from dynfab.scenario import PLANNERS, Scenario, ScenarioError, load_scenario
+from dynfab.scenario.runner import RunResult, link_path, run_scenario
+from dynfab.scenario.schema import PLANNERS, Scenario, ScenarioError, load_scenario
 
 #: ``dynfab demo NAME``: the bundled scenario, and whether the demo also runs the static
 #: baseline on it for comparison.
@@ -53,7 +53,7 @@ def main(argv: list[str] | None = None) -> int:
         path, planners = args.file, [args.planner]
     else:
         filename, compare = DEMOS[args.name]
-        path = Path(str(files("dynfab.scenarios") / filename))
+        path = Path(str(files("dynfab.scenario.demos") / filename))
         planners = [None, "static-fabric"] if compare else [None]
     try:
         scenario = load_scenario(path)
@@ -163,7 +163,7 @@ def _shown(value: object) -> str:
 def _plot(result: RunResult, path: Path) -> None:
     """Plot the goal link's workspace path; a goal given in other coordinates (joint
     goals, a subset of axes) is not drawn, the link's full path is."""
-    from dynfab.plots import plot_run
+    from dynfab.viz.plots import plot_run
 
     goal = result.scenario.goals[0]
     dimension = 2 if result.robot.planar else 3

@@ -6,7 +6,7 @@ obstacle at run time, with no rebuild.
 
 import numpy as np
 
-from dynfab.planner import FabricPlanner, GoalConfig, PlannerConfig
+from dynfab.fabric.planner import FabricPlanner, GoalConfig, PlannerConfig
 from dynfab.robots import load_robot
 
 robot = load_robot("panda")

@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 
 from dynfab.experiments import exp2, exp3
-from dynfab.metrics import Metrics
-from dynfab.runner import RunResult, run_scenario
-from dynfab.scenario import scenario_from_dict
+from dynfab.scenario.metrics import Metrics
+from dynfab.scenario.runner import RunResult, run_scenario
+from dynfab.scenario.schema import scenario_from_dict
 
 PANDA_Q0 = [1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0]
 PLANNERS = ("dynamic-fabric", "static-fabric")

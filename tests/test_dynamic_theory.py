@@ -5,9 +5,9 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from dynfab.energy import Lagrangian, dynamic_energize, finsler_energy
-from dynfab.maps import DifferentialMap, Reference
-from dynfab.spec import Spec
+from dynfab.fabric.energy import Lagrangian, dynamic_energize, finsler_energy
+from dynfab.fabric.maps import DifferentialMap, Reference
+from dynfab.fabric.spec import Spec
 
 RNG = np.random.default_rng(11)
 T = ca.SX.sym("t")

@@ -8,8 +8,8 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from dynfab.runner import run_scenario
-from dynfab.scenario import UrdfRobotSpec, load_scenario
+from dynfab.scenario.runner import run_scenario
+from dynfab.scenario.schema import UrdfRobotSpec, load_scenario
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 FILES = sorted(EXAMPLES.glob("**/*.yaml"))

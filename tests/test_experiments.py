@@ -19,9 +19,9 @@ from dynfab.experiments.panda_sampling import PandaSampler
 from dynfab.experiments.registry import EXPERIMENTS, MPC
 from dynfab.experiments.series import (METRIC_KEYS, METRICS, OUTCOMES, SeriesError, SeriesResult, load_records,
                                        run_series, scenario_file)
-from dynfab.runner import run_scenario
-from dynfab.scenario import load_scenario
-from dynfab.trajectories import trajectory_from_mapping
+from dynfab.scenario.runner import run_scenario
+from dynfab.scenario.schema import load_scenario
+from dynfab.motion.trajectories import trajectory_from_mapping
 
 RUNS, JOBS = 2, 2
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
-from dynfab.global_planning import GlobalPlanningError, path_duration, plan_path
+from dynfab.motion.global_planning import GlobalPlanningError, path_duration, plan_path
 
 CENTER = np.array([0.5, 0.0, 0.5])
 RADIUS = 0.2

@@ -6,8 +6,8 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from dynfab.energy import WeightedGeometry
-from dynfab.leaves.barrier import Barrier
+from dynfab.fabric.energy import WeightedGeometry
+from dynfab.fabric.leaves.barrier import Barrier
 
 RNG = np.random.default_rng(5)
 

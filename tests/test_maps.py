@@ -5,7 +5,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from dynfab.maps import DifferentialMap, difference, linear_map, selected, sphere_distance_map
+from dynfab.fabric.maps import DifferentialMap, difference, linear_map, selected, sphere_distance_map
 
 RNG = np.random.default_rng(3)
 

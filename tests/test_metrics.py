@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
-from dynfab.metrics import (
+from dynfab.scenario.metrics import (
     Metrics,
     clearance_over_time,
     compute_metrics,

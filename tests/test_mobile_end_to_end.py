@@ -29,15 +29,15 @@ import numpy as np
 import pytest
 import yaml
 
-from dynfab import runner
+from dynfab.scenario import runner
 from dynfab.cli import main
-from dynfab.controllers import FabricController, make_controller
+from dynfab.scenario.controllers import FabricController, make_controller
 from dynfab.experiments import exp4, exp5
 from dynfab.mpc import MpcController
-from dynfab.references import scenario_references
+from dynfab.scenario.references import scenario_references
 from dynfab.robots import load_robot
-from dynfab.runner import RunResult, run_scenario
-from dynfab.scenario import scenario_from_dict, validate_for_robot
+from dynfab.scenario.runner import RunResult, run_scenario
+from dynfab.scenario.schema import scenario_from_dict, validate_for_robot
 
 SEEDS = range(10)
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"

@@ -14,10 +14,10 @@ import pytest
 from dynfab.experiments import exp1, exp4
 from dynfab.mpc import MpcConfig, MpcController, MpcProblem, Plan, make_mpc_controller
 from dynfab.mpc.model import sinc
-from dynfab.references import scenario_references
+from dynfab.scenario.references import scenario_references
 from dynfab.robots import load_robot
-from dynfab.runner import BASE_SUBSTEPS, RunResult, link_path, robot_for, run_scenario
-from dynfab.scenario import scenario_from_dict, validate_for_robot
+from dynfab.scenario.runner import BASE_SUBSTEPS, RunResult, link_path, robot_for, run_scenario
+from dynfab.scenario.schema import scenario_from_dict, validate_for_robot
 from dynfab.sim import DifferentialDrive, simulate
 
 CLEARANCE_TOLERANCE = 1e-3  # [m] the constraints hold at the stage times; between them a sphere may graze

@@ -5,7 +5,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from dynfab.nonholonomic import least_squares_acceleration, velocity_map, velocity_map_derivative
+from dynfab.fabric.nonholonomic import least_squares_acceleration, velocity_map, velocity_map_derivative
 
 RNG = np.random.default_rng(21)
 
@@ -66,7 +66,7 @@ def test_steering_term_turns_a_base_toward_a_lateral_goal_direction() -> None:
     """With the base at rest and the fabric asking for a purely lateral acceleration, the
     plain least squares cannot do anything (ω̇ = 0), while the look-ahead term turns the
     base toward that side (ω̇ > 0 for a leftward request)."""
-    from dynfab.nonholonomic import Steering
+    from dynfab.fabric.nonholonomic import Steering
 
     n = 3
     q, u = ca.SX.sym("q", n), ca.SX.sym("u", n - 1)

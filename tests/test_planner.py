@@ -8,10 +8,10 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from dynfab.leaves.barrier import Barrier
-from dynfab.leaves.obstacle import SphereObstacleAvoidance
-from dynfab.maps import DifferentialMap, difference, sphere_distance_map
-from dynfab.planner import FabricPlanner, GoalConfig, PlannerConfig
+from dynfab.fabric.leaves.barrier import Barrier
+from dynfab.fabric.leaves.obstacle import SphereObstacleAvoidance
+from dynfab.fabric.maps import DifferentialMap, difference, sphere_distance_map
+from dynfab.fabric.planner import FabricPlanner, GoalConfig, PlannerConfig
 from dynfab.robots import load_robot
 from test_maps import check_map_against_finite_differences
 

@@ -1,4 +1,4 @@
-"""Scenario references (:mod:`dynfab.references`): static goals and obstacles as trajectories
+"""Scenario references (:mod:`dynfab.scenario.references`): static goals and obstacles as trajectories
 at rest, dimension checks naming the field, and ``rrt`` goals planned around static spheres."""
 
 from __future__ import annotations
@@ -8,12 +8,12 @@ from typing import Any
 import numpy as np
 import pytest
 
-from dynfab.controllers import References
-from dynfab.references import RRT_MARGIN, scenario_references
+from dynfab.scenario.controllers import References
+from dynfab.scenario.references import RRT_MARGIN, scenario_references
 from dynfab.robots.robot import Robot
-from dynfab.runner import robot_for
-from dynfab.scenario import Scenario, ScenarioError, scenario_from_dict, validate_for_robot
-from dynfab.trajectories import (
+from dynfab.scenario.runner import robot_for
+from dynfab.scenario.schema import Scenario, ScenarioError, scenario_from_dict, validate_for_robot
+from dynfab.motion.trajectories import (
     CircleTrajectory,
     ExpressionTrajectory,
     LinearTrajectory,

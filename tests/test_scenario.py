@@ -11,7 +11,7 @@ from typing import Any
 import pytest
 
 from dynfab.robots import load_robot
-from dynfab.scenario import (
+from dynfab.scenario.schema import (
     GoalSpec,
     InitialState,
     ScenarioError,

@@ -6,10 +6,10 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from dynfab.energy import Lagrangian, WeightedGeometry, energize, finsler_energy
-from dynfab.linalg import cholesky_solve, congruence
-from dynfab.maps import DifferentialMap
-from dynfab.spec import Spec
+from dynfab.fabric.energy import Lagrangian, WeightedGeometry, energize, finsler_energy
+from dynfab.fabric.linalg import cholesky_solve, congruence
+from dynfab.fabric.maps import DifferentialMap
+from dynfab.fabric.spec import Spec
 
 RNG = np.random.default_rng(7)
 

@@ -14,8 +14,8 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from dynfab.expression import MAX_LENGTH, ExpressionError, parse_expression
-from dynfab.trajectories import (
+from dynfab.motion.expression import MAX_LENGTH, ExpressionError, parse_expression
+from dynfab.motion.trajectories import (
     CircleTrajectory,
     ExpressionTrajectory,
     LinearTrajectory,

@@ -30,8 +30,8 @@ import numpy as np
 
 from dynfab.experiments.panda_sampling import PandaSampler, panda_scenario
 from dynfab.experiments.sampling import rounded
-from dynfab.global_planning import GlobalPlanningError, plan_path, path_duration
-from dynfab.references import RRT_MARGIN
+from dynfab.motion.global_planning import GlobalPlanningError, plan_path, path_duration
+from dynfab.scenario.references import RRT_MARGIN
 
 CIRCLE_CENTER = np.array([0.45, 0.0, 0.55])
 CIRCLE_RADIUS = 0.2

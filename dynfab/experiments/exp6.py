@@ -33,7 +33,7 @@ from scipy.optimize import least_squares
 
 from dynfab.experiments.panda_sampling import Q0, PandaSampler, panda_scenario
 from dynfab.experiments.sampling import rounded
-from dynfab.trajectories import SplineTrajectory
+from dynfab.motion.trajectories import SplineTrajectory
 
 GOAL = np.array([0.5, 0.0, 0.5])
 TOLERANCE = 0.05

@@ -42,10 +42,10 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
 from dynfab.experiments.registry import Experiment, PaperRatio, Quantity
-from dynfab.metrics import Metrics
-from dynfab.plots import plot_run
-from dynfab.runner import RunResult, run_scenario
-from dynfab.scenario import load_scenario
+from dynfab.scenario.metrics import Metrics
+from dynfab.viz.plots import plot_run
+from dynfab.scenario.runner import RunResult, run_scenario
+from dynfab.scenario.schema import load_scenario
 
 #: The run metrics summarized as mean ± std, with their labels.
 METRICS: dict[Quantity, str] = {

@@ -24,12 +24,12 @@ import time
 
 import numpy as np
 
-from dynfab.controllers import References
+from dynfab.scenario.controllers import References
 from dynfab.mpc.config import MpcConfig
 from dynfab.mpc.problem import GoalTerm, MpcProblem, Plan
-from dynfab.references import goal_axes
+from dynfab.scenario.references import goal_axes
 from dynfab.robots.robot import Robot
-from dynfab.scenario import GoalSpec, Scenario
+from dynfab.scenario.schema import GoalSpec, Scenario
 
 #: tolerance on "a solve period has elapsed", for times accumulated in floating point [s]
 _TIME_TOLERANCE = 1e-9

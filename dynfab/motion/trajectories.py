@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike
 from scipy.interpolate import CubicSpline
 
 from dynfab.describe import describe
-from dynfab.expression import ExpressionError, parse_expression
+from dynfab.motion.expression import ExpressionError, parse_expression
 
 Samples = tuple[np.ndarray, np.ndarray, np.ndarray]
 """Positions, velocities and accelerations at T times, each of shape (T, d)."""
@@ -256,7 +256,7 @@ class PolynomialTrajectory(Trajectory):
 
 @dataclass(frozen=True)
 class ExpressionTrajectory(Trajectory):
-    """One safe arithmetic expression in ``t`` per axis (:mod:`dynfab.expression`).
+    """One safe arithmetic expression in ``t`` per axis (:mod:`dynfab.motion.expression`).
 
     ``ẋ̃`` and ``ẍ̃`` are exact, by CasADi's automatic differentiation. One CasADi
     function ``t ↦ [x̃, ẋ̃, ẍ̃]`` is compiled on construction; :meth:`evaluate` calls it

@@ -2,7 +2,7 @@
 
 Task map: ``x = ‖p_a(q) − p_b(q)‖ − r_a − r_b`` [m], composed from the two spheres'
 forward-kinematics maps (``J = nᵀ (J_a − J_b)``); the leaf is a
-:class:`~dynfab.leaves.barrier.Barrier` on ``x``.
+:class:`~dynfab.fabric.leaves.barrier.Barrier` on ``x``.
 """
 
 from __future__ import annotations
@@ -11,9 +11,9 @@ from dataclasses import dataclass, field
 
 import casadi as ca
 
-from dynfab.energy import WeightedGeometry
-from dynfab.leaves.barrier import Barrier
-from dynfab.maps import DifferentialMap, difference, sphere_distance_map
+from dynfab.fabric.energy import WeightedGeometry
+from dynfab.fabric.leaves.barrier import Barrier
+from dynfab.fabric.maps import DifferentialMap, difference, sphere_distance_map
 
 
 @dataclass(frozen=True)

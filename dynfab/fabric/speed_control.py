@@ -26,9 +26,9 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from dynfab.energy import WeightedGeometry, energization_coefficient
-from dynfab.linalg import cholesky_solve
-from dynfab.spec import Spec
+from dynfab.fabric.energy import WeightedGeometry, energization_coefficient
+from dynfab.fabric.linalg import cholesky_solve
+from dynfab.fabric.spec import Spec
 
 
 @dataclass(frozen=True)

@@ -11,8 +11,8 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from dynfab.linalg import congruence
-from dynfab.maps import DifferentialMap, Reference
+from dynfab.fabric.linalg import congruence
+from dynfab.fabric.maps import DifferentialMap, Reference
 
 
 @dataclass(frozen=True)

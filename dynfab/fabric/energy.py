@@ -11,9 +11,9 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from dynfab.linalg import congruence
-from dynfab.maps import DifferentialMap, Reference
-from dynfab.spec import Spec
+from dynfab.fabric.linalg import congruence
+from dynfab.fabric.maps import DifferentialMap, Reference
+from dynfab.fabric.spec import Spec
 
 
 @dataclass(frozen=True)
@@ -158,7 +158,7 @@ class WeightedGeometry:
 
     def dynamic_pull(self, x: ca.SX, xdot: ca.SX, reference: Reference) -> WeightedGeometry:
         """Dynamic pullback from relative coordinates ``x − x̃`` to ``x``: both forces lose
-        ``M ẍ̃`` (see :meth:`dynfab.spec.Spec.dynamic_pull`)."""
+        ``M ẍ̃`` (see :meth:`dynfab.fabric.spec.Spec.dynamic_pull`)."""
         M, f_geometry, f_energy = ca.substitute(
             [self.M, self.f_geometry, self.f_energy], [self.x, self.xdot],
             [x - reference.position, xdot - reference.velocity])

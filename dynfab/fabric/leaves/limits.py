@@ -11,9 +11,9 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from dynfab.energy import WeightedGeometry
-from dynfab.leaves.barrier import Barrier
-from dynfab.maps import linear_map
+from dynfab.fabric.energy import WeightedGeometry
+from dynfab.fabric.leaves.barrier import Barrier
+from dynfab.fabric.maps import linear_map
 
 
 @dataclass(frozen=True)

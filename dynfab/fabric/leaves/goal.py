@@ -22,8 +22,8 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from dynfab.maps import DifferentialMap, Reference
-from dynfab.spec import Spec
+from dynfab.fabric.maps import DifferentialMap, Reference
+from dynfab.fabric.spec import Spec
 
 #: ``ψ(x)``: a scalar potential of the goal error.
 PotentialFunction = Callable[[ca.SX], ca.SX]

@@ -9,13 +9,13 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from dynfab.controllers import Controller, make_controller
-from dynfab.references import goal_axes, scenario_references
-from dynfab.metrics import Metrics, clearance_over_time, compute_metrics
+from dynfab.scenario.controllers import Controller, make_controller
+from dynfab.scenario.references import goal_axes, scenario_references
+from dynfab.scenario.metrics import Metrics, clearance_over_time, compute_metrics
 from dynfab.robots import load_robot, robot_from_urdf
 from dynfab.robots.builtin import UnknownRobotError
 from dynfab.robots.robot import CollisionSphere, Robot
-from dynfab.scenario import Scenario, ScenarioError, UrdfRobotSpec, validate_for_robot
+from dynfab.scenario.schema import Scenario, ScenarioError, UrdfRobotSpec, validate_for_robot
 from dynfab.sim import DifferentialDrive, DoubleIntegrator, Record, simulate
 
 #: integration sub-steps per control period for a differential-drive base (arcs)

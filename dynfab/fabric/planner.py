@@ -6,9 +6,9 @@
 - obstacle leaves summed in each sphere's point space, then pulled once per sphere;
 - self-collision leaves on sphere pairs, joint-limit leaves on joints, a base energy;
 - goal forcing on the goal links (or joints);
-- the root of :mod:`dynfab.speed_control` (static, or dynamic with goal and obstacle
+- the root of :mod:`dynfab.fabric.speed_control` (static, or dynamic with goal and obstacle
   velocities and accelerations);
-- for a differential-drive base, the least-squares solve of :mod:`dynfab.nonholonomic`;
+- for a differential-drive base, the least-squares solve of :mod:`dynfab.fabric.nonholonomic`;
 
 and compiles ONE function ``z = [q, q̇, p] ↦ q̈`` (``[q, q̇_u, p] ↦ q̈_u`` on a base). The
 runtime parameters ``p`` (goals, weights, obstacle slots) are written through
@@ -25,19 +25,19 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from dynfab.energy import WeightedGeometry
-from dynfab.leaves.barrier import Barrier
-from dynfab.leaves.goal import GoalAttractor
-from dynfab.leaves.limits import JointLimitAvoidance
-from dynfab.leaves.obstacle import SphereObstacleAvoidance
-from dynfab.leaves.self_collision import SelfCollisionAvoidance
-from dynfab.linalg import cholesky_solve
-from dynfab.maps import DifferentialMap, Reference, linear_map, selected
-from dynfab.nonholonomic import Steering, least_squares_acceleration, velocity_map, velocity_map_derivative
-from dynfab.parameters import ParameterLayout, ParameterSymbols, RuntimeParameters
+from dynfab.fabric.energy import WeightedGeometry
+from dynfab.fabric.leaves.barrier import Barrier
+from dynfab.fabric.leaves.goal import GoalAttractor
+from dynfab.fabric.leaves.limits import JointLimitAvoidance
+from dynfab.fabric.leaves.obstacle import SphereObstacleAvoidance
+from dynfab.fabric.leaves.self_collision import SelfCollisionAvoidance
+from dynfab.fabric.linalg import cholesky_solve
+from dynfab.fabric.maps import DifferentialMap, Reference, linear_map, selected
+from dynfab.fabric.nonholonomic import Steering, least_squares_acceleration, velocity_map, velocity_map_derivative
+from dynfab.fabric.parameters import ParameterLayout, ParameterSymbols, RuntimeParameters
 from dynfab.robots.robot import Robot
-from dynfab.spec import Spec
-from dynfab.speed_control import EnvironmentMotion, SpeedControl
+from dynfab.fabric.spec import Spec
+from dynfab.fabric.speed_control import EnvironmentMotion, SpeedControl
 
 _AXES = "xyz"
 
@@ -85,7 +85,7 @@ class PlannerConfig:
         reference_damping: ``λ`` of the damped pseudo-inverse ``J⁺ = Jᵀ (J Jᵀ + λ² I)⁻¹``
             that pulls the primary goal's reference velocity to joint space [m].
         steering: for a differential-drive base, the look-ahead term of the
-            non-holonomic solve (:class:`dynfab.nonholonomic.Steering`); ``None`` for the
+            non-holonomic solve (:class:`dynfab.fabric.nonholonomic.Steering`); ``None`` for the
             paper's plain least squares.
     """
 

@@ -2,7 +2,7 @@
 
 Task map: ``x = ‖p_rel‖ − r_robot − r_obstacle`` (the clearance [m]) of the robot sphere's
 centre relative to the obstacle's, ``p_rel = p − c(t)``; the leaf is the
-:class:`~dynfab.leaves.barrier.Barrier` on ``x``, written in the obstacle's frame and
+:class:`~dynfab.fabric.leaves.barrier.Barrier` on ``x``, written in the obstacle's frame and
 brought to the fixed frame by the dynamic pullback (paper eq. (dynamic_pull)), which uses
 the obstacle's velocity ``ċ`` and acceleration ``c̈``. A static obstacle is the case
 ``ċ = c̈ = 0``, where the dynamic pullback is the identity. It is pulled first to the sphere's point
@@ -16,9 +16,9 @@ from dataclasses import dataclass, field
 
 import casadi as ca
 
-from dynfab.energy import WeightedGeometry
-from dynfab.leaves.barrier import Barrier
-from dynfab.maps import Reference, sphere_distance_map
+from dynfab.fabric.energy import WeightedGeometry
+from dynfab.fabric.leaves.barrier import Barrier
+from dynfab.fabric.maps import Reference, sphere_distance_map
 
 
 @dataclass(frozen=True)

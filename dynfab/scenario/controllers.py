@@ -16,10 +16,10 @@ from typing import Protocol
 
 import numpy as np
 
-from dynfab.planner import FabricPlanner, GoalConfig, PlannerConfig
+from dynfab.fabric.planner import FabricPlanner, GoalConfig, PlannerConfig
 from dynfab.robots.robot import Robot
-from dynfab.scenario import GoalSpec, Scenario, ScenarioError
-from dynfab.trajectories import Trajectory
+from dynfab.scenario.schema import GoalSpec, Scenario, ScenarioError
+from dynfab.motion.trajectories import Trajectory
 
 _FABRIC_PLANNERS = {"static-fabric": False, "dynamic-fabric": True}
 

@@ -1,7 +1,7 @@
 """The goal and obstacle trajectories of a scenario (DESIGN.md section 5).
 
 Static goals and obstacles become trajectories at rest; ``trajectory:`` mappings are built
-by :func:`dynfab.trajectories.trajectory_from_mapping`, except ``{type: rrt, goal: P,
+by :func:`dynfab.motion.trajectories.trajectory_from_mapping`, except ``{type: rrt, goal: P,
 duration: T}``, which needs the scenario: an RRT (OMPL) plans a path for the goal link
 from its start position to ``P`` around the scenario's static spheres, and a spline
 through that path's waypoints reaches ``P`` at ``T``.
@@ -14,11 +14,11 @@ from typing import Any
 
 import numpy as np
 
-from dynfab.controllers import References
-from dynfab.global_planning import GlobalPlanningError, plan_path
+from dynfab.scenario.controllers import References
+from dynfab.motion.global_planning import GlobalPlanningError, plan_path
 from dynfab.robots.robot import Robot
-from dynfab.scenario import GoalSpec, Scenario, ScenarioError
-from dynfab.trajectories import SplineTrajectory, StaticPoint, Trajectory, TrajectoryError, trajectory_from_mapping
+from dynfab.scenario.schema import GoalSpec, Scenario, ScenarioError
+from dynfab.motion.trajectories import SplineTrajectory, StaticPoint, Trajectory, TrajectoryError, trajectory_from_mapping
 
 _AXES = "xyz"
 #: extra room around start, goal and spheres for the RRT's bounding box [m]

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from dynfab.maps import Reference
+from dynfab.fabric.maps import Reference
 
 
 @dataclass(frozen=True)

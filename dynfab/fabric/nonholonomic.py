@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from dynfab.linalg import cholesky_solve
+from dynfab.fabric.linalg import cholesky_solve
 
 TIKHONOV = 1e-12
 

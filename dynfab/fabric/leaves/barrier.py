@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from dynfab.energy import Lagrangian, WeightedGeometry
+from dynfab.fabric.energy import Lagrangian, WeightedGeometry
 
 #: ``h(x, ẋ)`` of a geometry ``ẍ + h = 0`` on a 1-D clearance.
 GeometryFunction = Callable[[ca.SX, ca.SX], ca.SX]

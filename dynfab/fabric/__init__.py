@@ -1,0 +1,1 @@
+"""Optimization fabrics: spec algebra, maps, energies, leaves, the root and the planner."""

@@ -1,0 +1,1 @@
+"""Motion references: trajectories, safe expressions, global paths."""

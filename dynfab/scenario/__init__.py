@@ -1,0 +1,1 @@
+"""The scenario file contract: schema, references, controllers, runner, metrics."""
