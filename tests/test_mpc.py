@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from dynfab.experiments import exp1, exp4
-from dynfab.mpc import MpcConfig, MpcController, MpcProblem, Plan, make_mpc_controller
+from dynfab.mpc import MpcConfig, MpcController, MpcProblem, Plan
+from dynfab.scenario.controllers import make_mpc_controller
 from dynfab.mpc.model import sinc
 from dynfab.scenario.references import scenario_references
 from dynfab.robots import load_robot

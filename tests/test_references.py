@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from dynfab.scenario.controllers import References
+from dynfab.motion.references import References
 from dynfab.scenario.references import RRT_MARGIN, scenario_references
 from dynfab.robots.robot import Robot
 from dynfab.scenario.runner import robot_for

@@ -4,9 +4,8 @@ integrator joints (robots on a differential-drive base), re-solved at 10 Hz with
 (IPOPT or fatrop)."""
 
 from dynfab.mpc.config import MpcConfig
-from dynfab.mpc.controller import MpcController, make_mpc_controller
+from dynfab.mpc.controller import MpcController
 from dynfab.mpc.model import PredictionModel
 from dynfab.mpc.problem import GoalTerm, MpcProblem, Plan, SolveResult
 
-__all__ = ["GoalTerm", "MpcConfig", "MpcController", "MpcProblem", "Plan", "PredictionModel", "SolveResult",
-           "make_mpc_controller"]
+__all__ = ["GoalTerm", "MpcConfig", "MpcController", "MpcProblem", "Plan", "PredictionModel", "SolveResult"]

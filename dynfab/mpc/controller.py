@@ -1,4 +1,4 @@
-"""The receding-horizon MPC controller ``(t, q, u) ↦ u̇`` and its factory for scenarios.
+"""The receding-horizon MPC controller ``(t, q, u) ↦ u̇``.
 
 ``u`` are the robot's velocity coordinates, as the simulator integrates them: the joint
 velocities ``q̇`` of a holonomic robot (``u̇ = q̈``), or ``(v, ω, arm rates)`` of a robot
@@ -24,12 +24,10 @@ import time
 
 import numpy as np
 
-from dynfab.scenario.controllers import References
+from dynfab.motion.references import References
 from dynfab.mpc.config import MpcConfig
 from dynfab.mpc.problem import GoalTerm, MpcProblem, Plan
-from dynfab.scenario.references import goal_axes
 from dynfab.robots.robot import Robot
-from dynfab.scenario.schema import GoalSpec, Scenario
 
 #: tolerance on "a solve period has elapsed", for times accumulated in floating point [s]
 _TIME_TOLERANCE = 1e-9
@@ -117,26 +115,3 @@ class MpcController:
             if 0 <= stage < self.config.stages:
                 return self._plan.qddot[stage].copy()
         return -self.config.braking_gain * qdot
-
-
-def make_mpc_controller(scenario: Scenario, robot: Robot, references: References,
-                        config: MpcConfig | None = None) -> MpcController:
-    """The MPC baseline for a scenario validated for ``robot``.
-
-    Args:
-        scenario: the scenario (goals, obstacle radii).
-        robot: any robot: holonomic (double-integrator model) or on a differential-drive
-            base (unicycle model, :mod:`dynfab.mpc.model`).
-        references: the scenario's goal and obstacle trajectories.
-        config: horizon, weights and solver; the benchmark's defaults if ``None``.
-    """
-    goals = tuple(_goal_term(goal, robot) for goal in scenario.goals)
-    problem = MpcProblem(robot, goals, len(scenario.obstacles), config or MpcConfig())
-    return MpcController(problem, references, np.array([o.radius for o in scenario.obstacles]))
-
-
-def _goal_term(goal: GoalSpec, robot: Robot) -> GoalTerm:
-    if goal.type == "joint":
-        return GoalTerm(link=None, weight=goal.weight)
-    return GoalTerm(link=goal.link or robot.goal_link, axes=tuple(goal_axes(goal, robot)),
-                    parent_link=goal.parent_link, weight=goal.weight)

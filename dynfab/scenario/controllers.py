@@ -11,15 +11,16 @@ obstacle references into the planner's runtime parameters before calling it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
 
 from dynfab.fabric.planner import FabricPlanner, GoalConfig, PlannerConfig
+from dynfab.motion.references import References
+from dynfab.mpc import GoalTerm, MpcConfig, MpcController, MpcProblem
 from dynfab.robots.robot import Robot
+from dynfab.scenario.references import goal_axes
 from dynfab.scenario.schema import GoalSpec, Scenario, ScenarioError
-from dynfab.motion.trajectories import Trajectory
 
 _FABRIC_PLANNERS = {"static-fabric": False, "dynamic-fabric": True}
 
@@ -28,20 +29,6 @@ class Controller(Protocol):
     """What the simulator calls once per control period."""
 
     def __call__(self, t: float, q: np.ndarray, qdot: np.ndarray) -> np.ndarray: ...
-
-
-@dataclass(frozen=True)
-class References:
-    """Where the goals and obstacles of a scenario are over time.
-
-    Attributes:
-        goals: per goal, its trajectory in the goal's coordinates (a static goal is a
-            trajectory at rest).
-        obstacles: per obstacle, its centre's trajectory, 3-D.
-    """
-
-    goals: tuple[Trajectory, ...]
-    obstacles: tuple[Trajectory, ...]
 
 
 class FabricController:
@@ -92,8 +79,6 @@ def make_controller(scenario: Scenario, robot: Robot, references: References) ->
         ScenarioError: if the scenario asks for something this planner cannot do.
     """
     if scenario.planner == "mpc":
-        from dynfab.mpc import make_mpc_controller  # dynfab.mpc imports References from here
-
         return make_mpc_controller(scenario, robot, references)
     if scenario.planner not in _FABRIC_PLANNERS:
         raise ScenarioError("planner", f"{scenario.planner!r} is not available yet; use static-fabric, dynamic-fabric "
@@ -112,3 +97,26 @@ def _goal_config(goal: GoalSpec) -> GoalConfig:
     if goal.type == "joint":
         return GoalConfig(link=None, weight=goal.weight)
     return GoalConfig(link=goal.link, axes=goal.axes, parent_link=goal.parent_link, weight=goal.weight)
+
+
+def make_mpc_controller(scenario: Scenario, robot: Robot, references: References,
+                        config: MpcConfig | None = None) -> MpcController:
+    """The MPC baseline for a scenario validated for ``robot``.
+
+    Args:
+        scenario: the scenario (goals, obstacle radii).
+        robot: any robot: holonomic (double-integrator model) or on a differential-drive
+            base (unicycle model, :mod:`dynfab.mpc.model`).
+        references: the scenario's goal and obstacle trajectories.
+        config: horizon, weights and solver; the benchmark's defaults if ``None``.
+    """
+    goals = tuple(_goal_term(goal, robot) for goal in scenario.goals)
+    problem = MpcProblem(robot, goals, len(scenario.obstacles), config or MpcConfig())
+    return MpcController(problem, references, np.array([o.radius for o in scenario.obstacles]))
+
+
+def _goal_term(goal: GoalSpec, robot: Robot) -> GoalTerm:
+    if goal.type == "joint":
+        return GoalTerm(link=None, weight=goal.weight)
+    return GoalTerm(link=goal.link or robot.goal_link, axes=tuple(goal_axes(goal, robot)),
+                    parent_link=goal.parent_link, weight=goal.weight)

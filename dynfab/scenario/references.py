@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from dynfab.scenario.controllers import References
+from dynfab.motion.references import References
 from dynfab.motion.global_planning import GlobalPlanningError, plan_path
 from dynfab.robots.robot import Robot
 from dynfab.scenario.schema import GoalSpec, Scenario, ScenarioError
