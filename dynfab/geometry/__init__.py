@@ -1,0 +1,1 @@
+"""Shapes and distances: obstacle shapes, sphere fitting, exact collision checks."""
