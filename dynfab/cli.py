@@ -151,9 +151,9 @@ def _report(results: list[RunResult], as_json: bool) -> None:
             print(json.dumps({result.scenario.planner: m for result, m in zip(results, metrics)}))
         return
     if len(results) > 1:
-        print(f"{'':>15}  " + "".join(f"{result.scenario.planner:>16}" for result in results))
+        print(f"{'':>17}  " + "".join(f"{result.scenario.planner:>16}" for result in results))
     for key in metrics[0]:
-        print(f"{key:>15}: " + "".join(f"{_shown(m[key]):>16}" for m in metrics))
+        print(f"{key:>17}: " + "".join(f"{_shown(m[key]):>16}" for m in metrics))
 
 
 def _shown(value: object) -> str:
