@@ -19,7 +19,7 @@ from dynfab.sim import Record
 
 JSON_KEYS = [
     "success", "goal_reached", "collision", "time_to_goal", "clearance",
-    "path_length", "summed_error", "solver_time_ms", "steps",
+    "path_length", "summed_error", "solver_time_ms", "steps", "orientation_error",
 ]
 
 
