@@ -1,8 +1,13 @@
-"""Parse URDF robot descriptions into immutable values.
+"""Read URDF robot descriptions into immutable values, with yourdfpy.
 
-Only the kinematic part of URDF is read: links (by name) and joints (type, parent,
-child, origin, axis, limits, mimic). Visual, collision and inertial elements are
-ignored. Parsing uses :mod:`xml.etree.ElementTree` and never evaluates text as code.
+yourdfpy parses the XML; this module turns its result into frozen values (links with
+their collision geometry, joints with origin, axis, limits, mimic) and checks what the
+kinematics rely on: known joint types, a single tree, non-zero axes of moving joints,
+limits of revolute and prismatic joints. As in urdfdom (and so pinocchio), the axis of a
+fixed joint is ignored, a ``<mimic>`` of a joint that does not move on its own is
+dropped, ``lower > upper`` means no position limit (Bullet's convention), and visual or
+collision geometry of a kind URDF does not define is skipped. Mesh ``filename``s are resolved to files
+(:mod:`dynfab.robots.mesh_paths`); nothing is evaluated as code.
 
 Units follow URDF: metres for lengths, radians for angles, m/s or rad/s for velocity
 limits.
@@ -10,28 +15,45 @@ limits.
 
 from __future__ import annotations
 
+import dataclasses
+import io
 import math
+import os
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import yourdfpy
+
+from dynfab.geometry.shapes import Box, Cylinder, ShapeError, Sphere
+
+from .mesh_paths import resolve_mesh_uri
 
 __all__ = [
     "ACTUATED_JOINT_TYPES",
+    "CollisionGeometry",
     "Joint",
     "JointLimit",
     "Link",
+    "MeshFile",
     "Mimic",
     "Origin",
     "UrdfError",
     "UrdfModel",
+    "load_urdf",
     "parse_urdf",
 ]
 
 Vector3 = tuple[float, float, float]
+Matrix3 = tuple[Vector3, Vector3, Vector3]
 
-#: Joint types that carry a configuration variable.
+#: Joint types that move (carry a configuration variable unless they mimic another).
 ACTUATED_JOINT_TYPES = frozenset({"revolute", "continuous", "prismatic"})
 _SUPPORTED_JOINT_TYPES = ACTUATED_JOINT_TYPES | {"fixed"}
 _UNSUPPORTED_JOINT_TYPES = frozenset({"floating", "planar"})
+_GEOMETRY_TAGS = frozenset({"box", "cylinder", "sphere", "mesh"})
 
 
 class UrdfError(ValueError):
@@ -40,18 +62,35 @@ class UrdfError(ValueError):
 
 @dataclass(frozen=True)
 class Origin:
-    """Pose of a joint frame in its parent link frame.
+    """Pose of a frame in its parent link frame: ``x_parent = rotation @ x + xyz``.
 
-    The transform is ``T = Trans(xyz) @ Rot(rpy)`` with
-    ``Rot(rpy) = Rz(yaw) @ Ry(pitch) @ Rx(roll)`` (fixed-axis roll, pitch, yaw).
+    URDF writes it as ``xyz`` and fixed-axis ``rpy`` with
+    ``rotation = Rz(yaw) @ Ry(pitch) @ Rx(roll)``; the matrix is what is kept.
 
     Attributes:
         xyz: Translation [m].
-        rpy: Roll, pitch, yaw [rad].
+        rotation: Rotation matrix as three rows [-].
     """
 
     xyz: Vector3 = (0.0, 0.0, 0.0)
-    rpy: Vector3 = (0.0, 0.0, 0.0)
+    rotation: Matrix3 = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+
+    @classmethod
+    def from_matrix(cls, matrix: np.ndarray | None) -> Origin:
+        """The origin of a 4x4 homogeneous transform (``None``: identity)."""
+        if matrix is None:
+            return cls()
+        m = np.asarray(matrix, dtype=float)
+        if m.shape != (4, 4) or not np.isfinite(m).all():
+            raise UrdfError(f"origin must be a finite pose, got {m.tolist()}")
+        rotation = tuple(tuple(float(x) for x in row) for row in m[:3, :3])
+        return cls(xyz=(float(m[0, 3]), float(m[1, 3]), float(m[2, 3])),
+                   rotation=rotation)  # type: ignore[arg-type]
+
+    @property
+    def is_identity_rotation(self) -> bool:
+        """True if the rotation is the identity (to 1e-12)."""
+        return bool(np.allclose(self.rotation, np.eye(3), rtol=0.0, atol=1e-12))
 
 
 @dataclass(frozen=True)
@@ -87,10 +126,46 @@ class Mimic:
 
 
 @dataclass(frozen=True)
+class MeshFile:
+    """A mesh referenced by a URDF ``<mesh>`` element.
+
+    Attributes:
+        uri: The ``filename`` as written (``package://``, ``file://`` or a relative path).
+        path: The file it resolves to, or ``None`` if no candidate exists (see
+            :func:`dynfab.robots.mesh_paths.resolve_mesh_uri`).
+        scale: Scale per axis [-].
+    """
+
+    uri: str
+    path: str | None
+    scale: Vector3 = (1.0, 1.0, 1.0)
+
+
+@dataclass(frozen=True)
+class CollisionGeometry:
+    """One ``<collision>`` element of a link.
+
+    Attributes:
+        origin: Pose of the geometry in the link frame.
+        shape: A primitive (:class:`~dynfab.geometry.shapes.Box`, ``Cylinder`` along z,
+            ``Sphere``) or a :class:`MeshFile`.
+    """
+
+    origin: Origin
+    shape: Box | Cylinder | Sphere | MeshFile
+
+
+@dataclass(frozen=True)
 class Link:
-    """A rigid body of the robot, known by its name."""
+    """A rigid body of the robot.
+
+    Attributes:
+        name: Link name.
+        collisions: Its ``<collision>`` geometries (empty if it has none).
+    """
 
     name: str
+    collisions: tuple[CollisionGeometry, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -161,85 +236,208 @@ class UrdfModel:
         return tuple(j for j in self.joints if j.parent == link)
 
 
-def parse_urdf(text: str) -> UrdfModel:
-    """Parse URDF XML text into a :class:`UrdfModel`.
+def load_urdf(path: str | os.PathLike[str], package_dirs: Sequence[str | os.PathLike[str]] = ()
+              ) -> UrdfModel:
+    """Read a URDF file; mesh URIs resolve against its folder, its parents and ``package_dirs``.
+
+    Raises:
+        OSError: The file cannot be read.
+        UrdfError: The file is not a valid URDF; the message starts with the path.
+    """
+    path = Path(path)
+    text = path.read_bytes()
+    try:
+        return parse_urdf(text, base_dir=path.parent, package_dirs=package_dirs)
+    except UrdfError as exc:
+        raise UrdfError(f"{os.fspath(path)}: {exc}") from None
+
+
+def parse_urdf(text: str | bytes, base_dir: str | os.PathLike[str] | None = None,
+               package_dirs: Sequence[str | os.PathLike[str]] = ()) -> UrdfModel:
+    """Parse URDF XML into a :class:`UrdfModel`.
 
     Args:
         text: The URDF document.
-
-    Returns:
-        The kinematic tree.
+        base_dir: Folder of the URDF file, for relative and ``package://`` mesh URIs
+            (``None``: meshes stay unresolved unless ``package_dirs`` finds them).
+        package_dirs: Extra folders in which ``package://NAME/...`` is looked up.
 
     Raises:
         UrdfError: Malformed XML, a missing or invalid attribute, an unsupported joint
-            type (``floating``, ``planar``) or a structure that is not a single tree.
-            The one-line message names the offending element.
+            type (``floating``, ``planar``) or a structure that is not a single tree; the
+            one-line message names the offending element.
     """
-    try:
-        root = ET.fromstring(text)
+    data = (text.encode("utf-8") if isinstance(text, str) else text).lstrip()
+    try:  # yourdfpy falls back to a lenient parser on broken XML: refuse it first
+        root = ET.fromstring(data)
     except ET.ParseError as exc:
         raise UrdfError(f"URDF is not well-formed XML: {exc}") from None
     if root.tag != "robot":
         raise UrdfError(f"URDF root element must be <robot>, got <{root.tag}>")
-    name = root.get("name", "")
-    links = tuple(Link(_required(el, "name", "<link>")) for el in root.findall("link"))
-    joints = tuple(_parse_joint(el) for el in root.findall("joint"))
-    model = UrdfModel(name=name, links=links, joints=joints)
+    _drop_unknown_geometry(root)
+    try:
+        robot = yourdfpy.URDF.load(io.BytesIO(ET.tostring(root)), build_scene_graph=False,
+                                   load_meshes=False, load_collision_meshes=False).robot
+    except Exception as exc:  # yourdfpy raises whatever its parsing met; name the element
+        raise UrdfError(_locate_parse_error(root, exc)) from None
+    search = [Path(d) for d in package_dirs]
+    links = tuple(_link(link, base_dir, search) for link in robot.links)
+    joints = _independent_unless_led(tuple(_joint(joint) for joint in robot.joints))
+    model = UrdfModel(name=robot.name or "", links=links, joints=joints)
     _check_tree(model)
     return model
 
 
-def _parse_joint(el: ET.Element) -> Joint:
-    """Parse one ``<joint>`` element."""
-    name = _required(el, "name", "<joint>")
-    where = f"<joint name='{name}'>"
-    jtype = _required(el, "type", where)
+def _drop_unknown_geometry(root: ET.Element) -> None:
+    """Remove ``<visual>``/``<collision>`` elements whose geometry URDF does not define
+    (simulator extensions such as pybullet's ``<plane>``), as urdfdom-based loaders skip them."""
+    for link in root.iter("link"):
+        for element in list(link):
+            if element.tag not in ("visual", "collision"):
+                continue
+            geometry = element.find("geometry")
+            kinds = [] if geometry is None else [child.tag for child in geometry]
+            if not kinds or any(kind not in _GEOMETRY_TAGS for kind in kinds):
+                link.remove(element)
+
+
+def _independent_unless_led(joints: tuple[Joint, ...]) -> tuple[Joint, ...]:
+    """Drop a ``<mimic>`` whose leader is not a moving joint that mimics nothing: the joint
+    then moves on its own, as in urdfdom and pinocchio (shipped files do contain such tags)."""
+    leaders = {joint.name for joint in joints if joint.is_actuated}
+    return tuple(dataclasses.replace(joint, mimic=None)
+                 if joint.mimic is not None and joint.mimic.joint not in leaders else joint
+                 for joint in joints)
+
+
+def _locate_parse_error(root: ET.Element, exc: Exception) -> str:
+    """A one-line message for an exception of yourdfpy, naming the element it came from."""
+    for element in root:
+        if element.tag not in ("link", "joint"):
+            continue
+        name = element.get("name")
+        where = f"<{element.tag} name='{name}'>" if name else f"<{element.tag}>"
+        if not name:
+            return f"{where}: missing attribute 'name'"
+        if element.tag == "joint":
+            for tag in ("parent", "child"):
+                if element.find(tag) is None:
+                    return f"{where}: missing <{tag}> element"
+            problem = _joint_attribute_problem(element)
+            if problem:
+                return f"{where}: {problem}"
+    detail = str(exc).splitlines()[0] if str(exc) else ""
+    return f"URDF could not be parsed ({type(exc).__name__}: {detail})"
+
+
+def _joint_attribute_problem(element: ET.Element) -> str | None:
+    """The first non-numeric or mis-sized number attribute of a joint's sub-elements."""
+    sizes = {("origin", "xyz"): 3, ("origin", "rpy"): 3, ("axis", "xyz"): 3,
+             ("limit", "lower"): 1, ("limit", "upper"): 1, ("limit", "velocity"): 1,
+             ("limit", "effort"): 1, ("mimic", "multiplier"): 1, ("mimic", "offset"): 1}
+    for (tag, attribute), size in sizes.items():
+        sub = element.find(tag)
+        value = None if sub is None else sub.get(attribute)
+        if value is None:
+            continue
+        try:
+            numbers = [float(part) for part in value.split()]
+        except ValueError:
+            return f"<{tag}>: attribute '{attribute}' is not a number: '{value}'"
+        if len(numbers) != size:
+            count = "three numbers" if size == 3 else "one number"
+            return f"<{tag}>: attribute '{attribute}' must be {count}, got '{value}'"
+    return None
+
+
+def _link(link: yourdfpy.Link, base_dir: str | os.PathLike[str] | None,
+          package_dirs: list[Path]) -> Link:
+    """A link with its collision geometry (primitives as shapes, meshes as files)."""
+    where = f"<link name='{link.name}'>"
+    collisions = []
+    for collision in link.collisions or ():
+        geometry = collision.geometry
+        origin = Origin.from_matrix(collision.origin)
+        try:
+            if geometry.box is not None:
+                shape: Box | Cylinder | Sphere | MeshFile = Box(tuple(geometry.box.size))
+            elif geometry.cylinder is not None:
+                shape = Cylinder(geometry.cylinder.radius, geometry.cylinder.length)
+            elif geometry.sphere is not None:
+                shape = Sphere(geometry.sphere.radius)
+            elif geometry.mesh is not None:
+                shape = _mesh(geometry.mesh, base_dir, package_dirs)
+            else:
+                raise UrdfError(f"{where} <collision>: no geometry")
+        except (ShapeError, TypeError, ValueError) as exc:
+            raise UrdfError(f"{where} <collision>: {exc}") from None
+        collisions.append(CollisionGeometry(origin=origin, shape=shape))
+    return Link(name=link.name, collisions=tuple(collisions))
+
+
+def _mesh(mesh: yourdfpy.Mesh, base_dir: str | os.PathLike[str] | None,
+          package_dirs: list[Path]) -> MeshFile:
+    scale = mesh.scale
+    if scale is None:
+        factors: Vector3 = (1.0, 1.0, 1.0)
+    else:
+        values = np.asarray(scale, dtype=float).reshape(-1)  # urdfdom reads the first three
+        array = np.broadcast_to(values[:3] if values.size >= 3 else values, (3,))
+        factors = (float(array[0]), float(array[1]), float(array[2]))
+    path = resolve_mesh_uri(mesh.filename, base_dir, package_dirs)
+    return MeshFile(uri=mesh.filename, path=None if path is None else os.fspath(path), scale=factors)
+
+
+def _joint(joint: yourdfpy.Joint) -> Joint:
+    """A joint's values; checks its type, axis and limits."""
+    where = f"<joint name='{joint.name}'>"
+    jtype = joint.type
     if jtype in _UNSUPPORTED_JOINT_TYPES:
         raise UrdfError(f"{where}: joint type '{jtype}' is not supported "
                         f"(supported: {', '.join(sorted(_SUPPORTED_JOINT_TYPES))})")
     if jtype not in _SUPPORTED_JOINT_TYPES:
         raise UrdfError(f"{where}: unknown joint type '{jtype}'")
-    parent = _required(_child(el, "parent", where), "link", f"{where} <parent>")
-    child = _required(_child(el, "child", where), "link", f"{where} <child>")
-    origin_el = el.find("origin")
-    origin = Origin()
-    if origin_el is not None:
-        origin = Origin(xyz=_vector(origin_el, "xyz", f"{where} <origin>", (0.0, 0.0, 0.0)),
-                        rpy=_vector(origin_el, "rpy", f"{where} <origin>", (0.0, 0.0, 0.0)))
-    axis = (1.0, 0.0, 0.0)
-    axis_el = el.find("axis")
-    if axis_el is not None:
-        axis = _unit(_vector(axis_el, "xyz", f"{where} <axis>", axis), f"{where} <axis>")
-    limit = _parse_limit(el.find("limit"), where)
+    if not joint.parent:
+        raise UrdfError(f"{where} <parent>: missing attribute 'link'")
+    if not joint.child:
+        raise UrdfError(f"{where} <child>: missing attribute 'link'")
+    axis: Vector3 = (1.0, 0.0, 0.0)
+    if jtype != "fixed":  # URDF ignores the axis of a fixed joint
+        axis = _unit(joint.axis, f"{where} <axis>")
+    limit = _limit(joint.limit, where)
     if limit is None and jtype in ("revolute", "prismatic"):
         raise UrdfError(f"{where}: {jtype} joint needs a <limit> element")
-    mimic_el = el.find("mimic")
     mimic = None
-    if mimic_el is not None:
-        mimic = Mimic(joint=_required(mimic_el, "joint", f"{where} <mimic>"),
-                      multiplier=_number(mimic_el, "multiplier", f"{where} <mimic>", 1.0),
-                      offset=_number(mimic_el, "offset", f"{where} <mimic>", 0.0))
-    return Joint(name=name, type=jtype, parent=parent, child=child, origin=origin,
-                 axis=axis, limit=limit, mimic=mimic)
+    if joint.mimic is not None:
+        mimic = Mimic(joint=joint.mimic.joint, multiplier=_finite(joint.mimic.multiplier, 1.0),
+                      offset=_finite(joint.mimic.offset, 0.0))
+    return Joint(name=joint.name, type=jtype, parent=joint.parent, child=joint.child,
+                 origin=Origin.from_matrix(joint.origin), axis=axis, limit=limit, mimic=mimic)
 
 
-def _parse_limit(el: ET.Element | None, where: str) -> JointLimit | None:
-    """Parse a ``<limit>`` element; ``lower``/``upper`` default to 0 as in URDF."""
-    if el is None:
+def _limit(limit: yourdfpy.Limit | None, where: str) -> JointLimit | None:
+    """The ``<limit>`` values; ``lower``/``upper`` default to 0 as in URDF."""
+    if limit is None:
         return None
     where = f"{where} <limit>"
-    if el.get("velocity") is None:
+    if limit.velocity is None:
         raise UrdfError(f"{where}: missing attribute 'velocity'")
-    lower = _number(el, "lower", where, 0.0)
-    upper = _number(el, "upper", where, 0.0)
-    velocity = _number(el, "velocity", where, 0.0)
-    effort = _number(el, "effort", where, math.nan)
-    if lower > upper:
-        raise UrdfError(f"{where}: lower {lower} exceeds upper {upper}")
+    lower, upper = _finite(limit.lower, 0.0), _finite(limit.upper, 0.0)
+    velocity = _finite(limit.velocity, 0.0)
+    if not all(math.isfinite(x) for x in (lower, upper, velocity)):
+        raise UrdfError(f"{where}: limits must be finite, got lower={limit.lower}, "
+                        f"upper={limit.upper}, velocity={limit.velocity}")
+    if lower > upper:  # Bullet's convention for a joint without position limits
+        lower, upper = -math.inf, math.inf
     if velocity < 0.0:
         raise UrdfError(f"{where}: velocity must be non-negative, got {velocity}")
-    return JointLimit(lower=lower, upper=upper, velocity=velocity,
-                      effort=None if math.isnan(effort) else effort)
+    effort = None if limit.effort is None else float(limit.effort)
+    return JointLimit(lower=lower, upper=upper, velocity=velocity, effort=effort)
+
+
+def _finite(value: object, default: float) -> float:
+    """``value`` as a float, ``default`` if it is ``None``."""
+    return default if value is None else float(value)  # type: ignore[arg-type]
 
 
 def _check_tree(model: UrdfModel) -> None:
@@ -267,14 +465,6 @@ def _check_tree(model: UrdfModel) -> None:
     if reached != names:
         raise UrdfError(f"URDF joints form a cycle through links "
                         f"{sorted(names - reached)}")
-    joints = {joint.name: joint for joint in model.joints}
-    for joint in model.joints:
-        if joint.mimic is None:
-            continue
-        target = joints.get(joint.mimic.joint)
-        if target is None or not target.is_actuated:
-            raise UrdfError(f"<joint name='{joint.name}'> <mimic>: '{joint.mimic.joint}' "
-                            "is not an actuated joint of this robot")
 
 
 def _reachable(model: UrdfModel, root: str) -> set[str]:
@@ -297,58 +487,13 @@ def _check_unique(names: list[str], kind: str) -> None:
         seen.add(name)
 
 
-def _child(el: ET.Element, tag: str, where: str) -> ET.Element:
-    """The required sub-element ``tag`` of ``el``."""
-    sub = el.find(tag)
-    if sub is None:
-        raise UrdfError(f"{where}: missing <{tag}> element")
-    return sub
-
-
-def _required(el: ET.Element, attribute: str, where: str) -> str:
-    """The required, non-empty attribute ``attribute`` of ``el``."""
-    value = el.get(attribute)
-    if value is None or not value.strip():
-        raise UrdfError(f"{where}: missing attribute '{attribute}'")
-    return value.strip()
-
-
-def _number(el: ET.Element, attribute: str, where: str, default: float) -> float:
-    """A finite float attribute, or ``default`` if absent."""
-    value = el.get(attribute)
-    if value is None:
-        return default
-    try:
-        number = float(value)
-    except ValueError:
-        raise UrdfError(f"{where}: attribute '{attribute}' is not a number: "
-                        f"'{value}'") from None
-    if not math.isfinite(number):
-        raise UrdfError(f"{where}: attribute '{attribute}' must be finite, got '{value}'")
-    return number
-
-
-def _vector(el: ET.Element, attribute: str, where: str, default: Vector3) -> Vector3:
-    """A 3-vector attribute written as three space-separated numbers."""
-    value = el.get(attribute)
-    if value is None:
-        return default
-    parts = value.split()
-    try:
-        numbers = tuple(float(p) for p in parts)
-    except ValueError:
-        numbers = ()
-    if len(numbers) != 3 or not all(math.isfinite(x) for x in numbers):
-        raise UrdfError(f"{where}: attribute '{attribute}' must be three finite numbers, "
-                        f"got '{value}'")
-    return (numbers[0], numbers[1], numbers[2])
-
-
-def _unit(axis: Vector3, where: str) -> Vector3:
-    """Normalise a joint axis to unit length."""
-    norm = math.sqrt(sum(x * x for x in axis))
+def _unit(axis: object, where: str) -> Vector3:
+    """A joint axis normalised to unit length."""
+    vector = np.asarray(axis if axis is not None else (1.0, 0.0, 0.0), dtype=float).reshape(-1)
+    if vector.size != 3 or not np.isfinite(vector).all():
+        raise UrdfError(f"{where}: axis must be three finite numbers, got {vector.tolist()}")
+    norm = float(np.linalg.norm(vector))
     if norm < 1e-12:
         raise UrdfError(f"{where}: axis must not be zero")
-    if abs(norm - 1.0) < 1e-15:
-        return axis
-    return (axis[0] / norm, axis[1] / norm, axis[2] / norm)
+    x, y, z = (float(v) for v in (vector if abs(norm - 1.0) < 1e-15 else vector / norm))
+    return (x, y, z)
