@@ -210,3 +210,20 @@ def test_a_shipped_urdf_runs_with_chosen_and_locked_joints() -> None:
         run_scenario(scenario_from_dict(_panda_scenario({"joints": arm, "locked": {"gripper": 0.0}})))
     with pytest.raises(ScenarioError, match="robot.joints: 'shoulder' is not a movable joint"):
         run_scenario(scenario_from_dict(_panda_scenario({"joints": ["shoulder"]})))
+
+
+def test_link_meshes_are_placed_in_the_link_frame_and_bad_files_are_named(tmp_path: Path) -> None:
+    from dynfab.robots.link_meshes import LinkMeshError, link_collision_meshes
+
+    meshes = link_collision_meshes(parse_urdf(_robot_with_mesh("x.stl").replace(
+        "<mesh filename='x.stl' scale='2 2 2'/>", "<box size='0.1 0.2 0.4'/>")), "a")
+    np.testing.assert_allclose(meshes[0].bounds, [[-0.1, -0.05, -0.1], [0.1, 0.05, 0.3]], atol=1e-12)
+    np.testing.assert_allclose(meshes[1].bounds, [[-0.05, -0.1, -0.15], [0.05, 0.1, 0.15]], atol=1e-12)
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(_robot_with_mesh("missing.stl"))
+    with pytest.raises(LinkMeshError, match="link 'a': collision mesh 'missing.stl' not found"):
+        link_collision_meshes(load_urdf(urdf), "a")
+    (tmp_path / "broken.stl").write_bytes(b"\x00\x01 not a mesh")
+    urdf.write_text(_robot_with_mesh("broken.stl"))
+    with pytest.raises(LinkMeshError, match="link 'a': collision mesh 'broken.stl' cannot be read"):
+        link_collision_meshes(load_urdf(urdf), "a")
