@@ -29,7 +29,7 @@ import yourdfpy
 
 from dynfab.geometry.shapes import Box, Cylinder, ShapeError, Sphere
 
-from .mesh_paths import resolve_mesh_uri
+from .mesh_paths import resolve_uri
 
 __all__ = [
     "ACTUATED_JOINT_TYPES",
@@ -132,7 +132,7 @@ class MeshFile:
     Attributes:
         uri: The ``filename`` as written (``package://``, ``file://`` or a relative path).
         path: The file it resolves to, or ``None`` if no candidate exists (see
-            :func:`dynfab.robots.mesh_paths.resolve_mesh_uri`).
+            :func:`dynfab.robots.mesh_paths.resolve_uri`).
         scale: Scale per axis [-].
     """
 
@@ -384,7 +384,7 @@ def _mesh(mesh: yourdfpy.Mesh, base_dir: str | os.PathLike[str] | None,
         values = np.asarray(scale, dtype=float).reshape(-1)  # urdfdom reads the first three
         array = np.broadcast_to(values[:3] if values.size >= 3 else values, (3,))
         factors = (float(array[0]), float(array[1]), float(array[2]))
-    path = resolve_mesh_uri(mesh.filename, base_dir, package_dirs)
+    path = resolve_uri(mesh.filename, base_dir, package_dirs)
     return MeshFile(uri=mesh.filename, path=None if path is None else os.fspath(path), scale=factors)
 
 

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any, Literal, cast
 import yaml
 
 from dynfab.describe import describe
+from dynfab.robots.mesh_paths import resolve_uri
 
 if TYPE_CHECKING:
     from dynfab.robots.robot import Robot
@@ -133,7 +134,8 @@ class UrdfRobotSpec:
     """A user robot described by a URDF file.
 
     Attributes:
-        urdf: Path of the URDF file (resolved against the scenario file's directory).
+        urdf: Path of the URDF file: relative to the scenario file's directory, absolute, or
+            ``package://NAME/...`` (see :func:`dynfab.robots.mesh_paths.resolve_uri`).
         goal_link: Default goal link of the robot.
         collision_spheres: Spheres used for obstacle and self-collision avoidance.
         self_collision_pairs: Pairs (i, j) of indices into ``collision_spheres``.
@@ -338,11 +340,14 @@ def _robot(value: object, field: str, base_dir: Path) -> str | UrdfRobotSpec:
         optional=("collision_spheres", "self_collision_pairs", "planar", "package_dirs", "joints",
                   "locked"),
     )
-    urdf = base_dir / _string(data["urdf"], f"{field}.urdf")
-    if not urdf.is_file():
-        raise ScenarioError(f"{field}.urdf", f"file not found: {urdf}")
     package_dirs = tuple(base_dir / _string(d, f"{field}.package_dirs[{i}]")
                          for i, d in enumerate(_list(data.get("package_dirs", []), f"{field}.package_dirs")))
+    uri = _string(data["urdf"], f"{field}.urdf")
+    urdf = resolve_uri(uri, base_dir, package_dirs)
+    if urdf is None:
+        raise ScenarioError(f"{field}.urdf", f"file not found: {uri} (a path relative to the scenario "
+                            "file, absolute, or package://NAME/... found through package_dirs, "
+                            "DYNFAB_PACKAGE_PATH or an installed example-robot-data / pybullet)")
     joints = None
     if "joints" in data:
         joints = tuple(_string(j, f"{field}.joints[{i}]")
