@@ -3,6 +3,7 @@ orientation error of every run is measured from the recorded joint states."""
 
 from __future__ import annotations
 
+import importlib.metadata
 import json
 from pathlib import Path
 from typing import Any
@@ -135,3 +136,22 @@ def test_cli_json_reports_orientation_error(tmp_path: Path, capsys: pytest.Captu
     main(["run", str(path), "--json"])
     report = json.loads(capsys.readouterr().out)
     assert report["orientation_error"] > 0.05 and report["goal_reached"] is False
+
+
+def test_ur5_from_its_shipped_urdf_reaches_a_pose_of_tool0() -> None:
+    """The contract's own example: a pose goal for ``tool0`` of a URDF as it ships."""
+    try:
+        importlib.metadata.distribution("example-robot-data")
+    except importlib.metadata.PackageNotFoundError:
+        pytest.skip("example-robot-data is not installed")
+    data = {"robot": {"urdf": "package://example-robot-data/robots/ur_description/urdf/ur5_robot.urdf",
+                      "goal_link": "tool0"},
+            "planner": "static-fabric", "dt": 0.01, "duration": 6.0,
+            "initial_state": {"q": [0.0, -1.2, 1.5, -1.9, -1.57, 0.0]},
+            "goal": [{"type": "pose", "link": "tool0", "offset": TOOL, "position": [0.4, 0.2, 0.3],
+                      "orientation": [0, 1, 0, 0], "tolerance": 0.02, "angle_tolerance": 0.1}]}
+    result = run_scenario(scenario_from_dict(data))
+    assert result.metrics.success, result.metrics
+    assert result.metrics.orientation_error < 0.01
+    final = np.array(result.robot.kinematics.position(result.record.q[-1], "tool0", offset=TOOL)).ravel()
+    assert np.linalg.norm(final - [0.4, 0.2, 0.3]) < 0.02
