@@ -143,3 +143,17 @@ def test_planner_reaches_a_pose_and_speed_control_uses_the_position_goal() -> No
     assert rotation_angle(rotation, target_rotation) < 1e-3
     assert np.linalg.norm(point - target_point) < 1e-3
     assert np.linalg.norm(qdot) < 1e-2
+
+
+def test_axis_target_is_a_runtime_parameter() -> None:
+    """One planner, two target directions written at run time: the hand's z follows each."""
+    goal = OrientationGoalConfig("panda_hand", ((0.0, 0.0, 1.0),))
+    planner = FabricPlanner(PANDA, PlannerConfig.for_robot(PANDA, (goal,)))
+    q, qdot, dt = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785]), np.zeros(7), 0.01
+    for direction in (unit_vector([1.0, 0.0, -1.0]), unit_vector([0.0, -1.0, -1.0])):
+        planner.parameters.goal_position[0][:] = direction
+        for _ in range(500):
+            qddot = planner.compute(q, qdot)
+            q, qdot = q + dt * qdot + 0.5 * dt**2 * qddot, qdot + dt * qddot
+        hand_z = np.array(PANDA.kinematics.rotation(q, "panda_hand"))[:, 2]
+        assert direction_angle(hand_z, direction) < 1e-3
