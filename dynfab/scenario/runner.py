@@ -11,7 +11,7 @@ import numpy as np
 
 from dynfab.scenario.controllers import Controller, make_controller
 from dynfab.scenario.references import goal_axes, scenario_references
-from dynfab.scenario.metrics import Metrics, clearance_over_time, compute_metrics
+from dynfab.scenario.metrics import Metrics, clearance_over_time, compute_metrics, shape_clearance_over_time
 from dynfab.robots import load_robot, robot_from_urdf
 from dynfab.robots.builtin import UnknownRobotError
 from dynfab.robots.robot import CollisionSphere, Robot
@@ -33,7 +33,7 @@ class RunResult:
         metrics: the run's metrics.
         goal_positions: the primary goal's task coordinates over time (T, d).
         goal_reference: the primary goal's reference over time (T, d).
-        obstacle_centers: obstacle centres over time (T, m, 3).
+        obstacle_centers: obstacle centres over time (T, m, 3) (a plane: its point).
         clearance: minimum clearance at each sample (T,) [m] (inf without obstacles).
         controller: the controller that ran (its planner, fallback count, ...).
     """
@@ -90,14 +90,20 @@ def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None
     for k, trajectory in enumerate(references.obstacles):
         positions = trajectory.sample(record.t)[0]
         obstacle_centers[:, k, : positions.shape[1]] = positions
-    obstacle_radii = np.array([o.radius for o in scenario.obstacles])
+    spheres = [k for k, o in enumerate(scenario.obstacles) if o.type == "sphere"]
+    shapes = [k for k, o in enumerate(scenario.obstacles) if o.type != "sphere"]
+    sphere_centres, sphere_radii = obstacle_centers[:, spheres], np.array([scenario.obstacles[k].radius for k in spheres])
+    shape_clearance = shape_clearance_over_time(
+        centres, radii, [scenario.obstacles[k].shape for k in shapes],
+        [scenario.obstacles[k].orientation for k in shapes], obstacle_centers[:, shapes], planar=robot.planar)
     metrics = compute_metrics(record, goal_positions, goal_reference, goal.tolerance,
-                              centres, radii, obstacle_centers, obstacle_radii, planar=robot.planar,
-                              path_goal=goal.type == "path")
+                              centres, radii, sphere_centres, sphere_radii, planar=robot.planar,
+                              path_goal=goal.type == "path", shape_clearance=shape_clearance)
     solve_times = getattr(controller, "solve_times", None)
     if solve_times:  # a planner that re-plans less often than it is called (MPC)
         metrics = dataclasses.replace(metrics, solver_time_ms=1e3 * float(np.mean(solve_times)))
-    clearance = clearance_over_time(centres, radii, obstacle_centers, obstacle_radii, planar=robot.planar)
+    clearance = np.minimum(clearance_over_time(centres, radii, sphere_centres, sphere_radii, planar=robot.planar),
+                           shape_clearance)
     return RunResult(scenario, robot, record, metrics, goal_positions, goal_reference, obstacle_centers, clearance,
                      controller)
 
