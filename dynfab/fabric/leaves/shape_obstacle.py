@@ -68,6 +68,15 @@ class ShapeObstacleAvoidance:
             return smooth_plane_distance(local)
         raise ValueError(f"ShapeSymbols.kind: unknown shape {kind!r}")
 
+    def clearance_map(self, relative: ca.SX, relative_velocity: ca.SX, slot: ShapeSymbols,
+                      sphere_radius: float) -> DifferentialMap:
+        """``x = d_ε(Rᵀ p̄_rel, s) − r_s`` [m] with ``J``, ``J̇ ṗ_rel`` by automatic
+        differentiation; ``p̄_rel`` is ``p_rel`` (d, 1) padded with zeros to 3-D."""
+        lifted = ca.vertcat(relative, ca.SX(3 - relative.shape[0], 1))
+        local = ca.mtimes(quaternion_rotation(slot.orientation).T, lifted)
+        clearance = self.distance(slot.kind, local, slot.dimensions) - sphere_radius
+        return DifferentialMap.from_expression(clearance, relative, relative_velocity)
+
     def on_point(self, point: ca.SX, point_velocity: ca.SX, slot: ShapeSymbols,
                  sphere_radius: float) -> WeightedGeometry:
         """The leaf pulled to the point space of one robot sphere.
@@ -79,12 +88,7 @@ class ShapeObstacleAvoidance:
             sphere_radius: radius of the robot sphere [m].
         """
         d = point.shape[0]
-        relative = ca.SX.sym("p_rel", d)
-        relative_velocity = ca.SX.sym("p_rel_dot", d)
-        lifted = ca.vertcat(relative, ca.SX(3 - d, 1))
-        local = ca.mtimes(quaternion_rotation(slot.orientation).T, lifted)
-        clearance = self.distance(slot.kind, local, slot.dimensions) - sphere_radius
-        distance = DifferentialMap.from_expression(clearance, relative, relative_velocity)
+        distance = self.clearance_map(ca.SX.sym("p_rel", d), ca.SX.sym("p_rel_dot", d), slot, sphere_radius)
         in_shape_frame = self.barrier.weighted_geometry().scaled(_active(slot)).pull(distance)
         reference = slot.reference
         origin = Reference(reference.position[:d], reference.velocity[:d], reference.acceleration[:d])
