@@ -5,11 +5,13 @@ from __future__ import annotations
 
 import copy
 import math
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 
+from dynfab.geometry.distance import shape_distance
 from dynfab.geometry.shapes import Box, Capsule, Cylinder, Plane, quaternion_matrix
 from dynfab.robots import load_robot
 from dynfab.scenario.controllers import make_controller
@@ -138,3 +140,23 @@ def test_a_box_moving_across_the_arm(planner: str) -> None:
         assert result.metrics.success and result.metrics.clearance > 0.0
     else:  # a static fabric sees the box only where it is: it hits the arm at rest (the paper's point)
         assert result.metrics.collision
+
+
+def test_shape_outlines_trace_the_shapes(tmp_path) -> None:  # noqa: ANN001
+    from dynfab.cli import main
+    from dynfab.viz.shape_outlines import shape_outline
+
+    edges = shape_outline(Box((0.1, 0.2, 0.3)), (math.cos(0.2), 0.0, math.sin(0.2), 0.0), [1.0, 2.0, 3.0])
+    assert len(edges) == 12
+    lengths = sorted(round(float(np.linalg.norm(edge[1] - edge[0])), 9) for edge in edges)
+    assert lengths == [0.1] * 4 + [0.2] * 4 + [0.3] * 4
+    np.testing.assert_allclose(np.mean([edge.mean(axis=0) for edge in edges], axis=0), [1.0, 2.0, 3.0])
+    wall = shape_outline(Plane(), (math.cos(math.pi / 4), 0.0, math.sin(math.pi / 4), 0.0), [0.5, 0.0, 0.0])
+    np.testing.assert_allclose(wall[0][:, 0], 0.5, atol=1e-12)  # normal along +x: the square lies in x = 0.5
+    for shape in (Capsule(0.1, 0.4), Cylinder(0.1, 0.4), Box((0.1, 0.2, 0.3))):
+        for line in shape_outline(shape, (1.0, 0.0, 0.0, 0.0), [0.0, 0.0, 0.0]):
+            np.testing.assert_allclose(shape_distance(shape, line), 0.0, atol=1e-12)  # on the surface
+    plot = tmp_path / "table.png"
+    example = Path(__file__).resolve().parent.parent / "examples" / "panda_table_box.yaml"
+    assert main(["run", str(example), "--plot", str(plot)]) == 0
+    assert plot.stat().st_size > 10_000
