@@ -174,14 +174,18 @@ class ParameterLayout:
     @property
     def size(self) -> int:
         k = self._derivatives
-        spheres = k * sum(self.goal_dimensions) + len(self.goal_dimensions) + (3 * k + 1) * self.obstacle_slots
-        return spheres + sum(self.shape_slots.count(kind) * (3 * k + 4 + n) for kind, n in SHAPE_DIMENSIONS.items())
+        return self._goal_and_sphere_size + sum(self.shape_slots.count(kind) * (3 * k + 4 + n)
+                                                for kind, n in SHAPE_DIMENSIONS.items())
+
+    @property
+    def _goal_and_sphere_size(self) -> int:
+        """Length of the goal and sphere-slot part, which comes first."""
+        k = self._derivatives
+        return k * sum(self.goal_dimensions) + len(self.goal_dimensions) + (3 * k + 1) * self.obstacle_slots
 
     def _shape_blocks(self) -> dict[str, tuple[list[slice], slice, slice]]:
         """Per kind: its origin blocks (one per derivative), orientations, dimensions."""
-        k = self._derivatives
-        start = self.size - sum(self.shape_slots.count(kind) * (3 * k + 4 + n)
-                                for kind, n in SHAPE_DIMENSIONS.items())
+        k, start = self._derivatives, self._goal_and_sphere_size
         blocks = {}
         for kind, n in SHAPE_DIMENSIONS.items():
             slots = self.shape_slots.count(kind)
