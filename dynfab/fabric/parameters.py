@@ -1,8 +1,9 @@
 """Runtime parameters of a planner: named, typed views into one packed vector.
 
 The compiled planner takes a single input ``z = [q, q̇, p]``; ``p`` holds the goals,
-the sphere obstacle slots and the shape slots (boxes, cylinders, capsules, planes). :class:`ParameterLayout` says where each named quantity lives, creates the
-matching CasADi symbols at build time, and numpy views into the packed buffer at run
+the sphere obstacle slots and the shape slots (boxes, cylinders, capsules, planes).
+:class:`ParameterLayout` says where each named quantity lives, creates the matching CasADi
+symbols at build time, and numpy views into the packed buffer at run
 time, so that ``params.obstacle_position[2] = [x, y, z]`` writes straight into the
 planner's input without any per-call conversion.
 

@@ -92,7 +92,8 @@ def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None
         obstacle_centers[:, k, : positions.shape[1]] = positions
     spheres = [k for k, o in enumerate(scenario.obstacles) if o.type == "sphere"]
     shapes = [k for k, o in enumerate(scenario.obstacles) if o.type != "sphere"]
-    sphere_centres, sphere_radii = obstacle_centers[:, spheres], np.array([scenario.obstacles[k].radius for k in spheres])
+    sphere_centres = obstacle_centers[:, spheres]
+    sphere_radii = np.array([scenario.obstacles[k].radius for k in spheres])
     shape_clearance = shape_clearance_over_time(
         centres, radii, [scenario.obstacles[k].shape for k in shapes],
         [scenario.obstacles[k].orientation for k in shapes], obstacle_centers[:, shapes], planar=robot.planar)
