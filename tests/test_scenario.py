@@ -78,7 +78,7 @@ def _fake_robot(dof: int = 7, planar: bool = False, links: tuple[str, ...] = PAN
                 goal_link: str = "panda_hand") -> SimpleNamespace:
     """Stand-in exposing the Robot attributes validate_for_robot reads."""
     return SimpleNamespace(
-        kinematics=SimpleNamespace(dof=dof, link_names=links), planar=planar, goal_link=goal_link, base=None
+        kinematics=SimpleNamespace(dof=dof, link_names=links, joint_names=tuple(f"j{i + 1}" for i in range(dof))), planar=planar, goal_link=goal_link, base=None
     )
 
 
@@ -307,13 +307,13 @@ def test_validate_for_robot_accepts_planar_shapes() -> None:
 @pytest.mark.parametrize(
     ("path", "value", "robot", "expected"),
     [
-        (("initial_state", "q"), [0.0] * 6, _fake_robot(), "initial_state.q: expected 7 numbers, got 6"),
-        (("initial_state", "qdot"), [0.0] * 6, _fake_robot(), "initial_state.qdot: expected 7 numbers, got 6"),
+        (("initial_state", "q"), [0.0] * 6, _fake_robot(), "initial_state.q: expected 7 numbers (one per joint: j1, j2, j3, j4, j5, j6, j7), got 6"),
+        (("initial_state", "qdot"), [0.0] * 6, _fake_robot(), "initial_state.qdot: expected 7 numbers (one per velocity: j1, j2, j3, j4, j5, j6, j7), got 6"),
         (("goal", 0, "position"), [0.5, 0.1], _fake_robot(), "goal[0].position: expected 3 numbers, got 2"),
         (("goal", 0, "link"), "gripper", _fake_robot(), "goal[0].link: unknown link 'gripper'"),
         (("goal", 0, "parent_link"), "table", _fake_robot(), "goal[0].parent_link: unknown link 'table'"),
         (("goal", 0), {"type": "joint", "position": [0.0] * 3}, _fake_robot(),
-         "goal[0].position: expected 7 numbers, got 3"),
+         "goal[0].position: expected 7 numbers (one per joint: j1, j2, j3, j4, j5, j6, j7), got 3"),
         (("obstacles", 0, "position"), [0.5, 0.2], _fake_robot(),
          "obstacles[0].position: expected 3 numbers, got 2"),
         (("goal", 0), {"type": "position", "axes": "xz", "position": [0.0, 0.0]},

@@ -3,7 +3,7 @@
 from .builtin import UnknownRobotError, load_robot, robot_from_urdf
 from .kinematics import Kinematics, UnknownLinkError
 from .robot import CollisionSphere, Robot
-from .urdf import UrdfError, UrdfModel, parse_urdf
+from .urdf import UrdfError, UrdfModel, load_urdf, parse_urdf
 
 __all__ = [
     "CollisionSphere",
@@ -14,6 +14,7 @@ __all__ = [
     "UrdfError",
     "UrdfModel",
     "load_robot",
+    "load_urdf",
     "parse_urdf",
     "robot_from_urdf",
 ]

@@ -4,14 +4,14 @@ user's URDF file."""
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from importlib import resources
 
 import numpy as np
 
 from .kinematics import Kinematics
 from .robot import CollisionSphere, DifferentialDriveBase, Robot
-from .urdf import UrdfError, parse_urdf
+from .urdf import load_urdf, parse_urdf
 
 __all__ = ["BUILTIN_ROBOTS", "UnknownRobotError", "load_robot", "robot_from_urdf"]
 
@@ -118,8 +118,11 @@ def robot_from_urdf(path: str | os.PathLike[str], goal_link: str,
                     self_collision_pairs: Sequence[tuple[int, int]] = (),
                     planar: bool = False,
                     default_q: Sequence[float] | np.ndarray | None = None,
-                    base: DifferentialDriveBase | None = None) -> Robot:
-    """A robot from a URDF file with user-given collision spheres.
+                    base: DifferentialDriveBase | None = None,
+                    joints: Sequence[str] | None = None,
+                    locked: Mapping[str, float] | None = None,
+                    package_dirs: Sequence[str | os.PathLike[str]] = ()) -> Robot:
+    """A robot from a URDF file as it ships, with given collision spheres.
 
     Args:
         path: URDF file.
@@ -131,21 +134,22 @@ def robot_from_urdf(path: str | os.PathLike[str], goal_link: str,
         base: The robot's differential-drive base, if it has one; then its URDF must
             start with the joints ``base_x``, ``base_y``, ``base_yaw`` (see
             :class:`~dynfab.robots.robot.Robot`).
+        joints: Active joints in the order of ``q``; ``None``: every movable joint
+            that does not mimic another, in depth-first order.
+        locked: Values of the other movable joints [rad or m]; default 0 clipped into
+            their limits.
+        package_dirs: Folders where ``package://`` mesh URIs are looked up (besides
+            ``DYNFAB_PACKAGE_PATH`` and the URDF's own folder and its parents).
 
     Raises:
         OSError: The file cannot be read.
         UrdfError: The file is not a valid URDF.
         UnknownLinkError: ``goal_link`` or a sphere's link is not in the URDF.
-        ValueError: Wrong ``default_q`` size, a pair index out of range, or a ``base``
-            without the three base joints first.
+        ValueError: Unknown names in ``joints`` or ``locked``, wrong ``default_q`` size,
+            a pair index out of range, or a ``base`` without the three base joints first.
     """
-    with open(path, encoding="utf-8") as file:
-        text = file.read()
-    try:
-        model = parse_urdf(text)
-    except UrdfError as exc:
-        raise UrdfError(f"{os.fspath(path)}: {exc}") from None
-    kinematics = Kinematics(model)
+    model = load_urdf(path, package_dirs)
+    kinematics = Kinematics(model, joints=joints, locked=locked)
     if default_q is None:
         default_q = np.clip(np.zeros(kinematics.dof), kinematics.lower, kinematics.upper)
     return Robot(name=model.name or os.path.basename(os.fspath(path)),

@@ -22,7 +22,7 @@ the given ``q``, so the same method works for ``SX`` (returns the expression, in
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Union
 
@@ -65,12 +65,17 @@ _IDENTITY = _Pose(rot=((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
 class Kinematics:
     """Forward kinematics of a URDF tree (or of the subtree below ``root_link``).
 
+    The *movable* joints are the revolute, continuous and prismatic joints that do not
+    mimic another. The *active* ones are the configuration ``q``; the others are *locked*
+    at constant values; a mimic joint follows its leader, ``q_j = m q_leader + c``, whether
+    the leader is active or locked.
+
     Attributes:
         model: The parsed URDF.
         root_link: The link whose frame is the reference ("world") frame.
-        joint_names: Actuated joints (revolute, continuous, prismatic, not mimic) in
-            depth-first order from the root; ``q[i]`` belongs to ``joint_names[i]``.
-        dof: Number of actuated joints.
+        joint_names: Active joints; ``q[i]`` belongs to ``joint_names[i]``.
+        locked: Values of the movable joints that are not active [rad or m].
+        dof: Number of active joints.
         lower: Lower position limits, shape (dof,); ``-inf`` if unlimited [rad or m].
         upper: Upper position limits, shape (dof,); ``+inf`` if unlimited [rad or m].
         velocity_limits: Velocity limits, shape (dof,); ``inf`` if not given
@@ -78,11 +83,24 @@ class Kinematics:
         link_names: Links of the tree in depth-first order from the root.
     """
 
-    def __init__(self, model: UrdfModel, root_link: str | None = None) -> None:
+    def __init__(self, model: UrdfModel, root_link: str | None = None,
+                 joints: Sequence[str] | None = None,
+                 locked: Mapping[str, float] | None = None) -> None:
         """Index the tree below ``root_link`` (the URDF root if ``None``).
+
+        Args:
+            model: The parsed URDF.
+            root_link: Reference link; the URDF's root if ``None``.
+            joints: Active joints in the order of ``q``; ``None``: every movable joint
+                in depth-first order from the root.
+            locked: Values of movable joints that are not active; the others default to
+                0 clipped into their limits [rad or m].
 
         Raises:
             UnknownLinkError: ``root_link`` is not a link of ``model``.
+            ValueError: A name in ``joints`` or ``locked`` that is not a movable joint
+                below ``root_link`` (the message lists them), a joint both active and
+                locked or named twice, or a non-finite locked value.
         """
         self.model = model
         if root_link is not None and root_link not in model.link_names:
@@ -90,7 +108,6 @@ class Kinematics:
         self.root_link: str = model.root_link if root_link is None else root_link
         self._parent_joint: dict[str, Joint] = {}
         links: list[str] = []
-        actuated: list[Joint] = []
         stack = [self.root_link]
         while stack:
             link = stack.pop()
@@ -100,21 +117,23 @@ class Kinematics:
                 self._parent_joint[joint.child] = joint
             stack.extend(j.child for j in reversed(children))
         # Depth-first link order; joints are numbered in the order their child is visited.
-        for link in links[1:]:
-            if self._parent_joint[link].is_actuated:
-                actuated.append(self._parent_joint[link])
+        movable = [self._parent_joint[link] for link in links[1:]
+                   if self._parent_joint[link].is_actuated]
+        by_name = {joint.name: joint for joint in movable}
+        active = _active_joints(movable, joints)
         self.link_names: tuple[str, ...] = tuple(links)
-        self.joint_names: tuple[str, ...] = tuple(j.name for j in actuated)
-        self.dof: int = len(actuated)
+        self.joint_names: tuple[str, ...] = tuple(j.name for j in active)
+        self.dof: int = len(active)
         self._index = {name: i for i, name in enumerate(self.joint_names)}
+        self.locked: dict[str, float] = _locked_values(by_name, self._index, locked or {})
         for joint in self._parent_joint.values():
-            if joint.mimic is not None and joint.mimic.joint not in self._index:
+            if joint.mimic is not None and joint.mimic.joint not in by_name:
                 raise ValueError(f"joint '{joint.name}' mimics '{joint.mimic.joint}', "
                                  f"which is not below root link '{self.root_link}'")
-        self.lower = np.array([_limit(j, "lower") for j in actuated], dtype=float)
-        self.upper = np.array([_limit(j, "upper") for j in actuated], dtype=float)
+        self.lower = np.array([_limit(j, "lower") for j in active], dtype=float)
+        self.upper = np.array([_limit(j, "upper") for j in active], dtype=float)
         self.velocity_limits = np.array(
-            [j.limit.velocity if j.limit is not None else math.inf for j in actuated],
+            [j.limit.velocity if j.limit is not None else math.inf for j in active],
             dtype=float)
         for array in (self.lower, self.upper, self.velocity_limits):
             array.setflags(write=False)
@@ -293,7 +312,7 @@ class _Builder:
 
     def _origin(self, joint: Joint) -> _Pose:
         """The constant origin transform of ``joint``."""
-        return _origin_pose(joint.origin.xyz, joint.origin.rpy)
+        return _origin_pose(joint.origin.xyz, joint.origin.rotation)
 
     def _motion(self, joint: Joint) -> _Pose:
         """The joint motion ``M(q_joint)``, memoised per joint."""
@@ -303,16 +322,23 @@ class _Builder:
                                       _motion_pose(joint, self._joint_value(joint)))
         return self._joint_poses[key]
 
-    def _joint_value(self, joint: Joint) -> ca.SX:
-        """The joint coordinate: ``q[i]``, or ``m q[i] + c`` for a mimic joint."""
+    def _joint_value(self, joint: Joint) -> Scalar:
+        """The joint coordinate: ``q[i]`` if active, a float if locked, ``m v + c`` for a
+        mimic joint of leader value ``v``."""
         if joint.mimic is None:
-            return self._q[self._kin._index[joint.name]]
-        value = self._q[self._kin._index[joint.mimic.joint]]
+            return self._own_value(joint.name)
+        value = self._own_value(joint.mimic.joint)
+        if isinstance(value, float):
+            return joint.mimic.multiplier * value + joint.mimic.offset
         if joint.mimic.multiplier != 1.0:
             value = joint.mimic.multiplier * value
         if joint.mimic.offset != 0.0:
             value = value + joint.mimic.offset
         return value
+
+    def _own_value(self, name: str) -> Scalar:
+        index = self._kin._index.get(name)
+        return self._kin.locked[name] if index is None else self._q[index]
 
 
 # ---------------------------------------------------------------------- pose algebra
@@ -380,15 +406,9 @@ def _apply(pose: _Pose, point: Sequence[Scalar]) -> tuple[Scalar, Scalar, Scalar
 
 
 def _origin_pose(xyz: tuple[float, float, float],
-                 rpy: tuple[float, float, float]) -> _Pose:
-    """Constant pose ``Trans(xyz) Rz(y) Ry(p) Rx(r)`` with near-0/+-1 entries snapped."""
-    r, p, y = rpy
-    cr, sr, cp, sp, cy, sy = (math.cos(r), math.sin(r), math.cos(p), math.sin(p),
-                              math.cos(y), math.sin(y))
-    rot = ((cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr),
-           (sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr),
-           (-sp, cp * sr, cp * cr))
-    snapped = tuple(tuple(_snap(x) for x in row) for row in rot)
+                 rotation: Sequence[Sequence[float]]) -> _Pose:
+    """Constant pose ``[rotation, xyz]`` with near-0/+-1 rotation entries snapped."""
+    snapped = tuple(tuple(_snap(float(x)) for x in row) for row in rotation)
     return _Pose(rot=snapped, pos=(float(xyz[0]), float(xyz[1]), float(xyz[2])))
 
 
@@ -400,13 +420,17 @@ def _snap(x: float) -> float:
     return float(x)
 
 
-def _motion_pose(joint: Joint, value: ca.SX) -> _Pose:
-    """Joint motion ``M(q)``: Rodrigues rotation or translation along the axis."""
+def _motion_pose(joint: Joint, value: Scalar) -> _Pose:
+    """Joint motion ``M(q)``: Rodrigues rotation or translation along the axis; a float
+    ``value`` (a locked joint) gives a constant pose."""
     a = joint.axis
     if joint.type == "prismatic":
         return _Pose(rot=_IDENTITY.rot,
                      pos=tuple(_lincomb([(a[i], value)]) for i in range(3)))  # type: ignore
-    c, s = ca.cos(value), ca.sin(value)
+    if isinstance(value, float):
+        c, s = math.cos(value), math.sin(value)
+    else:
+        c, s = ca.cos(value), ca.sin(value)
     skew = ((0.0, -a[2], a[1]), (a[2], 0.0, -a[0]), (-a[1], a[0], 0.0))
     rot = tuple(tuple(
         _lincomb([(_snap((1.0 if i == j else 0.0) - a[i] * a[j]), c),
@@ -453,6 +477,42 @@ def _limit(joint: Joint, side: str) -> float:
     if joint.type == "continuous" or joint.limit is None:
         return -math.inf if side == "lower" else math.inf
     return joint.limit.lower if side == "lower" else joint.limit.upper
+
+
+def _active_joints(movable: list[Joint], names: Sequence[str] | None) -> list[Joint]:
+    """The active joints: ``names`` in their order, or every movable joint."""
+    if names is None:
+        return movable
+    by_name = {joint.name: joint for joint in movable}
+    valid = ", ".join(by_name) or "none"
+    active = []
+    for name in names:
+        if name not in by_name:
+            raise ValueError(f"joints: '{name}' is not a movable joint (movable, non-mimic "
+                             f"joints: {valid})")
+        if by_name[name] in active:
+            raise ValueError(f"joints: '{name}' is named twice")
+        active.append(by_name[name])
+    return active
+
+
+def _locked_values(movable: Mapping[str, Joint], active: Mapping[str, int],
+                   locked: Mapping[str, float]) -> dict[str, float]:
+    """Values of every movable joint that is not active: ``locked`` or 0 in the limits."""
+    valid = ", ".join(name for name in movable if name not in active) or "none"
+    for name, value in locked.items():
+        if name not in movable or name in active:
+            why = "is active" if name in active else "is not a movable joint"
+            raise ValueError(f"locked: '{name}' {why} (joints that can be locked: {valid})")
+        if not math.isfinite(float(value)):
+            raise ValueError(f"locked: '{name}' must be a finite number, got {value!r}")
+    values = {}
+    for name, joint in movable.items():
+        if name in active:
+            continue
+        default = min(max(0.0, _limit(joint, "lower")), _limit(joint, "upper"))
+        values[name] = float(locked.get(name, default))
+    return values
 
 
 def _unknown_link(name: str, valid: Iterable[str]) -> UnknownLinkError:

@@ -222,7 +222,7 @@ def _check_base_joints(name: str, kin: Kinematics) -> None:
             problem = f"axis must be {axis}, got {joint.axis}"
         elif joint.parent != parent:
             problem = f"parent link must be '{parent}', got '{joint.parent}'"
-        elif (not np.allclose(joint.origin.rpy, 0.0, rtol=0.0, atol=1e-12)
+        elif (not joint.origin.is_identity_rotation
               or not np.allclose(joint.origin.xyz[:2], 0.0, rtol=0.0, atol=1e-12)):
             problem = "origin must have no rotation and no x-y offset"
         if problem is not None:

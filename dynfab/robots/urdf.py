@@ -1,245 +1,257 @@
-"""Parse URDF robot descriptions into immutable values.
+"""Read URDF robot descriptions into immutable values, with yourdfpy.
 
-Only the kinematic part of URDF is read: links (by name) and joints (type, parent,
-child, origin, axis, limits, mimic). Visual, collision and inertial elements are
-ignored. Parsing uses :mod:`xml.etree.ElementTree` and never evaluates text as code.
-
-Units follow URDF: metres for lengths, radians for angles, m/s or rad/s for velocity
-limits.
+yourdfpy parses the XML; this module turns its result into frozen values (links with
+their collision geometry, joints with origin, axis, limits, mimic) and checks what the
+kinematics rely on: known joint types, a single tree, non-zero axes of moving joints,
+limits of revolute and prismatic joints. As in urdfdom (and so pinocchio), the axis of a
+fixed joint is ignored, a ``<mimic>`` of a joint that does not move on its own is
+dropped, ``lower > upper`` means no position limit (Bullet's convention), and visual or
+collision geometry of a kind URDF does not define is skipped. Mesh ``filename``s are
+resolved to files (:mod:`dynfab.robots.mesh_paths`); nothing is evaluated as code. The
+values are those of :mod:`dynfab.robots.urdf_model`.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import io
 import math
+import os
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import yourdfpy
+
+from dynfab.geometry.shapes import Box, Cylinder, ShapeError, Sphere
+
+from .mesh_paths import resolve_uri
+from .urdf_model import (ACTUATED_JOINT_TYPES, CollisionGeometry, Joint, JointLimit, Link, MeshFile,
+                         Mimic, Origin, UrdfError, UrdfModel, Vector3)
 
 __all__ = [
     "ACTUATED_JOINT_TYPES",
+    "CollisionGeometry",
     "Joint",
     "JointLimit",
     "Link",
+    "MeshFile",
     "Mimic",
     "Origin",
     "UrdfError",
     "UrdfModel",
+    "load_urdf",
     "parse_urdf",
 ]
 
-Vector3 = tuple[float, float, float]
-
-#: Joint types that carry a configuration variable.
-ACTUATED_JOINT_TYPES = frozenset({"revolute", "continuous", "prismatic"})
 _SUPPORTED_JOINT_TYPES = ACTUATED_JOINT_TYPES | {"fixed"}
 _UNSUPPORTED_JOINT_TYPES = frozenset({"floating", "planar"})
+_GEOMETRY_TAGS = frozenset({"box", "cylinder", "sphere", "mesh"})
 
 
-class UrdfError(ValueError):
-    """A URDF text is malformed or uses a feature this package does not support."""
+def load_urdf(path: str | os.PathLike[str], package_dirs: Sequence[str | os.PathLike[str]] = ()
+              ) -> UrdfModel:
+    """Read a URDF file; mesh URIs resolve against its folder, its parents and ``package_dirs``.
 
-
-@dataclass(frozen=True)
-class Origin:
-    """Pose of a joint frame in its parent link frame.
-
-    The transform is ``T = Trans(xyz) @ Rot(rpy)`` with
-    ``Rot(rpy) = Rz(yaw) @ Ry(pitch) @ Rx(roll)`` (fixed-axis roll, pitch, yaw).
-
-    Attributes:
-        xyz: Translation [m].
-        rpy: Roll, pitch, yaw [rad].
+    Raises:
+        OSError: The file cannot be read.
+        UrdfError: The file is not a valid URDF; the message starts with the path.
     """
-
-    xyz: Vector3 = (0.0, 0.0, 0.0)
-    rpy: Vector3 = (0.0, 0.0, 0.0)
-
-
-@dataclass(frozen=True)
-class JointLimit:
-    """Position and velocity limits of an actuated joint.
-
-    Attributes:
-        lower: Lower position limit [rad or m].
-        upper: Upper position limit [rad or m].
-        velocity: Maximum absolute velocity [rad/s or m/s].
-        effort: Maximum absolute effort [N m or N], ``None`` if not given.
-    """
-
-    lower: float
-    upper: float
-    velocity: float
-    effort: float | None = None
+    path = Path(path)
+    text = path.read_bytes()
+    try:
+        return parse_urdf(text, base_dir=path.parent, package_dirs=package_dirs)
+    except UrdfError as exc:
+        raise UrdfError(f"{os.fspath(path)}: {exc}") from None
 
 
-@dataclass(frozen=True)
-class Mimic:
-    """A joint that follows another: ``q = multiplier * q_joint + offset``.
-
-    Attributes:
-        joint: Name of the followed joint.
-        multiplier: Gain [-].
-        offset: Offset [rad or m].
-    """
-
-    joint: str
-    multiplier: float = 1.0
-    offset: float = 0.0
-
-
-@dataclass(frozen=True)
-class Link:
-    """A rigid body of the robot, known by its name."""
-
-    name: str
-
-
-@dataclass(frozen=True)
-class Joint:
-    """A joint connecting a parent link to a child link.
-
-    The child frame is ``T_parent_child(q) = T_origin @ M(q)`` where ``M`` is a rotation
-    by ``q`` about ``axis`` (revolute, continuous), a translation by ``q * axis``
-    (prismatic) or the identity (fixed).
-
-    Attributes:
-        name: Joint name.
-        type: ``"revolute"``, ``"continuous"``, ``"prismatic"`` or ``"fixed"``.
-        parent: Parent link name.
-        child: Child link name.
-        origin: Joint frame in the parent link frame.
-        axis: Unit motion axis in the joint frame.
-        limit: Limits; ``None`` for continuous and fixed joints without a limit tag.
-        mimic: Set if the joint follows another joint instead of being actuated.
-    """
-
-    name: str
-    type: str
-    parent: str
-    child: str
-    origin: Origin = Origin()
-    axis: Vector3 = (1.0, 0.0, 0.0)
-    limit: JointLimit | None = None
-    mimic: Mimic | None = None
-
-    @property
-    def is_actuated(self) -> bool:
-        """True if the joint has its own configuration variable."""
-        return self.type in ACTUATED_JOINT_TYPES and self.mimic is None
-
-
-@dataclass(frozen=True)
-class UrdfModel:
-    """The kinematic tree of a URDF robot.
-
-    Attributes:
-        name: Robot name (the ``name`` attribute of ``<robot>``).
-        links: Links in document order.
-        joints: Joints in document order.
-    """
-
-    name: str
-    links: tuple[Link, ...]
-    joints: tuple[Joint, ...]
-
-    @property
-    def link_names(self) -> tuple[str, ...]:
-        """Names of all links in document order."""
-        return tuple(link.name for link in self.links)
-
-    @property
-    def root_link(self) -> str:
-        """The unique link that is no joint's child."""
-        children = {joint.child for joint in self.joints}
-        return next(link.name for link in self.links if link.name not in children)
-
-    def parent_joint(self, link: str) -> Joint | None:
-        """The joint whose child is ``link``, or ``None`` for the root."""
-        return next((j for j in self.joints if j.child == link), None)
-
-    def child_joints(self, link: str) -> tuple[Joint, ...]:
-        """Joints whose parent is ``link``, in document order."""
-        return tuple(j for j in self.joints if j.parent == link)
-
-
-def parse_urdf(text: str) -> UrdfModel:
-    """Parse URDF XML text into a :class:`UrdfModel`.
+def parse_urdf(text: str | bytes, base_dir: str | os.PathLike[str] | None = None,
+               package_dirs: Sequence[str | os.PathLike[str]] = ()) -> UrdfModel:
+    """Parse URDF XML into a :class:`UrdfModel`.
 
     Args:
         text: The URDF document.
-
-    Returns:
-        The kinematic tree.
+        base_dir: Folder of the URDF file, for relative and ``package://`` mesh URIs
+            (``None``: meshes stay unresolved unless ``package_dirs`` finds them).
+        package_dirs: Extra folders in which ``package://NAME/...`` is looked up.
 
     Raises:
         UrdfError: Malformed XML, a missing or invalid attribute, an unsupported joint
-            type (``floating``, ``planar``) or a structure that is not a single tree.
-            The one-line message names the offending element.
+            type (``floating``, ``planar``) or a structure that is not a single tree; the
+            one-line message names the offending element.
     """
-    try:
-        root = ET.fromstring(text)
+    data = (text.encode("utf-8") if isinstance(text, str) else text).lstrip()
+    try:  # yourdfpy falls back to a lenient parser on broken XML: refuse it first
+        root = ET.fromstring(data)
     except ET.ParseError as exc:
         raise UrdfError(f"URDF is not well-formed XML: {exc}") from None
     if root.tag != "robot":
         raise UrdfError(f"URDF root element must be <robot>, got <{root.tag}>")
-    name = root.get("name", "")
-    links = tuple(Link(_required(el, "name", "<link>")) for el in root.findall("link"))
-    joints = tuple(_parse_joint(el) for el in root.findall("joint"))
-    model = UrdfModel(name=name, links=links, joints=joints)
+    _drop_unknown_geometry(root)
+    try:
+        robot = yourdfpy.URDF.load(io.BytesIO(ET.tostring(root)), build_scene_graph=False,
+                                   load_meshes=False, load_collision_meshes=False).robot
+    except Exception as exc:  # yourdfpy raises whatever its parsing met; name the element
+        raise UrdfError(_locate_parse_error(root, exc)) from None
+    search = [Path(d) for d in package_dirs]
+    links = tuple(_link(link, base_dir, search) for link in robot.links)
+    joints = _independent_unless_led(tuple(_joint(joint) for joint in robot.joints))
+    model = UrdfModel(name=robot.name or "", links=links, joints=joints)
     _check_tree(model)
     return model
 
 
-def _parse_joint(el: ET.Element) -> Joint:
-    """Parse one ``<joint>`` element."""
-    name = _required(el, "name", "<joint>")
-    where = f"<joint name='{name}'>"
-    jtype = _required(el, "type", where)
+def _drop_unknown_geometry(root: ET.Element) -> None:
+    """Remove ``<visual>``/``<collision>`` elements whose geometry URDF does not define
+    (simulator extensions such as pybullet's ``<plane>``), as urdfdom-based loaders skip them."""
+    for link in root.iter("link"):
+        for element in list(link):
+            if element.tag not in ("visual", "collision"):
+                continue
+            geometry = element.find("geometry")
+            kinds = [] if geometry is None else [child.tag for child in geometry]
+            if not kinds or any(kind not in _GEOMETRY_TAGS for kind in kinds):
+                link.remove(element)
+
+
+def _independent_unless_led(joints: tuple[Joint, ...]) -> tuple[Joint, ...]:
+    """Drop a ``<mimic>`` whose leader is not a moving joint that mimics nothing: the joint
+    then moves on its own, as in urdfdom and pinocchio (shipped files do contain such tags)."""
+    leaders = {joint.name for joint in joints if joint.is_actuated}
+    return tuple(dataclasses.replace(joint, mimic=None)
+                 if joint.mimic is not None and joint.mimic.joint not in leaders else joint
+                 for joint in joints)
+
+
+def _locate_parse_error(root: ET.Element, exc: Exception) -> str:
+    """A one-line message for an exception of yourdfpy, naming the element it came from."""
+    for element in root:
+        if element.tag not in ("link", "joint"):
+            continue
+        name = element.get("name")
+        where = f"<{element.tag} name='{name}'>" if name else f"<{element.tag}>"
+        if not name:
+            return f"{where}: missing attribute 'name'"
+        if element.tag == "joint":
+            for tag in ("parent", "child"):
+                if element.find(tag) is None:
+                    return f"{where}: missing <{tag}> element"
+            problem = _joint_attribute_problem(element)
+            if problem:
+                return f"{where}: {problem}"
+    detail = str(exc).splitlines()[0] if str(exc) else ""
+    return f"URDF could not be parsed ({type(exc).__name__}: {detail})"
+
+
+def _joint_attribute_problem(element: ET.Element) -> str | None:
+    """The first non-numeric or mis-sized number attribute of a joint's sub-elements."""
+    sizes = {("origin", "xyz"): 3, ("origin", "rpy"): 3, ("axis", "xyz"): 3,
+             ("limit", "lower"): 1, ("limit", "upper"): 1, ("limit", "velocity"): 1,
+             ("limit", "effort"): 1, ("mimic", "multiplier"): 1, ("mimic", "offset"): 1}
+    for (tag, attribute), size in sizes.items():
+        sub = element.find(tag)
+        value = None if sub is None else sub.get(attribute)
+        if value is None:
+            continue
+        try:
+            numbers = [float(part) for part in value.split()]
+        except ValueError:
+            return f"<{tag}>: attribute '{attribute}' is not a number: '{value}'"
+        if len(numbers) != size:
+            count = "three numbers" if size == 3 else "one number"
+            return f"<{tag}>: attribute '{attribute}' must be {count}, got '{value}'"
+    return None
+
+
+def _link(link: yourdfpy.Link, base_dir: str | os.PathLike[str] | None,
+          package_dirs: list[Path]) -> Link:
+    """A link with its collision geometry (primitives as shapes, meshes as files)."""
+    where = f"<link name='{link.name}'>"
+    collisions = []
+    for collision in link.collisions or ():
+        geometry = collision.geometry
+        origin = Origin.from_matrix(collision.origin)
+        try:
+            if geometry.box is not None:
+                shape: Box | Cylinder | Sphere | MeshFile = Box(tuple(geometry.box.size))
+            elif geometry.cylinder is not None:
+                shape = Cylinder(geometry.cylinder.radius, geometry.cylinder.length)
+            elif geometry.sphere is not None:
+                shape = Sphere(geometry.sphere.radius)
+            elif geometry.mesh is not None:
+                shape = _mesh(geometry.mesh, base_dir, package_dirs)
+            else:
+                raise UrdfError(f"{where} <collision>: no geometry")
+        except (ShapeError, TypeError, ValueError) as exc:
+            raise UrdfError(f"{where} <collision>: {exc}") from None
+        collisions.append(CollisionGeometry(origin=origin, shape=shape))
+    return Link(name=link.name, collisions=tuple(collisions))
+
+
+def _mesh(mesh: yourdfpy.Mesh, base_dir: str | os.PathLike[str] | None,
+          package_dirs: list[Path]) -> MeshFile:
+    scale = mesh.scale
+    if scale is None:
+        factors: Vector3 = (1.0, 1.0, 1.0)
+    else:
+        values = np.asarray(scale, dtype=float).reshape(-1)  # urdfdom reads the first three
+        array = np.broadcast_to(values[:3] if values.size >= 3 else values, (3,))
+        factors = (float(array[0]), float(array[1]), float(array[2]))
+    path = resolve_uri(mesh.filename, base_dir, package_dirs)
+    return MeshFile(uri=mesh.filename, path=None if path is None else os.fspath(path), scale=factors)
+
+
+def _joint(joint: yourdfpy.Joint) -> Joint:
+    """A joint's values; checks its type, axis and limits."""
+    where = f"<joint name='{joint.name}'>"
+    jtype = joint.type
     if jtype in _UNSUPPORTED_JOINT_TYPES:
         raise UrdfError(f"{where}: joint type '{jtype}' is not supported "
                         f"(supported: {', '.join(sorted(_SUPPORTED_JOINT_TYPES))})")
     if jtype not in _SUPPORTED_JOINT_TYPES:
         raise UrdfError(f"{where}: unknown joint type '{jtype}'")
-    parent = _required(_child(el, "parent", where), "link", f"{where} <parent>")
-    child = _required(_child(el, "child", where), "link", f"{where} <child>")
-    origin_el = el.find("origin")
-    origin = Origin()
-    if origin_el is not None:
-        origin = Origin(xyz=_vector(origin_el, "xyz", f"{where} <origin>", (0.0, 0.0, 0.0)),
-                        rpy=_vector(origin_el, "rpy", f"{where} <origin>", (0.0, 0.0, 0.0)))
-    axis = (1.0, 0.0, 0.0)
-    axis_el = el.find("axis")
-    if axis_el is not None:
-        axis = _unit(_vector(axis_el, "xyz", f"{where} <axis>", axis), f"{where} <axis>")
-    limit = _parse_limit(el.find("limit"), where)
+    if not joint.parent:
+        raise UrdfError(f"{where} <parent>: missing attribute 'link'")
+    if not joint.child:
+        raise UrdfError(f"{where} <child>: missing attribute 'link'")
+    axis: Vector3 = (1.0, 0.0, 0.0)
+    if jtype != "fixed":  # URDF ignores the axis of a fixed joint
+        axis = _unit(joint.axis, f"{where} <axis>")
+    limit = _limit(joint.limit, where)
     if limit is None and jtype in ("revolute", "prismatic"):
         raise UrdfError(f"{where}: {jtype} joint needs a <limit> element")
-    mimic_el = el.find("mimic")
     mimic = None
-    if mimic_el is not None:
-        mimic = Mimic(joint=_required(mimic_el, "joint", f"{where} <mimic>"),
-                      multiplier=_number(mimic_el, "multiplier", f"{where} <mimic>", 1.0),
-                      offset=_number(mimic_el, "offset", f"{where} <mimic>", 0.0))
-    return Joint(name=name, type=jtype, parent=parent, child=child, origin=origin,
-                 axis=axis, limit=limit, mimic=mimic)
+    if joint.mimic is not None:
+        mimic = Mimic(joint=joint.mimic.joint, multiplier=_finite(joint.mimic.multiplier, 1.0),
+                      offset=_finite(joint.mimic.offset, 0.0))
+    return Joint(name=joint.name, type=jtype, parent=joint.parent, child=joint.child,
+                 origin=Origin.from_matrix(joint.origin), axis=axis, limit=limit, mimic=mimic)
 
 
-def _parse_limit(el: ET.Element | None, where: str) -> JointLimit | None:
-    """Parse a ``<limit>`` element; ``lower``/``upper`` default to 0 as in URDF."""
-    if el is None:
+def _limit(limit: yourdfpy.Limit | None, where: str) -> JointLimit | None:
+    """The ``<limit>`` values; ``lower``/``upper`` default to 0 as in URDF."""
+    if limit is None:
         return None
     where = f"{where} <limit>"
-    if el.get("velocity") is None:
+    if limit.velocity is None:
         raise UrdfError(f"{where}: missing attribute 'velocity'")
-    lower = _number(el, "lower", where, 0.0)
-    upper = _number(el, "upper", where, 0.0)
-    velocity = _number(el, "velocity", where, 0.0)
-    effort = _number(el, "effort", where, math.nan)
-    if lower > upper:
-        raise UrdfError(f"{where}: lower {lower} exceeds upper {upper}")
+    lower, upper = _finite(limit.lower, 0.0), _finite(limit.upper, 0.0)
+    velocity = _finite(limit.velocity, 0.0)
+    if not all(math.isfinite(x) for x in (lower, upper, velocity)):
+        raise UrdfError(f"{where}: limits must be finite, got lower={limit.lower}, "
+                        f"upper={limit.upper}, velocity={limit.velocity}")
+    if lower > upper:  # Bullet's convention for a joint without position limits
+        lower, upper = -math.inf, math.inf
     if velocity < 0.0:
         raise UrdfError(f"{where}: velocity must be non-negative, got {velocity}")
-    return JointLimit(lower=lower, upper=upper, velocity=velocity,
-                      effort=None if math.isnan(effort) else effort)
+    effort = None if limit.effort is None else float(limit.effort)
+    return JointLimit(lower=lower, upper=upper, velocity=velocity, effort=effort)
+
+
+def _finite(value: object, default: float) -> float:
+    """``value`` as a float, ``default`` if it is ``None``."""
+    return default if value is None else float(value)  # type: ignore[arg-type]
 
 
 def _check_tree(model: UrdfModel) -> None:
@@ -267,14 +279,6 @@ def _check_tree(model: UrdfModel) -> None:
     if reached != names:
         raise UrdfError(f"URDF joints form a cycle through links "
                         f"{sorted(names - reached)}")
-    joints = {joint.name: joint for joint in model.joints}
-    for joint in model.joints:
-        if joint.mimic is None:
-            continue
-        target = joints.get(joint.mimic.joint)
-        if target is None or not target.is_actuated:
-            raise UrdfError(f"<joint name='{joint.name}'> <mimic>: '{joint.mimic.joint}' "
-                            "is not an actuated joint of this robot")
 
 
 def _reachable(model: UrdfModel, root: str) -> set[str]:
@@ -297,58 +301,13 @@ def _check_unique(names: list[str], kind: str) -> None:
         seen.add(name)
 
 
-def _child(el: ET.Element, tag: str, where: str) -> ET.Element:
-    """The required sub-element ``tag`` of ``el``."""
-    sub = el.find(tag)
-    if sub is None:
-        raise UrdfError(f"{where}: missing <{tag}> element")
-    return sub
-
-
-def _required(el: ET.Element, attribute: str, where: str) -> str:
-    """The required, non-empty attribute ``attribute`` of ``el``."""
-    value = el.get(attribute)
-    if value is None or not value.strip():
-        raise UrdfError(f"{where}: missing attribute '{attribute}'")
-    return value.strip()
-
-
-def _number(el: ET.Element, attribute: str, where: str, default: float) -> float:
-    """A finite float attribute, or ``default`` if absent."""
-    value = el.get(attribute)
-    if value is None:
-        return default
-    try:
-        number = float(value)
-    except ValueError:
-        raise UrdfError(f"{where}: attribute '{attribute}' is not a number: "
-                        f"'{value}'") from None
-    if not math.isfinite(number):
-        raise UrdfError(f"{where}: attribute '{attribute}' must be finite, got '{value}'")
-    return number
-
-
-def _vector(el: ET.Element, attribute: str, where: str, default: Vector3) -> Vector3:
-    """A 3-vector attribute written as three space-separated numbers."""
-    value = el.get(attribute)
-    if value is None:
-        return default
-    parts = value.split()
-    try:
-        numbers = tuple(float(p) for p in parts)
-    except ValueError:
-        numbers = ()
-    if len(numbers) != 3 or not all(math.isfinite(x) for x in numbers):
-        raise UrdfError(f"{where}: attribute '{attribute}' must be three finite numbers, "
-                        f"got '{value}'")
-    return (numbers[0], numbers[1], numbers[2])
-
-
-def _unit(axis: Vector3, where: str) -> Vector3:
-    """Normalise a joint axis to unit length."""
-    norm = math.sqrt(sum(x * x for x in axis))
+def _unit(axis: object, where: str) -> Vector3:
+    """A joint axis normalised to unit length."""
+    vector = np.asarray(axis if axis is not None else (1.0, 0.0, 0.0), dtype=float).reshape(-1)
+    if vector.size != 3 or not np.isfinite(vector).all():
+        raise UrdfError(f"{where}: axis must be three finite numbers, got {vector.tolist()}")
+    norm = float(np.linalg.norm(vector))
     if norm < 1e-12:
         raise UrdfError(f"{where}: axis must not be zero")
-    if abs(norm - 1.0) < 1e-15:
-        return axis
-    return (axis[0] / norm, axis[1] / norm, axis[2] / norm)
+    x, y, z = (float(v) for v in (vector if abs(norm - 1.0) < 1e-15 else vector / norm))
+    return (x, y, z)

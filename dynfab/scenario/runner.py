@@ -57,9 +57,14 @@ def robot_for(scenario: Scenario) -> Robot:
             return robot_from_urdf(
                 spec.urdf, spec.goal_link,
                 tuple(CollisionSphere(s.link, s.center, s.radius) for s in spec.collision_spheres),
-                self_collision_pairs=spec.self_collision_pairs, planar=spec.planar)
+                self_collision_pairs=spec.self_collision_pairs, planar=spec.planar,
+                joints=spec.joints, locked=dict(spec.locked), package_dirs=spec.package_dirs)
         except (OSError, ValueError) as error:
-            raise ScenarioError("robot.urdf", str(error).splitlines()[0]) from error
+            message = str(error).splitlines()[0]
+            key, _, rest = message.partition(": ")
+            if key in ("joints", "locked"):  # Kinematics names the key it refuses
+                raise ScenarioError(f"robot.{key}", rest) from error
+            raise ScenarioError("robot.urdf", message) from error
     try:
         return load_robot(spec)
     except UnknownRobotError as error:

@@ -35,6 +35,7 @@ from dynfab.geometry.shapes import (
     quaternion_from_normal,
     unit_quaternion,
 )
+from dynfab.robots.mesh_paths import resolve_uri
 
 if TYPE_CHECKING:
     from dynfab.robots.robot import Robot
@@ -172,11 +173,17 @@ class UrdfRobotSpec:
     """A user robot described by a URDF file.
 
     Attributes:
-        urdf: Path of the URDF file (resolved against the scenario file's directory).
+        urdf: Path of the URDF file: relative to the scenario file's directory, absolute, or
+            ``package://NAME/...`` (see :func:`dynfab.robots.mesh_paths.resolve_uri`).
         goal_link: Default goal link of the robot.
         collision_spheres: Spheres used for obstacle and self-collision avoidance.
         self_collision_pairs: Pairs (i, j) of indices into ``collision_spheres``.
         planar: True if the workspace is the xy-plane (goals [x, y]).
+        package_dirs: Folders where ``package://`` mesh URIs are looked up (resolved
+            against the scenario file's directory).
+        joints: Active joints in the order of ``q``; None: every movable, non-mimic joint.
+        locked: Values of the other movable joints [rad or m]; unnamed ones 0 clipped
+            into their limits.
     """
 
     urdf: Path
@@ -184,6 +191,9 @@ class UrdfRobotSpec:
     collision_spheres: tuple[CollisionSphereSpec, ...] = ()
     self_collision_pairs: tuple[tuple[int, int], ...] = ()
     planar: bool = False
+    package_dirs: tuple[Path, ...] = ()
+    joints: tuple[str, ...] | None = None
+    locked: Mapping[str, float] = dataclasses.field(default_factory=lambda: MappingProxyType({}))
 
 
 @dataclass(frozen=True)
@@ -303,10 +313,13 @@ def validate_for_robot(scenario: Scenario, robot: Robot) -> Scenario:
     velocities = dof - 1 if robot.base is not None else dof
     links = tuple(robot.kinematics.link_names)
     state = scenario.initial_state
-    _check_length(state.q, "initial_state.q", (dof,))
+    joints = robot.kinematics.joint_names
+    _check_length(state.q, "initial_state.q", (dof,), f" (one per joint: {', '.join(joints)})")
     if state.qdot is None:
         state = dataclasses.replace(state, qdot=(0.0,) * velocities)
-    _check_length(state.qdot, "initial_state.qdot", (velocities,))
+    velocity_names = ("v", "omega") + joints[3:] if robot.base is not None else joints
+    _check_length(state.qdot, "initial_state.qdot", (velocities,),
+                  f" (one per velocity: {', '.join(velocity_names)})")
     if isinstance(scenario.robot, UrdfRobotSpec):
         _check_link(scenario.robot.goal_link, "robot.goal_link", links)
         for i, sphere in enumerate(scenario.robot.collision_spheres):
@@ -333,7 +346,8 @@ def _goal_for_robot(
     """Check one goal against the robot and resolve its default link."""
     position = goal.position or ()
     if goal.type == "joint":
-        _check_length(position, f"{field}.position", (robot.kinematics.dof,))
+        _check_length(position, f"{field}.position", (robot.kinematics.dof,),
+                      f" (one per joint: {', '.join(robot.kinematics.joint_names)})")
         return goal
     link = robot.goal_link if goal.link is None else goal.link
     _check_link(link, f"{field}.link", links)
@@ -352,11 +366,11 @@ def _check_link(link: str, field: str, links: tuple[str, ...]) -> None:
         raise ScenarioError(field, f"unknown link {link!r} (robot links: {', '.join(links)})")
 
 
-def _check_length(values: Sequence[float], field: str, lengths: tuple[int, ...]) -> None:
-    """Raise unless ``values`` has one of the allowed ``lengths``."""
+def _check_length(values: Sequence[float], field: str, lengths: tuple[int, ...], which: str = "") -> None:
+    """Raise unless ``values`` has one of the allowed ``lengths``; ``which`` says what they are."""
     if len(values) not in lengths:
         expected = " or ".join(str(n) for n in lengths)
-        raise ScenarioError(field, f"expected {expected} numbers, got {len(values)}")
+        raise ScenarioError(field, f"expected {expected} numbers{which}, got {len(values)}")
 
 
 def _robot(value: object, field: str, base_dir: Path) -> str | UrdfRobotSpec:
@@ -368,11 +382,23 @@ def _robot(value: object, field: str, base_dir: Path) -> str | UrdfRobotSpec:
         data,
         field,
         required=("urdf", "goal_link"),
-        optional=("collision_spheres", "self_collision_pairs", "planar"),
+        optional=("collision_spheres", "self_collision_pairs", "planar", "package_dirs", "joints",
+                  "locked"),
     )
-    urdf = base_dir / _string(data["urdf"], f"{field}.urdf")
-    if not urdf.is_file():
-        raise ScenarioError(f"{field}.urdf", f"file not found: {urdf}")
+    package_dirs = tuple(base_dir / _string(d, f"{field}.package_dirs[{i}]")
+                         for i, d in enumerate(_list(data.get("package_dirs", []), f"{field}.package_dirs")))
+    uri = _string(data["urdf"], f"{field}.urdf")
+    urdf = resolve_uri(uri, base_dir, package_dirs)
+    if urdf is None:
+        raise ScenarioError(f"{field}.urdf", f"file not found: {uri} (a path relative to the scenario "
+                            "file, absolute, or package://NAME/... found through package_dirs, "
+                            "DYNFAB_PACKAGE_PATH or an installed example-robot-data / pybullet)")
+    joints = None
+    if "joints" in data:
+        joints = tuple(_string(j, f"{field}.joints[{i}]")
+                       for i, j in enumerate(_list(data["joints"], f"{field}.joints")))
+    locked_data = _mapping(data.get("locked", {}), f"{field}.locked")
+    locked = {str(name): _number(value, f"{field}.locked.{name}") for name, value in locked_data.items()}
     spheres_field = f"{field}.collision_spheres"
     spheres = tuple(
         _collision_sphere(sphere, f"{spheres_field}[{i}]")
@@ -392,6 +418,9 @@ def _robot(value: object, field: str, base_dir: Path) -> str | UrdfRobotSpec:
         collision_spheres=spheres,
         self_collision_pairs=pairs,
         planar=planar,
+        package_dirs=package_dirs,
+        joints=joints,
+        locked=MappingProxyType(locked),
     )
 
 
