@@ -175,11 +175,14 @@ def _plot(result: RunResult, path: Path) -> None:
         link = goal.link if goal.type != "joint" else result.robot.goal_link
         positions = link_path(result.robot, link, result.record.q)[:, :dimension]
         markers = []
-    radii = [o.radius for o in result.scenario.obstacles]
-    plot_run(path, positions, markers, result.obstacle_centers, radii, result.robot.planar,
-             clearance_over_time=result.clearance if radii else None, times=result.record.t,
+    obstacles = result.scenario.obstacles
+    spheres = [k for k, o in enumerate(obstacles) if o.type == "sphere"]
+    shapes = [(o.shape, o.orientation, result.obstacle_centers[:, k]) for k, o in enumerate(obstacles)
+              if o.type != "sphere"]
+    plot_run(path, positions, markers, result.obstacle_centers[:, spheres], [obstacles[k].radius for k in spheres],
+             result.robot.planar, clearance_over_time=result.clearance if obstacles else None, times=result.record.t,
              title=f"{result.robot.name}: {'success' if result.metrics.success else 'failure'}",
-             base_path=None if result.robot.base is None else result.record.q[:, :2])
+             base_path=None if result.robot.base is None else result.record.q[:, :2], shapes=shapes)
 
 
 if __name__ == "__main__":

@@ -11,12 +11,10 @@ from typing import Any
 import numpy as np
 import pytest
 
-from dynfab.scenario import runner
 from dynfab.scenario.controllers import FabricController
 from dynfab.experiments import exp1, point_reaching
-from dynfab.robots.robot import Robot
 from dynfab.scenario.runner import RunResult, run_scenario
-from dynfab.scenario.schema import Scenario, scenario_from_dict
+from dynfab.scenario.schema import scenario_from_dict
 
 PANDA_Q0 = [1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0]
 SEEDS = range(10)

@@ -18,7 +18,8 @@ FILES = sorted(EXAMPLES.glob("**/*.yaml"))
 def test_examples_are_present() -> None:
     names = {path.relative_to(EXAMPLES).as_posix() for path in FILES}
     assert {"panda_reach.yaml", "panda_spheres.yaml", "panda_joint_goal.yaml", "panda_multi_goal.yaml",
-            "point_spheres.yaml", "custom_urdf/arm_spheres.yaml"} <= names
+            "point_spheres.yaml", "custom_urdf/arm_spheres.yaml", "panda_table_box.yaml",
+            "panda_moving_box.yaml"} <= names
 
 
 @pytest.mark.parametrize("path", FILES, ids=lambda path: path.relative_to(EXAMPLES).as_posix())

@@ -214,7 +214,7 @@ def test_urdf_robot_resolved_against_scenario_directory(tmp_path: Path) -> None:
         (("obstacles",), "none", "obstacles: expected a list, got str 'none'"),
         (("obstacles", 0, "radius"), -0.1, "obstacles[0].radius: must be positive"),
         (("obstacles", 0, "radius"), _DELETE, "obstacles[0].radius: missing required key"),
-        (("obstacles", 0, "type"), "box", "obstacles[0].type: expected one of sphere"),
+        (("obstacles", 0, "type"), "cube", "obstacles[0].type: expected one of sphere, box, cylinder, capsule, plane"),
         (("obstacles", 0, "position"), [0.5], "obstacles[0].position: expected 2 or 3 numbers, got 1"),
         (("obstacles", 0, "position"), _DELETE, "obstacles[0]: expected exactly one of 'position'"),
         (("obstacles", 0, "trajectory"), {"type": "linear"}, "obstacles[0]: expected exactly one of"),

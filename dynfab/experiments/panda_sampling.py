@@ -9,7 +9,6 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from dynfab.experiments.sampling import rounded
 from dynfab.robots import load_robot
 
 Q0 = (1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0)

@@ -541,9 +541,14 @@ def _plot_example(path: Path, result: RunResult, title: str) -> None:
     """The replayed example run: the goal link's path, goal, obstacles and clearance."""
     goal = result.scenario.goals[0]
     target = result.goal_reference if goal.type == "path" else goal.position
-    radii = [o.radius for o in result.scenario.obstacles]
+    obstacles = result.scenario.obstacles
+    spheres = [k for k, o in enumerate(obstacles) if o.type == "sphere"]
+    shapes = [(o.shape, o.orientation, result.obstacle_centers[:, k]) for k, o in enumerate(obstacles)
+              if o.type != "sphere"]
     metrics = result.metrics
     outcome = "success" if metrics.success else "collision" if metrics.collision else "deadlock"
-    plot_run(path, result.goal_positions, [(target, goal.tolerance)], result.obstacle_centers, radii,
-             result.robot.planar, clearance_over_time=result.clearance if radii else None, times=result.record.t,
-             title=f"{title}: {outcome}", base_path=None if result.robot.base is None else result.record.q[:, :2])
+    plot_run(path, result.goal_positions, [(target, goal.tolerance)], result.obstacle_centers[:, spheres],
+             [obstacles[k].radius for k in spheres], result.robot.planar,
+             clearance_over_time=result.clearance if obstacles else None, times=result.record.t,
+             title=f"{title}: {outcome}", base_path=None if result.robot.base is None else result.record.q[:, :2],
+             shapes=shapes)

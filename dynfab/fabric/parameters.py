@@ -1,8 +1,9 @@
 """Runtime parameters of a planner: named, typed views into one packed vector.
 
-The compiled planner takes a single input ``z = [q, q̇, p]``; ``p`` holds the goals and
-obstacle slots. :class:`ParameterLayout` says where each named quantity lives, creates the
-matching CasADi symbols at build time, and numpy views into the packed buffer at run
+The compiled planner takes a single input ``z = [q, q̇, p]``; ``p`` holds the goals,
+the sphere obstacle slots and the shape slots (boxes, cylinders, capsules, planes).
+:class:`ParameterLayout` says where each named quantity lives, creates the matching CasADi
+symbols at build time, and numpy views into the packed buffer at run
 time, so that ``params.obstacle_position[2] = [x, y, z]`` writes straight into the
 planner's input without any per-call conversion.
 
@@ -13,12 +14,88 @@ layout has none, and its planner treats them as structurally zero.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import casadi as ca
 import numpy as np
 
 from dynfab.fabric.maps import Reference
+
+
+#: Obstacle shapes that have slots of their own, and how many numbers size each
+#: (box ``(lx, ly, lz)``, cylinder and capsule ``(radius, length)``, plane none) [m].
+SHAPE_DIMENSIONS: dict[str, int] = {"box": 3, "cylinder": 2, "capsule": 2, "plane": 0}
+
+
+@dataclass(frozen=True)
+class ShapeSlots:
+    """How many slots of each obstacle shape a planner has (fixed at build time).
+
+    Attributes:
+        box, cylinder, capsule, plane: slot counts (>= 0).
+    """
+
+    box: int = 0
+    cylinder: int = 0
+    capsule: int = 0
+    plane: int = 0
+
+    def __post_init__(self) -> None:
+        for slot in fields(self):
+            count = getattr(self, slot.name)
+            if isinstance(count, bool) or not isinstance(count, int) or count < 0:
+                raise ValueError(f"ShapeSlots.{slot.name} must be an integer >= 0, got {count!r}")
+
+    def count(self, kind: str) -> int:
+        """Slots of ``kind`` (a key of :data:`SHAPE_DIMENSIONS`)."""
+        return int(getattr(self, kind))
+
+    @property
+    def total(self) -> int:
+        """Slots of all shapes."""
+        return sum(self.count(kind) for kind in SHAPE_DIMENSIONS)
+
+
+@dataclass(frozen=True)
+class ShapeSymbols:
+    """CasADi symbols of one shape slot.
+
+    Attributes:
+        kind: a key of :data:`SHAPE_DIMENSIONS`.
+        reference: the shape frame's origin ``(c, ċ, c̈)`` (3-D) [m, m/s, m/s²]; velocity and
+            acceleration are structural zeros in a static layout.
+        orientation: the frame's quaternion ``(w, x, y, z)`` (4, 1), taken as constant in time.
+        dimensions: the sizes (:data:`SHAPE_DIMENSIONS` of them) [m].
+    """
+
+    kind: str
+    reference: Reference
+    orientation: ca.SX
+    dimensions: ca.SX
+
+
+@dataclass(frozen=True)
+class ShapeViews:
+    """Writable numpy views of the slots of one shape kind (k slots).
+
+    A box, cylinder or capsule slot with a dimension ≤ 0 is inactive; a plane slot is
+    inactive while its orientation is the zero quaternion. Every slot starts inactive.
+
+    Attributes:
+        position: (k, 3) shape-frame origins [m] (a plane: a point on it).
+        orientation: (k, 4) unit quaternions ``(w, x, y, z)`` of the shape frames (a
+            plane's frame has its z axis along the normal, pointing out of the solid).
+        dimensions: (k, n) sizes [m]: box ``(lx, ly, lz)``, cylinder and capsule
+            ``(radius, length)``, plane none.
+        velocity, acceleration: (k, 3) of the origin [m/s], [m/s²] (dynamic planners only,
+            else ``None``).
+    """
+
+    position: np.ndarray
+    orientation: np.ndarray
+    dimensions: np.ndarray
+    velocity: np.ndarray | None = None
+    acceleration: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -32,6 +109,7 @@ class ParameterSymbols:
         goal_weight: per goal, its weight.
         obstacles: per slot, the centre's reference ``(c, ċ, c̈)`` (3-D).
         obstacle_radius: per slot, the radius.
+        shapes: every shape slot, kinds in the order of :data:`SHAPE_DIMENSIONS`.
     """
 
     vector: ca.SX
@@ -39,6 +117,7 @@ class ParameterSymbols:
     goal_weight: tuple[ca.SX, ...]
     obstacles: tuple[Reference, ...]
     obstacle_radius: tuple[ca.SX, ...]
+    shapes: tuple[ShapeSymbols, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -55,27 +134,40 @@ class RuntimeParameters:
             (dynamic planners only, else ``None``).
         obstacle_velocity, obstacle_acceleration: (slots, 3) [m/s], [m/s²]
             (dynamic planners only, else ``None``).
+        boxes, cylinders, capsules, planes: the shape slots of each kind (zero rows if
+            the planner has none).
     """
 
     goal_position: tuple[np.ndarray, ...]
     goal_weight: np.ndarray
     obstacle_position: np.ndarray
     obstacle_radius: np.ndarray
+    boxes: ShapeViews
+    cylinders: ShapeViews
+    capsules: ShapeViews
+    planes: ShapeViews
     goal_velocity: tuple[np.ndarray, ...] | None = None
     goal_acceleration: tuple[np.ndarray, ...] | None = None
     obstacle_velocity: np.ndarray | None = None
     obstacle_acceleration: np.ndarray | None = None
+
+    def shape_views(self, kind: str) -> ShapeViews:
+        """The views of the slots of ``kind`` (a key of :data:`SHAPE_DIMENSIONS`)."""
+        return {"box": self.boxes, "cylinder": self.cylinders, "capsule": self.capsules, "plane": self.planes}[kind]
 
 
 @dataclass(frozen=True)
 class ParameterLayout:
     """Order of the packed parameters: per goal its position (then velocity and
     acceleration if dynamic), the goal weights, the obstacle centres (then velocities and
-    accelerations if dynamic), the obstacle radii."""
+    accelerations if dynamic), the obstacle radii; then per shape kind (in the order of
+    :data:`SHAPE_DIMENSIONS`) its origins (then velocities and accelerations if dynamic),
+    orientations and dimensions."""
 
     goal_dimensions: tuple[int, ...]
     obstacle_slots: int
     dynamic: bool = False
+    shape_slots: ShapeSlots = ShapeSlots()
 
     @property
     def _derivatives(self) -> int:
@@ -84,7 +176,28 @@ class ParameterLayout:
     @property
     def size(self) -> int:
         k = self._derivatives
+        return self._goal_and_sphere_size + sum(self.shape_slots.count(kind) * (3 * k + 4 + n)
+                                                for kind, n in SHAPE_DIMENSIONS.items())
+
+    @property
+    def _goal_and_sphere_size(self) -> int:
+        """Length of the goal and sphere-slot part, which comes first."""
+        k = self._derivatives
         return k * sum(self.goal_dimensions) + len(self.goal_dimensions) + (3 * k + 1) * self.obstacle_slots
+
+    def _shape_blocks(self) -> dict[str, tuple[list[slice], slice, slice]]:
+        """Per kind: its origin blocks (one per derivative), orientations, dimensions."""
+        k, start = self._derivatives, self._goal_and_sphere_size
+        blocks = {}
+        for kind, n in SHAPE_DIMENSIONS.items():
+            slots = self.shape_slots.count(kind)
+            origins = [slice(start + i * 3 * slots, start + (i + 1) * 3 * slots) for i in range(k)]
+            start += 3 * k * slots
+            orientations = slice(start, start + 4 * slots)
+            dimensions = slice(start + 4 * slots, start + (4 + n) * slots)
+            start += (4 + n) * slots
+            blocks[kind] = (origins, orientations, dimensions)
+        return blocks
 
     def _blocks(self) -> tuple[list[list[slice]], int, list[slice], int]:
         """Goal slices per goal and derivative, weight offset, obstacle blocks, radius offset."""
@@ -118,7 +231,21 @@ class ParameterLayout:
             goal_weight=tuple(vector[weights + i] for i in range(len(self.goal_dimensions))),
             obstacles=tuple(obstacle_references),
             obstacle_radius=tuple(vector[radii + k] for k in range(self.obstacle_slots)),
+            shapes=self._shape_symbols(vector),
         )
+
+    def _shape_symbols(self, vector: ca.SX) -> tuple[ShapeSymbols, ...]:
+        slots = []
+        for kind, (origins, orientations, dimensions) in self._shape_blocks().items():
+            n = SHAPE_DIMENSIONS[kind]
+            for slot in range(self.shape_slots.count(kind)):
+                parts = [vector[block.start + 3 * slot: block.start + 3 * slot + 3] for block in origins]
+                parts += [ca.SX(3, 1)] * (3 - len(parts))
+                slots.append(ShapeSymbols(
+                    kind, Reference(*parts),
+                    vector[orientations.start + 4 * slot: orientations.start + 4 * slot + 4],
+                    vector[dimensions.start + n * slot: dimensions.start + n * slot + n]))
+        return tuple(slots)
 
     def views(self, buffer: np.ndarray) -> RuntimeParameters:
         """Views into ``buffer`` (length :attr:`size`); writes go straight into it."""
@@ -128,13 +255,32 @@ class ParameterLayout:
         n_goals = len(self.goal_dimensions)
         goal_views = [tuple(buffer[slices[i]] for slices in goals) for i in range(self._derivatives)]
         obstacle_views = [buffer[block].reshape(self.obstacle_slots, 3) for block in obstacle_blocks]
+        shapes = self._shape_views(buffer)
         return RuntimeParameters(
             goal_position=goal_views[0],
             goal_weight=buffer[weights: weights + n_goals],
             obstacle_position=obstacle_views[0],
             obstacle_radius=buffer[radii: radii + self.obstacle_slots],
+            boxes=shapes["box"],
+            cylinders=shapes["cylinder"],
+            capsules=shapes["capsule"],
+            planes=shapes["plane"],
             goal_velocity=goal_views[1] if self.dynamic else None,
             goal_acceleration=goal_views[2] if self.dynamic else None,
             obstacle_velocity=obstacle_views[1] if self.dynamic else None,
             obstacle_acceleration=obstacle_views[2] if self.dynamic else None,
         )
+
+    def _shape_views(self, buffer: np.ndarray) -> dict[str, ShapeViews]:
+        views = {}
+        for kind, (origins, orientations, dimensions) in self._shape_blocks().items():
+            slots = self.shape_slots.count(kind)
+            origin = [buffer[block].reshape(slots, 3) for block in origins]
+            views[kind] = ShapeViews(
+                position=origin[0],
+                orientation=buffer[orientations].reshape(slots, 4),
+                dimensions=buffer[dimensions].reshape(slots, SHAPE_DIMENSIONS[kind]),
+                velocity=origin[1] if self.dynamic else None,
+                acceleration=origin[2] if self.dynamic else None,
+            )
+        return views

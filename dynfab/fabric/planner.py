@@ -3,7 +3,8 @@
 ``FabricPlanner(robot, config)`` builds, in CasADi SX, the joint-space fabric
 
 - one point map per robot collision sphere (forward kinematics, ``J``, ``J̇ q̇``);
-- obstacle leaves summed in each sphere's point space, then pulled once per sphere;
+- obstacle leaves (sphere slots and shape slots: boxes, cylinders, capsules, planes)
+  summed in each sphere's point space, then pulled once per sphere;
 - self-collision leaves on sphere pairs, joint-limit leaves on joints, a base energy;
 - goal forcing on the goal links (a point on the link, or the directions of link axes:
   :mod:`dynfab.fabric.leaves.orientation`) or joints;
@@ -33,10 +34,11 @@ from dynfab.fabric.leaves.limits import JointLimitAvoidance
 from dynfab.fabric.leaves.obstacle import SphereObstacleAvoidance
 from dynfab.fabric.leaves.orientation import OrientationGoalConfig, direction_map
 from dynfab.fabric.leaves.self_collision import SelfCollisionAvoidance
+from dynfab.fabric.leaves.shape_obstacle import ShapeObstacleAvoidance
 from dynfab.fabric.linalg import cholesky_solve
 from dynfab.fabric.maps import DifferentialMap, Reference, linear_map, selected
 from dynfab.fabric.nonholonomic import Steering, least_squares_acceleration, velocity_map, velocity_map_derivative
-from dynfab.fabric.parameters import ParameterLayout, ParameterSymbols, RuntimeParameters
+from dynfab.fabric.parameters import ParameterLayout, ParameterSymbols, RuntimeParameters, ShapeSlots
 from dynfab.robots.robot import Robot
 from dynfab.fabric.spec import Spec
 from dynfab.fabric.speed_control import EnvironmentMotion, SpeedControl
@@ -81,6 +83,8 @@ class PlannerConfig:
             follows, is the first :class:`GoalConfig` (the first goal if there is none).
         obstacle_slots: number of sphere obstacle slots (fixed at build time).
         obstacle_avoidance: leaf of each robot sphere against each obstacle slot.
+        shape_slots: number of box, cylinder, capsule and plane slots (fixed at build time).
+        shape_avoidance: leaf of each robot sphere against each shape slot.
         joint_limits: joint-limit leaf.
         self_collision: leaf of each self-collision pair of the robot.
         speed_control: root parameters.
@@ -101,6 +105,8 @@ class PlannerConfig:
     goals: tuple[GoalConfig | OrientationGoalConfig, ...]
     obstacle_slots: int = 0
     obstacle_avoidance: SphereObstacleAvoidance | None = field(default_factory=SphereObstacleAvoidance)
+    shape_slots: ShapeSlots = field(default_factory=ShapeSlots)
+    shape_avoidance: ShapeObstacleAvoidance | None = field(default_factory=ShapeObstacleAvoidance)
     joint_limits: JointLimitAvoidance | None = field(default_factory=JointLimitAvoidance)
     self_collision: SelfCollisionAvoidance | None = field(default_factory=SelfCollisionAvoidance)
     speed_control: SpeedControl = field(default_factory=SpeedControl)
@@ -112,15 +118,17 @@ class PlannerConfig:
 
     @classmethod
     def for_robot(cls, robot: Robot, goals: tuple[GoalConfig | OrientationGoalConfig, ...], obstacle_slots: int = 0,
-                  dynamic: bool = False) -> PlannerConfig:
+                  dynamic: bool = False, shape_slots: ShapeSlots = ShapeSlots()) -> PlannerConfig:
         """The defaults for ``robot``: those of the fields, except that a robot on a
-        differential-drive base, which cannot sidestep, sees obstacles from 0.5 m (instead
-        of 0.2 m) and steers with a look-ahead point (:class:`Steering` ``L = 0.5 m``,
-        ``w = 1``). Chosen on seeded Experiment-4 runs (45/50 reached, no collision)."""
+        differential-drive base, which cannot sidestep, sees obstacles (spheres and shapes)
+        from 0.5 m (instead of 0.2 m) and steers with a look-ahead point (:class:`Steering`
+        ``L = 0.5 m``, ``w = 1``). Chosen on seeded Experiment-4 runs (45/50 reached, no
+        collision)."""
         if robot.base is None:
-            return cls(goals=goals, obstacle_slots=obstacle_slots, dynamic=dynamic)
-        avoidance = SphereObstacleAvoidance(Barrier(geometry_gain=5.0, energy_gain=0.5, horizon=0.5))
-        return cls(goals=goals, obstacle_slots=obstacle_slots, dynamic=dynamic, obstacle_avoidance=avoidance,
+            return cls(goals=goals, obstacle_slots=obstacle_slots, dynamic=dynamic, shape_slots=shape_slots)
+        barrier = Barrier(geometry_gain=5.0, energy_gain=0.5, horizon=0.5)
+        return cls(goals=goals, obstacle_slots=obstacle_slots, dynamic=dynamic, shape_slots=shape_slots,
+                   obstacle_avoidance=SphereObstacleAvoidance(barrier), shape_avoidance=ShapeObstacleAvoidance(barrier),
                    steering=Steering(lookahead=0.5, weight=1.0))
 
     def __post_init__(self) -> None:
@@ -150,7 +158,7 @@ class FabricPlanner:
         self._n = robot.kinematics.dof
         self._nv = self._n - 1 if robot.base is not None else self._n
         goal_dimensions = tuple(self._goal_dimension(goal) for goal in config.goals)
-        self._layout = ParameterLayout(goal_dimensions, config.obstacle_slots, config.dynamic)
+        self._layout = ParameterLayout(goal_dimensions, config.obstacle_slots, config.dynamic, config.shape_slots)
         self.function = self._build()
         self._input = np.zeros(self._n + self._nv + self._layout.size)
         self._output = np.zeros(self._nv)
@@ -271,11 +279,14 @@ class FabricPlanner:
 
     def _obstacle_terms(self, sphere_maps: list[DifferentialMap],
                         params: ParameterSymbols) -> list[tuple[WeightedGeometry, ca.SX]]:
-        """Per robot sphere: the obstacle leaves of all slots summed in the sphere's point
-        space and pulled once to joint space, with their momentum ``J_pᵀ Σ_o M_o ċ_o``
-        (structurally zero for a static planner)."""
+        """Per robot sphere: the obstacle leaves of all sphere and shape slots summed in the
+        sphere's point space and pulled once to joint space, with their momentum
+        ``J_pᵀ Σ_o M_o ċ_o`` (structurally zero for a static planner)."""
         avoidance = self.config.obstacle_avoidance
-        if avoidance is None or self.config.obstacle_slots == 0:
+        spheres = () if avoidance is None else tuple(zip(params.obstacles, params.obstacle_radius))
+        shape_avoidance = self.config.shape_avoidance
+        shapes = () if shape_avoidance is None else params.shapes
+        if not spheres and not shapes:
             return []
         links = self.config.collision_links
         if links is not None:
@@ -293,11 +304,15 @@ class FabricPlanner:
             pdot = ca.SX.sym("pdot", dims)
             in_point_space = None
             momentum = ca.SX(dims, 1)
-            for obstacle, radius in zip(params.obstacles, params.obstacle_radius):
+            for obstacle, radius in spheres:
                 planar_obstacle = _first_axes(obstacle, dims)
                 leaf = avoidance.on_point(p, pdot, planar_obstacle, radius, sphere.radius)
                 in_point_space = leaf if in_point_space is None else in_point_space + leaf
                 momentum = momentum + ca.mtimes(leaf.M, planar_obstacle.velocity)
+            for shape in shapes:
+                leaf = shape_avoidance.on_point(p, pdot, shape, sphere.radius)
+                in_point_space = leaf if in_point_space is None else in_point_space + leaf
+                momentum = momentum + ca.mtimes(leaf.M, shape.reference.velocity[:dims])
             (momentum,) = point_map.substitute([momentum], p, pdot)
             terms.append((in_point_space.pull(point_map), ca.mtimes(point_map.jacobian.T, momentum)))
         return terms

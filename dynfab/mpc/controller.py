@@ -26,8 +26,7 @@ import numpy as np
 
 from dynfab.motion.references import References
 from dynfab.mpc.config import MpcConfig
-from dynfab.mpc.problem import GoalTerm, MpcProblem, Plan
-from dynfab.robots.robot import Robot
+from dynfab.mpc.problem import MpcProblem, Plan
 
 #: tolerance on "a solve period has elapsed", for times accumulated in floating point [s]
 _TIME_TOLERANCE = 1e-9

@@ -10,22 +10,28 @@ obstacle references into the planner's runtime parameters before calling it.
 
 Scenario goals become planner goals one to one, except a ``pose`` goal, which becomes two:
 the position of its point (first) and the orientation of its link, with the same weight.
+
+Sphere obstacles take the planner's sphere slots in file order; boxes, cylinders, capsules
+and planes take the slots of their kind (:class:`dynfab.fabric.parameters.ShapeSlots`),
+whose orientation and sizes are written once.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
 
 from dynfab.fabric.leaves.orientation import FRAME_AXES, OrientationGoalConfig
+from dynfab.fabric.parameters import RuntimeParameters, ShapeSlots
 from dynfab.fabric.planner import FabricPlanner, GoalConfig, PlannerConfig
 from dynfab.motion.references import References
 from dynfab.motion.trajectories import StaticPoint, Trajectory
 from dynfab.mpc import GoalTerm, MpcConfig, MpcController, MpcProblem
 from dynfab.robots.robot import Robot
 from dynfab.scenario.references import goal_axes
-from dynfab.scenario.schema import GoalSpec, Scenario, ScenarioError
+from dynfab.scenario.schema import GoalSpec, ObstacleSpec, Scenario, ScenarioError
 
 _FABRIC_PLANNERS = {"static-fabric": False, "dynamic-fabric": True}
 
@@ -34,6 +40,17 @@ class Controller(Protocol):
     """What the simulator calls once per control period."""
 
     def __call__(self, t: float, q: np.ndarray, qdot: np.ndarray) -> np.ndarray: ...
+
+
+@dataclass(frozen=True)
+class ObstacleSlot:
+    """Where one obstacle's centre goes in the planner's parameters: row ``row`` of the
+    (slots, 3) views of its kind (velocity and acceleration ``None`` in a static planner)."""
+
+    position: np.ndarray
+    velocity: np.ndarray | None
+    acceleration: np.ndarray | None
+    row: int
 
 
 class FabricController:
@@ -46,11 +63,18 @@ class FabricController:
     """
 
     def __init__(self, planner: FabricPlanner, references: References,
-                 moving_goals: tuple[int, ...], moving_obstacles: tuple[int, ...]) -> None:
+                 moving_goals: tuple[int, ...], moving_obstacles: tuple[int, ...],
+                 obstacle_slots: tuple[ObstacleSlot, ...] | None = None) -> None:
+        """``obstacle_slots[k]`` is where obstacle ``k``'s centre is written; ``None``: the
+        sphere slot ``k``."""
         self.planner = planner
         self.references = references
         self._moving_goals = moving_goals
         self._moving_obstacles = moving_obstacles
+        params = planner.parameters
+        self._slots = obstacle_slots if obstacle_slots is not None else tuple(
+            ObstacleSlot(params.obstacle_position, params.obstacle_velocity, params.obstacle_acceleration, k)
+            for k in range(len(references.obstacles)))
         self._write_all(0.0)
 
     def __call__(self, t: float, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
@@ -71,11 +95,12 @@ class FabricController:
                 params.goal_acceleration[i][:] = point.acceleration
         for k in obstacles:
             point = self.references.obstacles[k].evaluate(t)
+            slot = self._slots[k]
             d = len(point.position)  # planar scenarios may give x, y only
-            params.obstacle_position[k, :d] = point.position
+            slot.position[slot.row, :d] = point.position
             if dynamic:
-                params.obstacle_velocity[k, :d] = point.velocity
-                params.obstacle_acceleration[k, :d] = point.acceleration
+                slot.velocity[slot.row, :d] = point.velocity
+                slot.acceleration[slot.row, :d] = point.acceleration
 
 
 def make_controller(scenario: Scenario, robot: Robot, references: References) -> Controller:
@@ -89,15 +114,38 @@ def make_controller(scenario: Scenario, robot: Robot, references: References) ->
     if scenario.planner not in _FABRIC_PLANNERS:
         raise ScenarioError("planner", f"{scenario.planner!r} is not available yet; use static-fabric, dynamic-fabric "
                             "or mpc")
+    kinds = [obstacle.type for obstacle in scenario.obstacles]
+    shape_slots = ShapeSlots(box=kinds.count("box"), cylinder=kinds.count("cylinder"),
+                             capsule=kinds.count("capsule"), plane=kinds.count("plane"))
     goals = tuple(config for goal in scenario.goals for config in _goal_configs(goal))
-    config = PlannerConfig.for_robot(robot, goals, len(scenario.obstacles), _FABRIC_PLANNERS[scenario.planner])
+    config = PlannerConfig.for_robot(robot, goals, kinds.count("sphere"), _FABRIC_PLANNERS[scenario.planner],
+                                     shape_slots)
     planner = FabricPlanner(robot, config)
-    for k, obstacle in enumerate(scenario.obstacles):
-        planner.parameters.obstacle_radius[k] = obstacle.radius
+    slots = _place_obstacles(scenario.obstacles, planner.parameters)
     references = planner_references(scenario, references)
     moving_goals = tuple(i for i, goal in enumerate(references.goals) if not isinstance(goal, StaticPoint))
     moving_obstacles = tuple(k for k, obstacle in enumerate(scenario.obstacles) if obstacle.trajectory is not None)
-    return FabricController(planner, references, moving_goals, moving_obstacles)
+    return FabricController(planner, references, moving_goals, moving_obstacles, slots)
+
+
+def _place_obstacles(obstacles: tuple[ObstacleSpec, ...], params: RuntimeParameters) -> tuple[ObstacleSlot, ...]:
+    """Give each obstacle the next slot of its kind and write its radius, or its
+    orientation and sizes; returns where each one's centre goes."""
+    used = dict.fromkeys(("sphere", "box", "cylinder", "capsule", "plane"), 0)
+    slots = []
+    for obstacle in obstacles:
+        row = used[obstacle.type]
+        used[obstacle.type] += 1
+        if obstacle.type == "sphere":
+            params.obstacle_radius[row] = obstacle.radius
+            slots.append(ObstacleSlot(params.obstacle_position, params.obstacle_velocity,
+                                      params.obstacle_acceleration, row))
+            continue
+        views = params.shape_views(obstacle.type)
+        views.orientation[row] = obstacle.orientation
+        views.dimensions[row] = obstacle.shape.dimensions
+        slots.append(ObstacleSlot(views.position, views.velocity, views.acceleration, row))
+    return tuple(slots)
 
 
 def planner_references(scenario: Scenario, references: References) -> References:
@@ -133,6 +181,10 @@ def make_mpc_controller(scenario: Scenario, robot: Robot, references: References
         references: the scenario's goal and obstacle trajectories.
         config: horizon, weights and solver; the benchmark's defaults if ``None``.
     """
+    for k, obstacle in enumerate(scenario.obstacles):
+        if obstacle.type != "sphere":
+            raise ScenarioError(f"obstacles[{k}].type", f"the mpc planner avoids spheres only, got {obstacle.type!r}; "
+                                "use static-fabric or dynamic-fabric")
     goals = tuple(term for goal in scenario.goals for term in _goal_terms(goal, robot))
     problem = MpcProblem(robot, goals, len(scenario.obstacles), config or MpcConfig())
     return MpcController(problem, planner_references(scenario, references),

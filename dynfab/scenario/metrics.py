@@ -1,16 +1,20 @@
 """Run metrics of DESIGN.md section 6 (as in the paper and localPlannerBench).
 
 All functions are pure numpy. Positions are in metres, times in seconds. For planar
-robots distances are measured in the xy-plane: only the first two coordinates count.
+robots distances are measured in the xy-plane: only the first two coordinates count
+(a box, cylinder, capsule or plane is cut at the height of its centre).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from dynfab.geometry.distance import shape_distance
+from dynfab.geometry.shapes import Shape, quaternion_matrix
 from dynfab.sim.simulator import Record
 
 
@@ -24,7 +28,8 @@ class Metrics:
         collision: Clearance went below zero.
         time_to_goal: First time within tolerance [s]; None if never.
         clearance: min over time, robot spheres i and obstacles j of
-            ||p_i - p_j|| - r_i - r_j [m]; None without obstacles.
+            ||p_i - p_j|| - r_i - r_j [m] (a shape j: its exact signed distance from
+            p_i, minus r_i); None without obstacles.
         path_length: sum_k ||x_{k+1} - x_k|| of the goal link [m].
         summed_error: Path goals: mean ||x - x_ref|| from the first time within
             tolerance [m]; None for other goals or if never within tolerance.
@@ -65,6 +70,7 @@ def compute_metrics(
     path_goal: bool = False,
     orientation_errors: ArrayLike | None = None,
     angle_tolerance: float | None = None,
+    shape_clearance: ArrayLike | None = None,
 ) -> Metrics:
     """Compute the metrics of a run.
 
@@ -83,6 +89,8 @@ def compute_metrics(
             goal ``orientation_error`` reports; None without orientation goals.
         angle_tolerance: If given, the goal is reached only when also
             ``orientation_errors < angle_tolerance`` [rad] (a primary pose or axis goal).
+        shape_clearance: Clearance to the other obstacle shapes at each sample, shape (T,)
+            (:func:`shape_clearance_over_time`), counted with the spheres'.
 
     Returns:
         The metrics.
@@ -110,6 +118,8 @@ def compute_metrics(
     clearances = clearance_over_time(
         sphere_centers, sphere_radii, obstacle_centers, obstacle_radii, planar=planar
     )
+    if shape_clearance is not None:
+        clearances = np.minimum(clearances, np.asarray(shape_clearance, dtype=float))
     clearance = float(np.min(clearances)) if np.isfinite(clearances).any() else None
     collision = clearance is not None and clearance < 0.0
     return Metrics(
@@ -165,6 +175,48 @@ def clearance_over_time(
     gaps = np.linalg.norm(spheres[:, :, None, :] - obstacles[:, None, :, :], axis=-1)
     gaps -= r_spheres[None, :, None] + r_obstacles[None, None, :]
     return np.min(gaps, axis=(1, 2))
+
+
+def shape_clearance_over_time(
+    sphere_centers: ArrayLike,
+    sphere_radii: ArrayLike,
+    shapes: Sequence[Shape],
+    orientations: Sequence[Sequence[float]],
+    shape_centers: ArrayLike,
+    *,
+    planar: bool = False,
+) -> NDArray[np.float64]:
+    """Clearance at each sample: min over robot spheres i and shapes j of
+    ``d_j(R_jᵀ (p_i(t) − c_j(t))) − r_i`` [m], with ``d_j`` the exact signed distance of
+    :func:`dynfab.geometry.distance.shape_distance`.
+
+    Args:
+        sphere_centers: Robot sphere centres, shape (T, k, 3).
+        sphere_radii: Robot sphere radii, shape (k,).
+        shapes: The m shapes, each in its own frame.
+        orientations: Their frames' unit quaternions (w, x, y, z).
+        shape_centers: Their frames' origins, shape (T, m, 3) (a plane: its point).
+        planar: Robot spheres act at the height of each shape's origin (their z is ignored).
+
+    Returns:
+        Shape (T,); +inf at every sample if there are no spheres or no shapes.
+    """
+    spheres = np.asarray(sphere_centers, dtype=float)
+    centers = np.asarray(shape_centers, dtype=float)
+    radii = np.asarray(sphere_radii, dtype=float)
+    if spheres.ndim != 3 or centers.shape != (spheres.shape[0], len(shapes), 3):
+        raise ValueError(f"expected sphere centres (T, k, 3) and shape centres (T, {len(shapes)}, 3), "
+                         f"got {spheres.shape} and {centers.shape}")
+    clearance = np.full(spheres.shape[0], np.inf)
+    if spheres.shape[1] == 0:
+        return clearance
+    for j, (shape, orientation) in enumerate(zip(shapes, orientations)):
+        offsets = spheres - centers[:, j, None, :]
+        if planar:
+            offsets[..., 2] = 0.0
+        distances = shape_distance(shape, offsets @ quaternion_matrix(orientation)) - radii[None, :]
+        clearance = np.minimum(clearance, distances.min(axis=1))
+    return clearance
 
 
 def path_length(positions: ArrayLike) -> float:

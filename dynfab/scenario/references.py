@@ -3,8 +3,9 @@
 Static goals and obstacles become trajectories at rest; ``trajectory:`` mappings are built
 by :func:`dynfab.motion.trajectories.trajectory_from_mapping`, except ``{type: rrt, goal: P,
 duration: T}``, which needs the scenario: an RRT (OMPL) plans a path for the goal link
-from its start position to ``P`` around the scenario's static spheres, and a spline
-through that path's waypoints reaches ``P`` at ``T``.
+from its start position to ``P`` around the scenario's static spheres (other shapes are
+left to the fabric), and a spline through that path's waypoints reaches ``P`` at ``T``.
+An obstacle's trajectory is that of its centre (a plane's point).
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ def goal_axes(goal: GoalSpec, robot: Robot) -> list[int]:
 
 
 def scenario_references(scenario: Scenario, robot: Robot) -> References:
-    """Trajectories of every goal (in its coordinates) and obstacle centre.
+    """Trajectories of every goal (in its coordinates) and obstacle centre (a plane's point).
 
     Raises:
         ScenarioError: naming the field of an invalid trajectory, or of an RRT goal that
@@ -115,7 +116,7 @@ def _rrt_reference(scenario: Scenario, robot: Robot, goal: GoalSpec, field: str)
     if len(target) != len(axes):
         raise ScenarioError(f"{field}.goal", f"expected {len(axes)} numbers, got {len(target)}")
     spheres = [(np.asarray(o.position, dtype=float)[axes], o.radius)
-               for o in scenario.obstacles if o.trajectory is None]
+               for o in scenario.obstacles if o.trajectory is None and o.type == "sphere"]
     for k, (centre, radius) in enumerate(spheres):
         for name, point, where in (("start", start_position, field), ("goal", target, f"{field}.goal")):
             gap = float(np.linalg.norm(point - centre)) - radius

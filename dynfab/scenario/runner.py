@@ -13,7 +13,7 @@ from dynfab.geometry.orientation import direction_angle, rotation_angle
 from dynfab.motion.references import References
 from dynfab.scenario.controllers import Controller, make_controller
 from dynfab.scenario.references import goal_axes, scenario_references
-from dynfab.scenario.metrics import Metrics, clearance_over_time, compute_metrics
+from dynfab.scenario.metrics import Metrics, clearance_over_time, compute_metrics, shape_clearance_over_time
 from dynfab.robots import load_robot, robot_from_urdf
 from dynfab.robots.builtin import UnknownRobotError
 from dynfab.robots.robot import CollisionSphere, Robot
@@ -38,7 +38,7 @@ class RunResult:
             point on its axes (the link origin for an axis goal), or the joints.
         goal_reference: the primary goal's reference over time (T, d) (an axis goal has
             no position target: its ``goal_positions``).
-        obstacle_centers: obstacle centres over time (T, m, 3).
+        obstacle_centers: obstacle centres over time (T, m, 3) (a plane: its point).
         clearance: minimum clearance at each sample (T,) [m] (inf without obstacles).
         controller: the controller that ran (its planner, fallback count, ...).
     """
@@ -101,15 +101,23 @@ def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None
     for k, trajectory in enumerate(references.obstacles):
         positions = trajectory.sample(record.t)[0]
         obstacle_centers[:, k, : positions.shape[1]] = positions
-    obstacle_radii = np.array([o.radius for o in scenario.obstacles])
+    spheres = [k for k, o in enumerate(scenario.obstacles) if o.type == "sphere"]
+    shapes = [k for k, o in enumerate(scenario.obstacles) if o.type != "sphere"]
+    sphere_centres = obstacle_centers[:, spheres]
+    sphere_radii = np.array([scenario.obstacles[k].radius for k in spheres])
+    shape_clearance = shape_clearance_over_time(
+        centres, radii, [scenario.obstacles[k].shape for k in shapes],
+        [scenario.obstacles[k].orientation for k in shapes], obstacle_centers[:, shapes], planar=robot.planar)
     metrics = compute_metrics(record, goal_positions, goal_reference, goal.tolerance,
-                              centres, radii, obstacle_centers, obstacle_radii, planar=robot.planar,
-                              path_goal=goal.type == "path", orientation_errors=orientation_errors,
+                              centres, radii, sphere_centres, sphere_radii, planar=robot.planar,
+                              path_goal=goal.type == "path", shape_clearance=shape_clearance,
+                              orientation_errors=orientation_errors,
                               angle_tolerance=goal.angle_tolerance if goal.type in _ORIENTED else None)
     solve_times = getattr(controller, "solve_times", None)
     if solve_times:  # a planner that re-plans less often than it is called (MPC)
         metrics = dataclasses.replace(metrics, solver_time_ms=1e3 * float(np.mean(solve_times)))
-    clearance = clearance_over_time(centres, radii, obstacle_centers, obstacle_radii, planar=robot.planar)
+    clearance = np.minimum(clearance_over_time(centres, radii, sphere_centres, sphere_radii, planar=robot.planar),
+                           shape_clearance)
     return RunResult(scenario, robot, record, metrics, goal_positions, goal_reference, obstacle_centers, clearance,
                      controller)
 

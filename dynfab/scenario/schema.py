@@ -24,7 +24,19 @@ import yaml
 
 from dynfab.describe import describe
 from dynfab.geometry.orientation import unit_vector
-from dynfab.geometry.shapes import ShapeError, quaternion_from_rpy, unit_quaternion
+from dynfab.geometry.shapes import (
+    IDENTITY_QUATERNION,
+    Box,
+    Capsule,
+    Cylinder,
+    Plane,
+    Shape,
+    ShapeError,
+    Sphere,
+    quaternion_from_normal,
+    quaternion_from_rpy,
+    unit_quaternion,
+)
 from dynfab.robots.mesh_paths import resolve_uri
 
 if TYPE_CHECKING:
@@ -33,7 +45,9 @@ if TYPE_CHECKING:
 BUILTIN_ROBOTS: tuple[str, ...] = ("panda", "point", "boxer", "boxer-panda")
 PLANNERS: tuple[str, ...] = ("static-fabric", "dynamic-fabric", "mpc")
 TRAJECTORY_TYPES: tuple[str, ...] = ("linear", "circle", "polynomial", "expression", "spline", "rrt")
+OBSTACLE_TYPES: tuple[str, ...] = ("sphere", "box", "cylinder", "capsule", "plane")
 GoalType = Literal["position", "joint", "path", "pose", "axis"]
+ObstacleType = Literal["sphere", "box", "cylinder", "capsule", "plane"]
 _GOAL_TYPES: tuple[str, ...] = ("position", "joint", "path", "pose", "axis")
 _WORKSPACE_KEYS = ("link", "parent_link", "axes", "tolerance", "weight", "offset")
 _POSE_KEYS = ("link", "offset", "orientation", "rpy", "tolerance", "angle_tolerance", "weight")
@@ -124,20 +138,45 @@ class GoalSpec:
 
 @dataclass(frozen=True)
 class ObstacleSpec:
-    """A spherical obstacle, static (``position``) or moving (``trajectory``).
+    """An obstacle shape, static (``position``) or moving (``trajectory`` of its centre;
+    its orientation stays).
 
     Attributes:
-        type: Always ``sphere``.
-        radius: Sphere radius [m] (> 0).
-        position: Centre [m], 2 numbers (planar robots only) or 3; None if moving.
+        type: One of :data:`OBSTACLE_TYPES`.
+        radius: Radius of a sphere, cylinder or capsule [m] (> 0); 0 for a box or plane.
+        position: Centre [m] (a plane: its ``point``), 2 numbers (planar robots only) or 3;
+            None if moving.
         trajectory: Read-only mapping of the centre's motion, with a ``type`` among
             :data:`TRAJECTORY_TYPES`; None if static.
+        size: A box's full edge lengths (lx, ly, lz) [m]; None for other shapes.
+        length: A cylinder's full length or a capsule's segment length, along the shape's z
+            axis [m]; None for other shapes.
+        orientation: Unit quaternion (w, x, y, z) of the shape frame (normalised from the
+            file); a plane's takes +z onto its ``normal``.
+        normal: A plane's unit normal, pointing out of the solid half-space; None otherwise.
     """
 
-    type: Literal["sphere"]
-    radius: float
+    type: ObstacleType
+    radius: float = 0.0
     position: tuple[float, ...] | None = None
     trajectory: Mapping[str, Any] | None = None
+    size: tuple[float, float, float] | None = None
+    length: float | None = None
+    orientation: tuple[float, float, float, float] = IDENTITY_QUATERNION
+    normal: tuple[float, float, float] | None = None
+
+    @property
+    def shape(self) -> Shape:
+        """The obstacle's geometry in its own frame."""
+        if self.type == "sphere":
+            return Sphere(self.radius)
+        if self.type == "box":
+            return Box(self.size)
+        if self.type == "cylinder":
+            return Cylinder(self.radius, self.length)
+        if self.type == "capsule":
+            return Capsule(self.radius, self.length)
+        return Plane()
 
 
 @dataclass(frozen=True)
@@ -194,7 +233,7 @@ class Scenario:
         duration: Simulated time [s] (>= dt).
         initial_state: Initial joint positions and velocities.
         goals: One or more goals; the first is the primary goal.
-        obstacles: Spherical obstacles (possibly none).
+        obstacles: Obstacles: spheres, boxes, cylinders, capsules, planes (possibly none).
         path: The file the scenario was loaded from; None if built from a mapping.
     """
 
@@ -280,8 +319,9 @@ def validate_for_robot(scenario: Scenario, robot: Robot) -> Scenario:
     zeros); goal
     positions have 2 numbers for planar robots and 3 otherwise (or one per axis of
     ``axes``, which must not contain z for planar robots); joint goals have ``dof``
-    entries; obstacle positions have 3 numbers (planar robots: 2 or 3); every link
-    named by the scenario exists.
+    entries; obstacle positions have 3 numbers (planar robots: 2 or 3; a plane's normal
+    must then have an x or y part: planar robots see shapes at the height of their
+    centre); every link named by the scenario exists.
 
     Args:
         scenario: A scenario from :func:`load_scenario` or :func:`scenario_from_dict`.
@@ -317,7 +357,12 @@ def validate_for_robot(scenario: Scenario, robot: Robot) -> Scenario:
     obstacle_lengths = (2, 3) if robot.planar else (3,)
     for i, obstacle in enumerate(scenario.obstacles):
         if obstacle.position is not None:
-            _check_length(obstacle.position, f"obstacles[{i}].position", obstacle_lengths)
+            key = "point" if obstacle.type == "plane" else "position"
+            _check_length(obstacle.position, f"obstacles[{i}].{key}", obstacle_lengths)
+        if robot.planar and obstacle.normal is not None and math.hypot(*obstacle.normal[:2]) < 1e-9:
+            raise ScenarioError(f"obstacles[{i}].normal", "a planar robot moves in the xy-plane, which a "
+                                f"horizontal plane never bounds; use a wall (normal with an x or y part), "
+                                f"got {list(obstacle.normal)}")
     return dataclasses.replace(scenario, goals=goals, initial_state=state)
 
 
@@ -575,22 +620,70 @@ def _axes(value: object, field: str) -> str:
     return axes
 
 
+#: Keys of each obstacle type besides ``type``: (required, optional); every type also
+#: takes exactly one of its placement key (``position``, a plane's ``point``) or ``trajectory``.
+_OBSTACLE_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "sphere": (("radius",), ()),
+    "box": (("size",), ("orientation",)),
+    "cylinder": (("radius", "length"), ("orientation",)),
+    "capsule": (("radius", "length"), ("orientation",)),
+    "plane": (("normal",), ()),
+}
+
+
 def _obstacle(value: object, field: str) -> ObstacleSpec:
-    """Parse one entry of ``obstacles``."""
+    """Parse one entry of ``obstacles``; the allowed keys depend on its ``type``."""
     data = _mapping(value, field)
-    _check_keys(data, field, required=("type", "radius"), optional=("position", "trajectory"))
-    _choice(data["type"], f"{field}.type", ("sphere",))
-    if ("position" in data) == ("trajectory" in data):
+    if "type" not in data:
+        raise ScenarioError(f"{field}.type", "missing required key")
+    kind = cast(ObstacleType, _choice(data["type"], f"{field}.type", OBSTACLE_TYPES))
+    placement = "point" if kind == "plane" else "position"
+    required, optional = _OBSTACLE_KEYS[kind]
+    _check_keys(data, field, ("type",) + required, optional + (placement, "trajectory"))
+    if (placement in data) == ("trajectory" in data):
         raise ScenarioError(
-            field, "expected exactly one of 'position' (static) or 'trajectory' (moving)"
+            field, f"expected exactly one of '{placement}' (static) or 'trajectory' (moving)"
         )
     moving = "trajectory" in data
+    normal = _normal(data["normal"], f"{field}.normal") if kind == "plane" else None
+    orientation = _orientation(data["orientation"], f"{field}.orientation") if "orientation" in data \
+        else IDENTITY_QUATERNION
     return ObstacleSpec(
-        type="sphere",
-        radius=_positive(data["radius"], f"{field}.radius"),
-        position=None if moving else _vector(data["position"], f"{field}.position", (2, 3)),
+        type=kind,
+        radius=_positive(data["radius"], f"{field}.radius") if "radius" in data else 0.0,
+        position=None if moving else _vector(data[placement], f"{field}.{placement}", (2, 3)),
         trajectory=_trajectory(data["trajectory"], f"{field}.trajectory") if moving else None,
+        size=_size(data["size"], f"{field}.size") if kind == "box" else None,
+        length=_positive(data["length"], f"{field}.length") if "length" in data else None,
+        orientation=quaternion_from_normal(normal) if normal is not None else orientation,
+        normal=normal,
     )
+
+
+def _size(value: object, field: str) -> tuple[float, float, float]:
+    """Parse a box's edge lengths: 3 positive numbers [m]."""
+    numbers = _vector(value, field, (3,))
+    lx, ly, lz = (_positive(number, f"{field}[{i}]") for i, number in enumerate(numbers))
+    return lx, ly, lz
+
+
+def _orientation(value: object, field: str) -> tuple[float, float, float, float]:
+    """Parse a quaternion [w, x, y, z]; a non-unit one is normalised, a zero one rejected."""
+    numbers = _vector(value, field, (4,))
+    try:
+        return unit_quaternion(numbers)
+    except ShapeError:
+        raise ScenarioError(field, f"expected a non-zero quaternion [w, x, y, z], got {list(numbers)}") from None
+
+
+def _normal(value: object, field: str) -> tuple[float, float, float]:
+    """Parse a plane's normal: 3 numbers, not all zero; returned unit length."""
+    numbers = _vector(value, field, (3,))
+    length = math.hypot(*numbers)
+    if length < 1e-9:
+        raise ScenarioError(field, f"expected a non-zero vector, got {list(numbers)}")
+    x, y, z = (number / length for number in numbers)
+    return x, y, z
 
 
 def _trajectory(value: object, field: str) -> Mapping[str, Any]:

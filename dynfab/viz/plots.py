@@ -15,6 +15,9 @@ from matplotlib.patches import Circle
 from mpl_toolkits.mplot3d import Axes3D
 from numpy.typing import ArrayLike, NDArray
 
+from dynfab.geometry.shapes import Shape
+from dynfab.viz.shape_outlines import shape_outline
+
 _PATH_COLOR = "C0"
 _GOAL_COLOR = "C2"
 _OBSTACLE_COLOR = "C3"
@@ -22,6 +25,10 @@ _AXIS_NAMES = "xyz"
 
 GoalMarker = tuple[ArrayLike, float]
 """``(position, tolerance)``: a goal point (d,) or a reference path (T, d), and [m]."""
+
+ShapeTrack = tuple[Shape, Sequence[float], ArrayLike]
+"""``(shape, orientation, centres)``: an obstacle shape, its quaternion (w, x, y, z) and its
+frame's origin over time (T, 3) [m]."""
 
 
 def plot_run(
@@ -35,6 +42,7 @@ def plot_run(
     times: ArrayLike | None = None,
     title: str = "dynfab run",
     base_path: ArrayLike | None = None,
+    shapes: Sequence[ShapeTrack] = (),
 ) -> None:
     """Save a PNG of a run.
 
@@ -54,11 +62,14 @@ def plot_run(
         times: Sample times, shape (T,) [s], for the clearance axis (else step indices).
         title: Figure title.
         base_path: Positions (T, 2) of a mobile base [m], drawn in the top view.
+        shapes: Box, cylinder, capsule and plane obstacles, drawn as wireframes at their
+            end position (with the path of their origin if they move).
     """
     positions = np.asarray(goal_link_positions, dtype=float)
     obstacles = np.asarray(obstacles_over_time, dtype=float)
     radii = np.asarray(obstacle_radii, dtype=float)
     markers = [(np.asarray(goal, dtype=float), float(tol)) for goal, tol in goals]
+    tracks = [(shape, orientation, np.asarray(centres, dtype=float)) for shape, orientation, centres in shapes]
     has_clearance = clearance_over_time is not None
     reference = markers[0][0] if markers and markers[0][0].ndim == 2 else None
     if planar:
@@ -67,6 +78,7 @@ def plot_run(
         grid = figure.add_gridspec(1, panels)
         top = figure.add_subplot(grid[0, 0])
         _draw_projection(top, (0, 1), positions, markers, obstacles, radii)
+        _draw_shapes(top, (0, 1), tracks)
         _draw_base(top, base_path)
         top.legend(loc="best", fontsize="small")
         extra = [grid[0, k] for k in range(1, panels)]
@@ -74,10 +86,11 @@ def plot_run(
         figure = Figure(figsize=(16.0, 10.0), layout="constrained")
         grid = figure.add_gridspec(2, 3)
         view = figure.add_subplot(grid[0, 0], projection="3d")
-        _draw_3d(view, positions, markers, obstacles, radii)
+        _draw_3d(view, positions, markers, obstacles, radii, tracks)
         for slot, axes in ((grid[0, 1], (0, 1)), (grid[0, 2], (1, 2)), (grid[1, 0], (0, 2))):
             ax = figure.add_subplot(slot)
             _draw_projection(ax, axes, positions, markers, obstacles, radii)
+            _draw_shapes(ax, axes, tracks)
             if axes == (0, 1):
                 _draw_base(ax, base_path)
                 ax.legend(loc="best", fontsize="small")
@@ -155,15 +168,33 @@ def _draw_projection(
     ax.grid(True, alpha=0.3)
 
 
+def _draw_shapes(ax: Axes, axes: tuple[int, int], tracks: list[tuple[Shape, Sequence[float], NDArray[np.float64]]]
+                 ) -> None:
+    """Wireframes of the shapes at their end positions, projected on two axes."""
+    i, j = axes
+    for k, (shape, orientation, centres) in enumerate(tracks):
+        if np.ptp(centres[:, [i, j]], axis=0).max() > 0.0:
+            ax.plot(centres[:, i], centres[:, j], ":", color=_OBSTACLE_COLOR, linewidth=1)
+        for n, line in enumerate(shape_outline(shape, orientation, centres[-1])):
+            label = "shape" if k == 0 and n == 0 else None
+            ax.plot(line[:, i], line[:, j], color=_OBSTACLE_COLOR, linewidth=1, alpha=0.6, label=label)
+
+
 def _draw_3d(
     ax: Axes3D,
     positions: NDArray[np.float64],
     goals: list[tuple[NDArray[np.float64], float]],
     obstacles: NDArray[np.float64],
     radii: NDArray[np.float64],
+    tracks: list[tuple[Shape, Sequence[float], NDArray[np.float64]]],
 ) -> None:
-    """Draw the path, goals (with tolerance spheres) and obstacles in 3-D."""
+    """Draw the path, goals (with tolerance spheres), obstacles and shapes in 3-D."""
     extent = [positions]
+    for shape, orientation, centres in tracks:
+        ax.plot(*centres.T, ":", color=_OBSTACLE_COLOR, linewidth=1)
+        for line in shape_outline(shape, orientation, centres[-1]):
+            ax.plot(line[:, 0], line[:, 1], line[:, 2], color=_OBSTACLE_COLOR, linewidth=1, alpha=0.6)
+            extent.append(line)
     for k, radius in enumerate(radii):
         centers = obstacles[:, k, :]
         ax.plot(*centers.T, ":", color=_OBSTACLE_COLOR, linewidth=1)
