@@ -1,7 +1,8 @@
-"""The ``dynfab`` command: ``run`` a scenario file, or a ``demo``.
+"""The ``dynfab`` command: ``run`` a scenario file, ``check`` a recorded run, or a ``demo``.
 
-Exit codes: 0 success (the run finished, whatever its metrics), 2 invalid input (one
-line on stderr naming the field), 1 unexpected failure.
+Exit codes: 0 success (the run finished, whatever its metrics; a check found nothing),
+2 invalid input (one line on stderr naming the field), 3 ``check`` found a collision, a
+self-collision or a joint outside its limits, 1 unexpected failure.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import sys
 from importlib.resources import files
 from pathlib import Path
 
+from dynfab.scenario.recording import RecordingError, load_recording, recording_of, save_recording
 from dynfab.scenario.runner import RunResult, link_path, run_scenario
 from dynfab.scenario.schema import PLANNERS, Scenario, ScenarioError, load_scenario
 
@@ -32,7 +34,14 @@ def main(argv: list[str] | None = None) -> int:
     run = commands.add_parser("run", help="run a scenario file in the embedded simulator")
     run.add_argument("file", type=Path, help="scenario YAML file")
     run.add_argument("--planner", choices=PLANNERS, help="override the scenario's planner")
+    run.add_argument("--record", type=Path, metavar="OUT.npz",
+                     help="write t, q, qdot, qddot (one row per control step) and joint_names")
     _output_options(run)
+    check = commands.add_parser("check", help="check a recorded run on the robot's collision meshes: collisions, "
+                                              "self-collisions, joint limits (exit 3 if any)")
+    check.add_argument("recording", type=Path, help="a recording written by dynfab run --record")
+    check.add_argument("file", type=Path, help="the scenario YAML file of the run")
+    check.add_argument("--json", action="store_true", help="print the findings as one JSON object on stdout")
     demo = commands.add_parser("demo", help="spheres: the Panda reaching a goal among spheres (default); "
                                             "dynamic: following a circle past a moving sphere, DF vs SF; "
                                             "boxer: a differential-drive base among discs; "
@@ -49,6 +58,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.command == "experiment":
         return _experiment(args.name, args.runs, args.seed, args.out, args.jobs)
+    if args.command == "check":
+        return _check(args.recording, args.file, args.json)
     if args.command == "run":
         path, planners = args.file, [args.planner]
     else:
@@ -63,6 +74,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"dynfab: error: {error}", file=sys.stderr)
         return 2
     _report(results, args.json)
+    if getattr(args, "record", None) is not None:
+        _record(results[0], args.record)
     if args.plot is not None:
         _plot(results[0], args.plot)
         print(f"dynfab: plot written to {args.plot}", file=sys.stderr)
@@ -103,6 +116,40 @@ def _experiment(name: str, runs: int, seed: int, out: Path | None, jobs: int | N
     print(f"dynfab: {result.executed} runs executed; wrote {out}/runs.jsonl, runs.csv, summary.md, summary.json, "
           f"scenarios/ and plots/", file=sys.stderr)
     return 0
+
+
+def _record(result: RunResult, path: Path) -> None:
+    """Write the run's recording (scenario/recording.py) to ``path``."""
+    joints = result.robot.kinematics.joint_names
+    velocities = ("v", "omega") + joints[3:] if result.robot.base is not None else joints
+    save_recording(path, recording_of(result.record, joints, velocities, result.scenario.dt))
+    print(f"dynfab: recording written to {path}", file=sys.stderr)
+
+
+def _check(recording_path: Path, scenario_path: Path, as_json: bool) -> int:
+    """``dynfab check``: 0 if the recording is clean, 3 if not, 2 on invalid input."""
+    from dynfab.scenario.recording_check import check_recording
+
+    try:
+        report = check_recording(load_scenario(scenario_path), load_recording(recording_path))
+    except (ScenarioError, RecordingError) as error:
+        print(f"dynfab: error: {error}", file=sys.stderr)
+        return 2
+    findings = report.to_dict()
+    if as_json:
+        print(json.dumps(findings))
+    else:
+        print(f"{recording_path}: {findings['samples']} samples, "
+              f"{'no collision, no self-collision, joints within limits' if report.ok else 'VIOLATIONS'}")
+        print(f"  clearance {_shown(report.clearance)} m, min self distance {_shown(report.min_self_distance)} m")
+        for key in ("collisions", "self_collisions"):
+            for c in findings[key]:
+                print(f"  {key[:-1].replace('_', '-')}: {c['link']} - {c['other']} from t = {c['first_time']:.3f} s, "
+                      f"{c['samples']} samples, distance {c['distance']:.4g} m")
+        for v in findings["joint_limit_violations"]:
+            print(f"  joint limit: {v['joint']} from t = {v['first_time']:.3f} s, {v['samples']} samples, "
+                  f"worst {v['worst']:.6g} outside [{v['lower']:.6g}, {v['upper']:.6g}]")
+    return 0 if report.ok else 3
 
 
 def _run(path: Path, scenario: Scenario) -> RunResult:
@@ -151,9 +198,9 @@ def _report(results: list[RunResult], as_json: bool) -> None:
             print(json.dumps({result.scenario.planner: m for result, m in zip(results, metrics)}))
         return
     if len(results) > 1:
-        print(f"{'':>15}  " + "".join(f"{result.scenario.planner:>16}" for result in results))
+        print(f"{'':>17}  " + "".join(f"{result.scenario.planner:>16}" for result in results))
     for key in metrics[0]:
-        print(f"{key:>15}: " + "".join(f"{_shown(m[key]):>16}" for m in metrics))
+        print(f"{key:>17}: " + "".join(f"{_shown(m[key]):>16}" for m in metrics))
 
 
 def _shown(value: object) -> str:

@@ -30,6 +30,12 @@ class Metrics:
             tolerance [m]; None for other goals or if never within tolerance.
         solver_time_ms: Mean wall time of one controller call [ms].
         steps: Number of control steps.
+        sphere_clearance: The sphere figure of ``clearance`` [m], kept when ``clearance``
+            comes from collision meshes (scenario/exact_metrics.py); None without obstacles.
+        self_collision: Two checked links touched (collision meshes); None for robots
+            measured by spheres.
+        min_self_distance: Smallest distance between checked links [m] (collision
+            meshes); None for robots measured by spheres.
     """
 
     success: bool
@@ -41,6 +47,9 @@ class Metrics:
     summed_error: float | None
     solver_time_ms: float
     steps: int
+    sphere_clearance: float | None = None
+    self_collision: bool | None = None
+    min_self_distance: float | None = None
 
     def to_dict(self) -> dict[str, bool | int | float | None]:
         """The metrics as a JSON-ready dict with the keys of DESIGN.md section 5."""
@@ -103,6 +112,7 @@ def compute_metrics(
         summed_error=_mean_from(errors, reached) if path_goal else None,
         solver_time_ms=float(np.mean(record.solver_time)) * 1e3,
         steps=record.steps,
+        sphere_clearance=clearance,
     )
 
 
