@@ -7,12 +7,14 @@ the link frame. Each mesh is kept twice, as
   inside (the penetration depth), in a few microseconds; since a mesh lies inside its
   hull, the hull distance is a lower bound of the mesh distance;
 - the mesh itself (``coal.BVHModelOBBRSS``): exact but about 10-50 times slower, and it
-  only knows surfaces: no penetration depth, and a mesh wholly inside another mesh is
-  not seen.
+  only knows surfaces: no penetration depth, and a solid wholly inside a mesh does not
+  cross its surface.
 
 :func:`exact_distance` combines them: the true mesh distance when the hulls are apart
 or the meshes do not touch although their hulls overlap, and the hulls' (non-positive)
-signed distance when the meshes do touch. Obstacle shapes (:mod:`dynfab.geometry.shapes`)
+signed distance when the meshes do touch — their surfaces intersect, or one lies wholly
+inside the other (then no surfaces cross; one point of the inner solid is tested against
+the outer mesh by ray parity, which needs closed meshes, as collision meshes are). Obstacle shapes (:mod:`dynfab.geometry.shapes`)
 are coal primitives, exact; a :class:`~dynfab.geometry.shapes.Plane` is the solid
 half-space ``z <= 0`` of its frame.
 
@@ -39,10 +41,11 @@ __all__ = [
 
 @dataclass(frozen=True, eq=False)
 class _MeshPart:
-    """One triangle mesh as its convex hull and as a BVH of its triangles."""
+    """One triangle mesh as its convex hull, as a BVH of its triangles and as is."""
 
     hull: coal.Convex
     mesh: coal.BVHModelOBBRSS
+    triangles: trimesh.Trimesh
 
 
 @dataclass(frozen=True, eq=False)
@@ -76,7 +79,7 @@ def mesh_set(meshes: Sequence[trimesh.Trimesh]) -> MeshSet:
     for mesh in meshes:
         if len(mesh.faces) == 0:
             raise ValueError("a collision mesh has no triangles")
-        parts.append(_MeshPart(_convex(mesh.convex_hull), _bvh(mesh)))
+        parts.append(_MeshPart(_convex(mesh.convex_hull), _bvh(mesh), mesh))
     vertices = np.concatenate([np.asarray(mesh.vertices, dtype=float) for mesh in meshes])
     center = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
     radius = float(np.max(np.linalg.norm(vertices - center, axis=1)))
@@ -136,30 +139,49 @@ def hull_distance(a: MeshSet, pose_a: NDArray[np.float64], b: Solid, pose_b: NDA
 def exact_distance(a: MeshSet, pose_a: NDArray[np.float64], b: Solid, pose_b: NDArray[np.float64]) -> float:
     """Distance [m] between ``a``'s meshes and ``b``; <= 0 when they touch.
 
-    For each pair of parts: if the hulls are apart, or the meshes do not intersect,
-    the exact distance between the meshes (>= 0); if the meshes intersect, the hulls'
-    signed distance (<= 0: its magnitude is the hulls' penetration depth). The result is
-    the minimum over the pairs.
+    For each pair of parts: if the hulls are apart, or the solids do not touch, the
+    exact distance between the meshes (>= 0); if they touch (surfaces intersect or one
+    is inside the other), the hulls' signed distance (<= 0: its magnitude is the hulls'
+    penetration depth). The result is the minimum over the pairs.
     """
     transform_a, transform_b = _transform(pose_a), _transform(pose_b)
     best = float("inf")
     for part in a.parts:
-        for hull, mesh in _hulls_and_meshes(b):
+        for hull, mesh, triangles in _parts_of(b):
             hull_gap = _distance(part.hull, transform_a, hull, transform_b)
-            if hull_gap > 0.0 or not _collide(part.mesh, transform_a, mesh, transform_b):
-                gap = max(_distance(part.mesh, transform_a, mesh, transform_b), max(hull_gap, 0.0))
-            else:
+            touching = hull_gap <= 0.0 and (
+                _collide(part.mesh, transform_a, mesh, transform_b)
+                or _inside(part, pose_a, b, triangles, pose_b))
+            if touching:
                 gap = min(hull_gap, 0.0)
+            else:
+                gap = max(_distance(part.mesh, transform_a, mesh, transform_b), hull_gap, 0.0)
             best = min(best, gap)
     return best
+
+
+def _inside(part: _MeshPart, pose_a: NDArray[np.float64], b: Solid, triangles: trimesh.Trimesh | None,
+            pose_b: NDArray[np.float64]) -> bool:
+    """Whether ``b`` lies inside the part, or (a mesh) the part inside ``b``, given that
+    their surfaces do not cross: then one point of the inner one decides."""
+    to_a = np.linalg.inv(np.asarray(pose_a, dtype=float)) @ np.asarray(pose_b, dtype=float)
+    if triangles is None:  # a primitive: its origin is inside it (a half-space never fits in a mesh)
+        return not isinstance(b, coal.Halfspace) and bool(part.triangles.contains(to_a[None, :3, 3])[0])
+    b_vertex = to_a[:3, :3] @ triangles.vertices[0] + to_a[:3, 3]
+    to_b = np.linalg.inv(to_a)
+    a_vertex = to_b[:3, :3] @ part.triangles.vertices[0] + to_b[:3, 3]
+    return bool(part.triangles.contains(b_vertex[None])[0] or triangles.contains(a_vertex[None])[0])
 
 
 def _hulls(b: Solid) -> list[coal.CollisionGeometry]:
     return [part.hull for part in b.parts] if isinstance(b, MeshSet) else [b]
 
 
-def _hulls_and_meshes(b: Solid) -> list[tuple[coal.CollisionGeometry, coal.CollisionGeometry]]:
-    return [(part.hull, part.mesh) for part in b.parts] if isinstance(b, MeshSet) else [(b, b)]
+def _parts_of(b: Solid) -> list[tuple[coal.CollisionGeometry, coal.CollisionGeometry, trimesh.Trimesh | None]]:
+    """(hull, BVH, triangles) of each part of a mesh set; (shape, shape, None) for a primitive."""
+    if isinstance(b, MeshSet):
+        return [(part.hull, part.mesh, part.triangles) for part in b.parts]
+    return [(b, b, None)]
 
 
 def _distance(a: coal.CollisionGeometry, transform_a: coal.Transform3s,
