@@ -142,8 +142,11 @@ def exact_distance(a: MeshSet, pose_a: NDArray[np.float64], b: Solid, pose_b: ND
     For each pair of parts: if the hulls are apart, or the solids do not touch, the
     exact distance between the meshes (>= 0); if they touch (surfaces intersect or one
     is inside the other), the hulls' signed distance (<= 0: its magnitude is the hulls'
-    penetration depth). The result is the minimum over the pairs.
+    penetration depth). The result is the minimum over the pairs. Against a half-space the
+    hulls are exact: the lowest point of a hull is one of the mesh's vertices.
     """
+    if isinstance(b, coal.Halfspace):
+        return hull_distance(a, pose_a, b, pose_b)
     transform_a, transform_b = _transform(pose_a), _transform(pose_b)
     best = float("inf")
     for part in a.parts:
@@ -165,8 +168,8 @@ def _inside(part: _MeshPart, pose_a: NDArray[np.float64], b: Solid, triangles: t
     """Whether ``b`` lies inside the part, or (a mesh) the part inside ``b``, given that
     their surfaces do not cross: then one point of the inner one decides."""
     to_a = np.linalg.inv(np.asarray(pose_a, dtype=float)) @ np.asarray(pose_b, dtype=float)
-    if triangles is None:  # a primitive: its origin is inside it (a half-space never fits in a mesh)
-        return not isinstance(b, coal.Halfspace) and bool(part.triangles.contains(to_a[None, :3, 3])[0])
+    if triangles is None:  # a bounded primitive: its origin is inside it
+        return bool(part.triangles.contains(to_a[None, :3, 3])[0])
     b_vertex = to_a[:3, :3] @ triangles.vertices[0] + to_a[:3, 3]
     to_b = np.linalg.inv(to_a)
     a_vertex = to_b[:3, :3] @ part.triangles.vertices[0] + to_b[:3, 3]
