@@ -34,8 +34,6 @@ def main(argv: list[str] | None = None) -> int:
     run = commands.add_parser("run", help="run a scenario file in the embedded simulator")
     run.add_argument("file", type=Path, help="scenario YAML file")
     run.add_argument("--planner", choices=PLANNERS, help="override the scenario's planner")
-    run.add_argument("--record", type=Path, metavar="OUT.npz",
-                     help="write t, q, qdot, qddot (one row per control step) and joint_names")
     _output_options(run)
     check = commands.add_parser("check", help="check a recorded run on the robot's collision meshes: collisions, "
                                               "self-collisions, joint limits (exit 3 if any)")
@@ -74,8 +72,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"dynfab: error: {error}", file=sys.stderr)
         return 2
     _report(results, args.json)
-    if getattr(args, "record", None) is not None:
-        _record(results[0], args.record)
+    if args.record is not None:
+        try:
+            _record(results[0], args.record)
+        except OSError as error:
+            print(f"dynfab: error: --record: cannot write {args.record} ({error.strerror})", file=sys.stderr)
+            return 2
     if args.plot is not None:
         _plot(results[0], args.plot)
         print(f"dynfab: plot written to {args.plot}", file=sys.stderr)
@@ -161,6 +163,8 @@ def _run(path: Path, scenario: Scenario) -> RunResult:
 def _output_options(parser: argparse.ArgumentParser, default_plot: Path | None = None) -> None:
     parser.add_argument("--json", action="store_true", help="print the metrics as one JSON object on stdout")
     parser.add_argument("--plot", type=Path, default=default_plot, help="write a PNG of the run")
+    parser.add_argument("--record", type=Path, metavar="OUT.npz",
+                        help="write t, q, qdot, qddot (one row per control step) and joint_names of the (first) run")
 
 
 class _ProgressBar:

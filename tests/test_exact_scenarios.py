@@ -242,3 +242,9 @@ def test_check_needs_meshes_and_the_robot_of_the_recording(hit: tuple[Path, Path
     (tmp_path / "broken.npz").write_text("not a zip")
     assert main(["check", str(tmp_path / "broken.npz"), str(scenario_file(tmp_path, UR5))]) == 2
     assert "cannot read a numpy .npz file" in capsys.readouterr().err
+
+
+def test_record_into_a_missing_folder_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "missing" / "run.npz"
+    assert main(["run", str(scenario_file(tmp_path, PANDA)), "--json", "--record", str(out)]) == 2
+    assert f"--record: cannot write {out}" in capsys.readouterr().err
