@@ -213,12 +213,13 @@ def _shown(value: object) -> str:
 
 def _plot(result: RunResult, path: Path) -> None:
     """Plot the goal link's workspace path; a goal given in other coordinates (joint
-    goals, a subset of axes) is not drawn, the link's full path is."""
+    goals, a subset of axes) or without a point (axis goals) is not drawn, the link's
+    full path is."""
     from dynfab.viz.plots import plot_run
 
     goal = result.scenario.goals[0]
     dimension = 2 if result.robot.planar else 3
-    if goal.type != "joint" and result.goal_positions.shape[1] == dimension:
+    if goal.type not in ("joint", "axis") and result.goal_positions.shape[1] == dimension:
         positions = result.goal_positions
         markers = [(result.goal_reference if goal.type == "path" else goal.position, goal.tolerance)]
     else:

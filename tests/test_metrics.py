@@ -19,8 +19,8 @@ from dynfab.sim import Record
 
 JSON_KEYS = [
     "success", "goal_reached", "collision", "time_to_goal", "clearance",
-    "path_length", "summed_error", "solver_time_ms", "steps", "sphere_clearance", "self_collision",
-    "min_self_distance",
+    "path_length", "summed_error", "solver_time_ms", "steps", "orientation_error", "sphere_clearance",
+    "self_collision", "min_self_distance",
 ]
 
 

@@ -195,7 +195,7 @@ def test_urdf_robot_resolved_against_scenario_directory(tmp_path: Path) -> None:
         (("goal",), {"type": "position"}, "goal: expected a list, got a mapping"),
         (("goal", 0), "panda_hand", "goal[0]: expected a mapping"),
         (("goal", 0, "positon"), [0, 0, 0], "goal[0].positon: unknown key"),
-        (("goal", 0, "type"), "pose", "goal[0].type: expected one of position, joint, path"),
+        (("goal", 0, "type"), "frame", "goal[0].type: expected one of position, joint, path, pose, axis"),
         (("goal", 0, "type"), _DELETE, "goal[0].type: missing required key"),
         (("goal", 0, "position"), _DELETE, "goal[0].position: missing required key"),
         (("goal", 0, "position"), [1, 2, 3, 4], "goal[0].position: expected 2 or 3 numbers, got 4"),

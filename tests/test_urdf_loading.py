@@ -189,7 +189,8 @@ def test_degenerate_collision_primitives_are_named(geometry: str, pattern: str) 
 
 
 def _panda_scenario(extra: dict) -> dict:
-    robot = {"urdf": str(arm_urdf("panda")), "goal_link": "panda_hand_tcp",
+    robot = {"urdf": "package://example-robot-data/robots/panda_description/urdf/panda.urdf",
+             "goal_link": "panda_hand_tcp",
              "collision_spheres": [{"link": "panda_hand", "center": [0, 0, 0.05], "radius": 0.08}]}
     return {"robot": {**robot, **extra}, "planner": "static-fabric", "dt": 0.01, "duration": 4.0,
             "initial_state": {"q": [1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0]},
@@ -210,6 +211,8 @@ def test_a_shipped_urdf_runs_with_chosen_and_locked_joints() -> None:
         run_scenario(scenario_from_dict(_panda_scenario({"joints": arm, "locked": {"gripper": 0.0}})))
     with pytest.raises(ScenarioError, match="robot.joints: 'shoulder' is not a movable joint"):
         run_scenario(scenario_from_dict(_panda_scenario({"joints": ["shoulder"]})))
+    with pytest.raises(ScenarioError, match="robot.urdf: file not found: package://nowhere/arm.urdf"):
+        scenario_from_dict(_panda_scenario({"urdf": "package://nowhere/arm.urdf"}))
 
 
 def test_link_meshes_are_placed_in_the_link_frame_and_bad_files_are_named(tmp_path: Path) -> None:

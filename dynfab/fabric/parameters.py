@@ -46,7 +46,8 @@ class RuntimeParameters:
     """Writable numpy views of the runtime parameters.
 
     Attributes:
-        goal_position: one view per goal, of the goal's dimension [m or rad].
+        goal_position: one view per goal, of the goal's dimension [m or rad; unit
+            directions for orientation goals].
         goal_weight: (n_goals,) weights; 0 deactivates a goal.
         obstacle_position: (slots, 3) sphere centres [m] (z ignored by planar robots).
         obstacle_radius: (slots,) radii [m]; 0 marks an unused slot.

@@ -5,7 +5,8 @@
 - one point map per robot collision sphere (forward kinematics, ``J``, ``J̇ q̇``);
 - obstacle leaves summed in each sphere's point space, then pulled once per sphere;
 - self-collision leaves on sphere pairs, joint-limit leaves on joints, a base energy;
-- goal forcing on the goal links (or joints);
+- goal forcing on the goal links (a point on the link, or the directions of link axes:
+  :mod:`dynfab.fabric.leaves.orientation`) or joints;
 - the root of :mod:`dynfab.fabric.speed_control` (static, or dynamic with goal and obstacle
   velocities and accelerations);
 - for a differential-drive base, the least-squares solve of :mod:`dynfab.fabric.nonholonomic`;
@@ -30,6 +31,7 @@ from dynfab.fabric.leaves.barrier import Barrier
 from dynfab.fabric.leaves.goal import GoalAttractor
 from dynfab.fabric.leaves.limits import JointLimitAvoidance
 from dynfab.fabric.leaves.obstacle import SphereObstacleAvoidance
+from dynfab.fabric.leaves.orientation import OrientationGoalConfig, direction_map
 from dynfab.fabric.leaves.self_collision import SelfCollisionAvoidance
 from dynfab.fabric.linalg import cholesky_solve
 from dynfab.fabric.maps import DifferentialMap, Reference, linear_map, selected
@@ -44,10 +46,13 @@ _AXES = "xyz"
 
 @dataclass(frozen=True)
 class GoalConfig:
-    """One sub-goal; the first goal of a planner is the primary one (it drives damping).
+    """One position or joint sub-goal; the first of these is the primary goal (its error
+    drives the goal damping of speed control).
 
     Attributes:
         link: goal link for a position goal; ``None`` for a joint-space goal.
+        offset: the goal point on ``link``, in the link frame [m] (e.g. a tool centre
+            point); the origin of the link by default.
         axes: controlled axes of the link position, e.g. ``"xyz"`` or ``"xy"``; ``None``
             means ``"xy"`` for planar robots and ``"xyz"`` otherwise.
         parent_link: express the link position in this link's frame (``None``: root).
@@ -57,6 +62,7 @@ class GoalConfig:
     """
 
     link: str | None = None
+    offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
     axes: str | None = None
     parent_link: str | None = None
     joints: tuple[int, ...] | None = None
@@ -69,7 +75,10 @@ class PlannerConfig:
     """What the planner is made of. ``None`` disables a component.
 
     Attributes:
-        goals: sub-goals (at least one).
+        goals: sub-goals (at least one): position or joint goals (:class:`GoalConfig`)
+            and orientation goals (:class:`OrientationGoalConfig`). The primary goal, whose
+            error drives speed control and whose reference velocity a dynamic planner
+            follows, is the first :class:`GoalConfig` (the first goal if there is none).
         obstacle_slots: number of sphere obstacle slots (fixed at build time).
         obstacle_avoidance: leaf of each robot sphere against each obstacle slot.
         joint_limits: joint-limit leaf.
@@ -89,7 +98,7 @@ class PlannerConfig:
             paper's plain least squares.
     """
 
-    goals: tuple[GoalConfig, ...]
+    goals: tuple[GoalConfig | OrientationGoalConfig, ...]
     obstacle_slots: int = 0
     obstacle_avoidance: SphereObstacleAvoidance | None = field(default_factory=SphereObstacleAvoidance)
     joint_limits: JointLimitAvoidance | None = field(default_factory=JointLimitAvoidance)
@@ -102,7 +111,7 @@ class PlannerConfig:
     steering: Steering | None = None
 
     @classmethod
-    def for_robot(cls, robot: Robot, goals: tuple[GoalConfig, ...], obstacle_slots: int = 0,
+    def for_robot(cls, robot: Robot, goals: tuple[GoalConfig | OrientationGoalConfig, ...], obstacle_slots: int = 0,
                   dynamic: bool = False) -> PlannerConfig:
         """The defaults for ``robot``: those of the fields, except that a robot on a
         differential-drive base, which cannot sidestep, sees obstacles from 0.5 m (instead
@@ -140,8 +149,7 @@ class FabricPlanner:
         self.config = config
         self._n = robot.kinematics.dof
         self._nv = self._n - 1 if robot.base is not None else self._n
-        goal_dimensions = tuple(len(self._goal_axes(goal)) if goal.link else len(self._goal_joints(goal))
-                                for goal in config.goals)
+        goal_dimensions = tuple(self._goal_dimension(goal) for goal in config.goals)
         self._layout = ParameterLayout(goal_dimensions, config.obstacle_slots, config.dynamic)
         self.function = self._build()
         self._input = np.zeros(self._n + self._nv + self._layout.size)
@@ -202,6 +210,11 @@ class FabricPlanner:
         return "a planner parameter (goal or obstacle) contains NaN or infinity"
 
     # -- construction -------------------------------------------------------------------
+
+    def _goal_dimension(self, goal: GoalConfig | OrientationGoalConfig) -> int:
+        if isinstance(goal, OrientationGoalConfig):
+            return goal.dimension
+        return len(self._goal_axes(goal)) if goal.link else len(self._goal_joints(goal))
 
     def _goal_axes(self, goal: GoalConfig) -> list[int]:
         axes = goal.axes if goal.axes is not None else ("xy" if self.robot.planar else "xyz")
@@ -300,27 +313,33 @@ class FabricPlanner:
     def _forcing(self, q: ca.SX, qdot: ca.SX, params: ParameterSymbols) -> tuple[Spec, ca.SX, ca.SX | None]:
         """Summed goal forcing, the primary goal's error norm, and (dynamic planners) the
         primary goal reference's velocity pulled to joint space."""
-        kin = self.robot.kinematics
+        goals = self.config.goals
+        primary_index = next((i for i, goal in enumerate(goals) if isinstance(goal, GoalConfig)), 0)
         total: Spec | None = None
-        primary: tuple[ca.SX, ca.SX | None] | None = None
-        for i, goal in enumerate(self.config.goals):
+        for i, goal in enumerate(goals):
             reference = params.goals[i]
-            if goal.link is not None:
-                position = kin.position(q, goal.link, parent=goal.parent_link)
-                axes = self._goal_axes(goal)
-                task = selected(DifferentialMap.from_expression(position, q, qdot), axes, ca.SX(len(axes), 1))
-            else:
-                joints = self._goal_joints(goal)
-                selector = np.zeros((len(joints), self._n))
-                selector[range(len(joints)), joints] = 1.0
-                task = linear_map(selector, ca.SX(len(joints), 1), q, qdot)
+            task = self._goal_task(goal, q, qdot)
             spec = goal.attractor.forcing(task, reference, params.goal_weight[i])
             total = spec if total is None else total + spec
-            if primary is None:
+            if i == primary_index:
                 distance = ca.norm_2(task.phi - reference.position)
                 velocity = self._pulled_reference_velocity(task, reference) if self.config.dynamic else None
-                primary = (distance, velocity)
-        return total, primary[0], primary[1]
+        return total, distance, velocity
+
+    def _goal_task(self, goal: GoalConfig | OrientationGoalConfig, q: ca.SX, qdot: ca.SX) -> DifferentialMap:
+        """The task map of a goal: directions of link axes, a point on a link (on the
+        goal's axes), or selected joints."""
+        kin = self.robot.kinematics
+        if isinstance(goal, OrientationGoalConfig):
+            return direction_map(kin.rotation(q, goal.link), goal.link_axes, q, qdot)
+        if goal.link is not None:
+            position = kin.position(q, goal.link, parent=goal.parent_link, offset=goal.offset)
+            axes = self._goal_axes(goal)
+            return selected(DifferentialMap.from_expression(position, q, qdot), axes, ca.SX(len(axes), 1))
+        joints = self._goal_joints(goal)
+        selector = np.zeros((len(joints), self._n))
+        selector[range(len(joints)), joints] = 1.0
+        return linear_map(selector, ca.SX(len(joints), 1), q, qdot)
 
     def _pulled_reference_velocity(self, task: DifferentialMap, reference: Reference) -> ca.SX:
         """``q̇̃ = Jᵀ (J Jᵀ + λ² I)⁻¹ ẋ̃``: the least-norm joint velocity that moves the task

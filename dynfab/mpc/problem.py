@@ -21,8 +21,10 @@ Over stages k = 0..H at times t_k = t + k h, with one slack ``s_k ≥ 0`` per st
           ||p_j(q_k) − c_o(t_k)|| − r_j − r_o ≥ δ − s_k  every robot sphere j, obstacle o
           q_min ≤ q_k ≤ q_max,  |u_k| ≤ u_max                             k = 1..H
 
-``e_i`` is the goal link's position on the goal's axes in its parent link's frame [m]
-(or the joint vector for joint goals [rad]), ``r_i(t_k)`` the goal's reference at the
+``e_i`` is the position of the goal point (the link origin plus a link-frame offset) on
+the goal's axes in its parent link's frame [m] (or the joint vector for joint goals
+[rad]; or, for orientation goals, the stacked world directions ``R a`` of link axes ``a``,
+so that ``||e_i − r_i||`` is the chord between unit directions), ``r_i(t_k)`` the goal's reference at the
 stage time, ``p_j`` a collision sphere's centre and ``c_o(t_k)`` an obstacle's centre
 at the stage time, ``δ ≥ 0`` the collision margin (``MpcConfig.collision_margin``,
 0 in the benchmark); planar robots (the point robot, ``boxer``) measure distances in x-y
@@ -76,16 +78,29 @@ class GoalTerm:
     """One goal of the cost.
 
     Attributes:
-        link: goal link of a position or path goal; ``None`` for a joint-space goal.
+        link: goal link of a position, path or orientation goal; ``None`` for a
+            joint-space goal.
         axes: indices (0 = x, 1 = y, 2 = z) of the controlled axes of ``link``.
         parent_link: frame in which the link position is measured (``None``: root).
         weight: ω, relative weight of this goal.
+        offset: the goal point in the link frame [m].
+        link_axes: an orientation goal: unit axes ``a`` in the link frame whose world
+            directions ``R a`` (stacked) follow the reference; ``()`` for a position goal.
     """
 
     link: str | None
     axes: tuple[int, ...] = (0, 1, 2)
     parent_link: str | None = None
     weight: float = 1.0
+    offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    link_axes: tuple[tuple[float, float, float], ...] = ()
+
+    @property
+    def dimension(self) -> int | None:
+        """Size of ``e_i``; ``None`` for a joint goal (the robot's dof)."""
+        if self.link is None:
+            return None
+        return 3 * len(self.link_axes) if self.link_axes else len(self.axes)
 
 
 @dataclass(frozen=True, eq=False)
@@ -176,7 +191,7 @@ class MpcProblem:
         self._n = robot.dof
         self._m = self.model.velocity_size
         self._dims = 2 if robot.planar else 3
-        self._goal_dims = tuple(len(g.axes) if g.link is not None else self._n for g in self.goals)
+        self._goal_dims = tuple(self._n if g.dimension is None else g.dimension for g in self.goals)
         self._slack_unit = min(1.0, _SLACK_COST / config.slack_weight) if config.slack_weight > 0 else 1.0
         self._index: dict[str, list[np.ndarray]] = {"q": [], "qdot": [], "qddot": [], "slack": []}
         self._size = 0
@@ -286,14 +301,19 @@ class MpcProblem:
         return ca.Function("spheres", [q], [centres[moving, :]]), self.robot.sphere_radii[moving]
 
     def _goal_functions(self) -> list[ca.Function]:
-        """Per goal, ``q ↦ e_i(q)``: link position on the goal's axes, or q itself."""
+        """Per goal, ``q ↦ e_i(q)``: goal point on the goal's axes, directions of link axes,
+        or q itself."""
         q = ca.SX.sym("q", self._n)
+        kinematics = self.robot.kinematics
         functions = []
         for i, goal in enumerate(self.goals):
             if goal.link is None:
                 task = q
+            elif goal.link_axes:
+                rotation = kinematics.rotation(q, goal.link)
+                task = ca.vertcat(*[ca.mtimes(rotation, ca.DM(list(axis))) for axis in goal.link_axes])
             else:
-                task = self.robot.kinematics.position(q, goal.link, parent=goal.parent_link)[list(goal.axes)]
+                task = kinematics.position(q, goal.link, parent=goal.parent_link, offset=goal.offset)[list(goal.axes)]
             functions.append(ca.Function(f"goal_{i}", [q], [task]))
         return functions
 

@@ -7,6 +7,9 @@ obstacle references into the planner's runtime parameters before calling it.
   (the paper's static-fabric baseline: no velocity, no acceleration).
 - ``dynamic-fabric``: goals and obstacles also pass their velocity and acceleration, which
   the dynamic pullback uses (paper section IV).
+
+Scenario goals become planner goals one to one, except a ``pose`` goal, which becomes two:
+the position of its point (first) and the orientation of its link, with the same weight.
 """
 
 from __future__ import annotations
@@ -15,8 +18,10 @@ from typing import Protocol
 
 import numpy as np
 
+from dynfab.fabric.leaves.orientation import FRAME_AXES, OrientationGoalConfig
 from dynfab.fabric.planner import FabricPlanner, GoalConfig, PlannerConfig
 from dynfab.motion.references import References
+from dynfab.motion.trajectories import StaticPoint, Trajectory
 from dynfab.mpc import GoalTerm, MpcConfig, MpcController, MpcProblem
 from dynfab.robots.robot import Robot
 from dynfab.scenario.references import goal_axes
@@ -36,7 +41,8 @@ class FabricController:
 
     Attributes:
         planner: the compiled planner.
-        references: the goal and obstacle trajectories.
+        references: the obstacle trajectories and the goal trajectories, one per planner
+            goal (see :func:`planner_references`).
     """
 
     def __init__(self, planner: FabricPlanner, references: References,
@@ -83,20 +89,37 @@ def make_controller(scenario: Scenario, robot: Robot, references: References) ->
     if scenario.planner not in _FABRIC_PLANNERS:
         raise ScenarioError("planner", f"{scenario.planner!r} is not available yet; use static-fabric, dynamic-fabric "
                             "or mpc")
-    config = PlannerConfig.for_robot(robot, tuple(_goal_config(goal) for goal in scenario.goals),
-                                     len(scenario.obstacles), _FABRIC_PLANNERS[scenario.planner])
+    goals = tuple(config for goal in scenario.goals for config in _goal_configs(goal))
+    config = PlannerConfig.for_robot(robot, goals, len(scenario.obstacles), _FABRIC_PLANNERS[scenario.planner])
     planner = FabricPlanner(robot, config)
     for k, obstacle in enumerate(scenario.obstacles):
         planner.parameters.obstacle_radius[k] = obstacle.radius
-    moving_goals = tuple(i for i, goal in enumerate(scenario.goals) if goal.type == "path")
+    references = planner_references(scenario, references)
+    moving_goals = tuple(i for i, goal in enumerate(references.goals) if not isinstance(goal, StaticPoint))
     moving_obstacles = tuple(k for k, obstacle in enumerate(scenario.obstacles) if obstacle.trajectory is not None)
     return FabricController(planner, references, moving_goals, moving_obstacles)
 
 
-def _goal_config(goal: GoalSpec) -> GoalConfig:
+def planner_references(scenario: Scenario, references: References) -> References:
+    """The references in planner-goal order: a pose goal's position, then its orientation."""
+    goals: list[Trajectory] = []
+    for i, goal in enumerate(scenario.goals):
+        goals.append(references.goals[i])
+        if goal.type == "pose":
+            goals.append(references.orientation(i))
+    return References(tuple(goals), references.obstacles)
+
+
+def _goal_configs(goal: GoalSpec) -> tuple[GoalConfig | OrientationGoalConfig, ...]:
     if goal.type == "joint":
-        return GoalConfig(link=None, weight=goal.weight)
-    return GoalConfig(link=goal.link, axes=goal.axes, parent_link=goal.parent_link, weight=goal.weight)
+        return (GoalConfig(link=None, weight=goal.weight),)
+    if goal.type == "axis":
+        return (OrientationGoalConfig(link=goal.link, link_axes=(goal.axis,), weight=goal.weight),)
+    position = GoalConfig(link=goal.link, offset=goal.offset, axes=goal.axes, parent_link=goal.parent_link,
+                          weight=goal.weight)
+    if goal.type == "pose":
+        return (position, OrientationGoalConfig(link=goal.link, link_axes=FRAME_AXES, weight=goal.weight))
+    return (position,)
 
 
 def make_mpc_controller(scenario: Scenario, robot: Robot, references: References,
@@ -110,13 +133,21 @@ def make_mpc_controller(scenario: Scenario, robot: Robot, references: References
         references: the scenario's goal and obstacle trajectories.
         config: horizon, weights and solver; the benchmark's defaults if ``None``.
     """
-    goals = tuple(_goal_term(goal, robot) for goal in scenario.goals)
+    goals = tuple(term for goal in scenario.goals for term in _goal_terms(goal, robot))
     problem = MpcProblem(robot, goals, len(scenario.obstacles), config or MpcConfig())
-    return MpcController(problem, references, np.array([o.radius for o in scenario.obstacles]))
+    return MpcController(problem, planner_references(scenario, references),
+                         np.array([o.radius for o in scenario.obstacles]))
 
 
-def _goal_term(goal: GoalSpec, robot: Robot) -> GoalTerm:
+def _goal_terms(goal: GoalSpec, robot: Robot) -> tuple[GoalTerm, ...]:
+    """The MPC's goal terms of a scenario goal, in the order of :func:`planner_references`."""
     if goal.type == "joint":
-        return GoalTerm(link=None, weight=goal.weight)
-    return GoalTerm(link=goal.link or robot.goal_link, axes=tuple(goal_axes(goal, robot)),
-                    parent_link=goal.parent_link, weight=goal.weight)
+        return (GoalTerm(link=None, weight=goal.weight),)
+    link = goal.link or robot.goal_link
+    if goal.type == "axis":
+        return (GoalTerm(link=link, weight=goal.weight, link_axes=(goal.axis,)),)
+    position = GoalTerm(link=link, axes=tuple(goal_axes(goal, robot)), parent_link=goal.parent_link,
+                        weight=goal.weight, offset=goal.offset)
+    if goal.type == "pose":
+        return (position, GoalTerm(link=link, weight=goal.weight, link_axes=FRAME_AXES))
+    return (position,)

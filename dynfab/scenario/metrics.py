@@ -30,6 +30,9 @@ class Metrics:
             tolerance [m]; None for other goals or if never within tolerance.
         solver_time_ms: Mean wall time of one controller call [ms].
         steps: Number of control steps.
+        orientation_error: Final orientation error of the primary pose or axis goal (else
+            of the first one) [rad]: the angle of ``R_dᵀ R`` for a pose, the angle between
+            ``R a`` and ``d`` for an axis; None without such goals.
         sphere_clearance: The sphere figure of ``clearance`` [m], kept when ``clearance``
             comes from collision meshes (scenario/exact_metrics.py); None without obstacles.
         self_collision: Two checked links touched (collision meshes); None for robots
@@ -47,6 +50,7 @@ class Metrics:
     summed_error: float | None
     solver_time_ms: float
     steps: int
+    orientation_error: float | None = None
     sphere_clearance: float | None = None
     self_collision: bool | None = None
     min_self_distance: float | None = None
@@ -68,6 +72,8 @@ def compute_metrics(
     *,
     planar: bool = False,
     path_goal: bool = False,
+    orientation_errors: ArrayLike | None = None,
+    angle_tolerance: float | None = None,
 ) -> Metrics:
     """Compute the metrics of a run.
 
@@ -82,6 +88,10 @@ def compute_metrics(
         obstacle_radii: Their radii, shape (m,); m = 0 means no obstacles.
         planar: Measure every distance in the xy-plane.
         path_goal: ``goal`` is a path reference: report ``summed_error``.
+        orientation_errors: Orientation errors at ``record.t``, shape (T,) [rad], of the
+            goal ``orientation_error`` reports; None without orientation goals.
+        angle_tolerance: If given, the goal is reached only when also
+            ``orientation_errors < angle_tolerance`` [rad] (a primary pose or axis goal).
 
     Returns:
         The metrics.
@@ -96,7 +106,16 @@ def compute_metrics(
             f"goal_link_positions has {positions.shape[0]} samples, the record {record.t.shape[0]}"
         )
     errors = np.linalg.norm(positions - target, axis=-1)
-    reached = _first_within(errors, tolerance)
+    angles = None if orientation_errors is None else np.asarray(orientation_errors, dtype=float)
+    if angles is not None and angles.shape != errors.shape:
+        raise ValueError(f"orientation_errors has shape {angles.shape}, expected {errors.shape}")
+    if angle_tolerance is not None and angles is None:
+        raise ValueError("angle_tolerance needs orientation_errors")
+    within = errors < tolerance
+    if angle_tolerance is not None:
+        within &= angles < angle_tolerance
+    below = np.flatnonzero(within)
+    reached = int(below[0]) if below.size else None
     clearances = clearance_over_time(
         sphere_centers, sphere_radii, obstacle_centers, obstacle_radii, planar=planar
     )
@@ -112,6 +131,7 @@ def compute_metrics(
         summed_error=_mean_from(errors, reached) if path_goal else None,
         solver_time_ms=float(np.mean(record.solver_time)) * 1e3,
         steps=record.steps,
+        orientation_error=None if angles is None else float(angles[-1]),
         sphere_clearance=clearance,
     )
 

@@ -14,6 +14,8 @@ from typing import Any
 
 import numpy as np
 
+from dynfab.geometry.shapes import quaternion_matrix
+from dynfab.motion.directions import RotatingDirections
 from dynfab.motion.references import References
 from dynfab.motion.global_planning import GlobalPlanningError, plan_path
 from dynfab.robots.robot import Robot
@@ -53,12 +55,27 @@ def scenario_references(scenario: Scenario, robot: Robot) -> References:
             raise ScenarioError(f"obstacles[{k}].trajectory", f"expected {' or '.join(map(str, allowed))} "
                                 f"coordinates, got {trajectory.dimension}")
         obstacles.append(trajectory)
-    return References(goals, tuple(obstacles))
+    orientations = tuple(_orientation_reference(goal) for goal in scenario.goals)
+    return References(goals, tuple(obstacles), orientations)
+
+
+def _orientation_reference(goal: GoalSpec) -> Trajectory | None:
+    """Stacked target directions: the columns of a pose goal's rotation, or an axis
+    goal's direction (turning at its angular velocity, if any)."""
+    if goal.type == "pose":
+        return StaticPoint(tuple(quaternion_matrix(goal.orientation).T.ravel()))
+    if goal.type == "axis" and goal.angular_velocity is not None:
+        return RotatingDirections((goal.direction,), goal.angular_velocity)
+    if goal.type == "axis":
+        return StaticPoint(goal.direction)
+    return None
 
 
 def _goal_reference(scenario: Scenario, robot: Robot, index: int) -> Trajectory:
     goal = scenario.goals[index]
     field = f"goal[{index}].trajectory"
+    if goal.type == "axis":
+        return _orientation_reference(goal)
     if goal.type != "path":
         return StaticPoint(tuple(goal.position))
     dimension = len(goal_axes(goal, robot))
@@ -94,7 +111,7 @@ def _rrt_reference(scenario: Scenario, robot: Robot, goal: GoalSpec, field: str)
                             "rrt paths are planned in the world frame; remove parent_link")
     axes = goal_axes(goal, robot)
     start_position = np.asarray(robot.kinematics.position(np.asarray(scenario.initial_state.q),
-                                                          goal.link)).ravel()[axes]
+                                                          goal.link, offset=goal.offset)).ravel()[axes]
     if len(target) != len(axes):
         raise ScenarioError(f"{field}.goal", f"expected {len(axes)} numbers, got {len(target)}")
     spheres = [(np.asarray(o.position, dtype=float)[axes], o.radius)

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from dynfab.geometry.orientation import direction_angle, rotation_angle
 from dynfab.motion.references import References
 from dynfab.robots.mesh_sweep import MeshSweep, sweep_meshes
 from dynfab.scenario.controllers import Controller, make_controller
@@ -24,6 +25,7 @@ from dynfab.sim import DifferentialDrive, DoubleIntegrator, Record, simulate
 
 #: integration sub-steps per control period for a differential-drive base (arcs)
 BASE_SUBSTEPS = 10
+_ORIENTED = ("pose", "axis")
 
 
 @dataclass(frozen=True)
@@ -35,8 +37,10 @@ class RunResult:
         robot: the robot.
         record: states and commands over time.
         metrics: the run's metrics.
-        goal_positions: the primary goal's task coordinates over time (T, d).
-        goal_reference: the primary goal's reference over time (T, d).
+        goal_positions: the primary goal's task coordinates over time (T, d): the goal
+            point on its axes (the link origin for an axis goal), or the joints.
+        goal_reference: the primary goal's reference over time (T, d) (an axis goal has
+            no position target: its ``goal_positions``).
         obstacle_centers: obstacle centres over time (T, m, 3).
         clearance: minimum clearance at each sample (T,) [m] (inf without obstacles).
         controller: the controller that ran (its planner, fallback count, ...).
@@ -103,12 +107,14 @@ def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None
                       model=model, progress=progress)
     goal = scenario.goals[0]
     goal_positions = _goal_coordinates(robot, scenario, record.q)
-    goal_reference = references.goals[0].sample(record.t)[0]
+    goal_reference = goal_positions if goal.type == "axis" else references.goals[0].sample(record.t)[0]
+    orientation_errors = _orientation_errors(robot, scenario, references, record.q, record.t)
     centres, radii = _sphere_centres(robot, record.q)
     obstacle_centers = obstacle_centres(references, record.t)
     metrics = compute_metrics(record, goal_positions, goal_reference, goal.tolerance,
                               centres, radii, obstacle_centers, obstacle_radii, planar=robot.planar,
-                              path_goal=goal.type == "path")
+                              path_goal=goal.type == "path", orientation_errors=orientation_errors,
+                              angle_tolerance=goal.angle_tolerance if goal.type in _ORIENTED else None)
     solve_times = getattr(controller, "solve_times", None)
     if solve_times:  # a planner that re-plans less often than it is called (MPC)
         metrics = dataclasses.replace(metrics, solver_time_ms=1e3 * float(np.mean(solve_times)))
@@ -136,8 +142,25 @@ def _goal_coordinates(robot: Robot, scenario: Scenario, qs: np.ndarray) -> np.nd
     if goal.type == "joint":
         return qs.copy()
     q = ca.SX.sym("q", robot.kinematics.dof)
-    position = robot.kinematics.position(q, goal.link, parent=goal.parent_link)
+    position = robot.kinematics.position(q, goal.link, parent=goal.parent_link, offset=goal.offset)
     return _evaluate_over(q, position[goal_axes(goal, robot)], qs)
+
+
+def _orientation_errors(robot: Robot, scenario: Scenario, references: References, qs: np.ndarray,
+                        times: np.ndarray) -> np.ndarray | None:
+    """Orientation error over time [rad] of the primary pose or axis goal, else of the
+    first one; None without such goals."""
+    index = next((i for i, goal in enumerate(scenario.goals) if goal.type in _ORIENTED), None)
+    if index is None:
+        return None
+    goal = scenario.goals[index]
+    q = ca.SX.sym("q", robot.kinematics.dof)
+    rows = _evaluate_over(q, ca.reshape(robot.kinematics.rotation(q, goal.link).T, 9, 1), qs)
+    rotations = rows.reshape(-1, 3, 3)
+    targets = references.orientation(index).sample(times)[0]
+    if goal.type == "axis":
+        return direction_angle(rotations @ np.asarray(goal.axis), targets)
+    return rotation_angle(rotations, np.swapaxes(targets.reshape(-1, 3, 3), 1, 2))
 
 
 def link_path(robot: Robot, link: str, qs: np.ndarray) -> np.ndarray:

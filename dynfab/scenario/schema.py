@@ -23,6 +23,9 @@ from typing import TYPE_CHECKING, Any, Literal, cast
 import yaml
 
 from dynfab.describe import describe
+from dynfab.geometry.orientation import unit_vector
+from dynfab.geometry.shapes import ShapeError, quaternion_from_rpy, unit_quaternion
+from dynfab.robots.mesh_paths import resolve_uri
 
 if TYPE_CHECKING:
     from dynfab.robots.robot import Robot
@@ -30,9 +33,13 @@ if TYPE_CHECKING:
 BUILTIN_ROBOTS: tuple[str, ...] = ("panda", "point", "boxer", "boxer-panda")
 PLANNERS: tuple[str, ...] = ("static-fabric", "dynamic-fabric", "mpc")
 TRAJECTORY_TYPES: tuple[str, ...] = ("linear", "circle", "polynomial", "expression", "spline", "rrt")
-GoalType = Literal["position", "joint", "path"]
-_GOAL_TYPES: tuple[str, ...] = ("position", "joint", "path")
-_WORKSPACE_KEYS = ("link", "parent_link", "axes", "tolerance", "weight")
+GoalType = Literal["position", "joint", "path", "pose", "axis"]
+_GOAL_TYPES: tuple[str, ...] = ("position", "joint", "path", "pose", "axis")
+_WORKSPACE_KEYS = ("link", "parent_link", "axes", "tolerance", "weight", "offset")
+_POSE_KEYS = ("link", "offset", "orientation", "rpy", "tolerance", "angle_tolerance", "weight")
+_AXIS_KEYS = ("link", "angle_tolerance", "weight", "angular_velocity")
+#: default ``angle_tolerance`` of pose and axis goals [rad]
+DEFAULT_ANGLE_TOLERANCE = 0.1
 
 
 class ScenarioError(ValueError):
@@ -70,19 +77,33 @@ class GoalSpec:
     """One weighted sub-goal; the first goal of a scenario is the primary one.
 
     Attributes:
-        type: ``position`` (a workspace point for ``link``), ``joint`` (a configuration)
-            or ``path`` (``link`` follows the reference ``trajectory``).
+        type: ``position`` (a workspace point for ``link``), ``joint`` (a configuration),
+            ``path`` (``link`` follows the reference ``trajectory``), ``pose`` (a point
+            and an orientation for ``link``) or ``axis`` (a link axis along a world
+            direction).
         link: Goal link; None means the robot's goal link (see :func:`validate_for_robot`).
             Always None for joint goals.
         position: Target point [m] in the ``parent_link`` frame (one number per axis of
             ``axes`` if given, else x, y for planar robots and x, y, z otherwise), or the
             target configuration for joint goals. None for path goals.
-        tolerance: Reached when ||x_link - x_goal|| < tolerance [m] (joint goals: [rad]).
+        tolerance: Reached when ||x_link - x_goal|| < tolerance [m] (joint goals: [rad];
+            unused by axis goals).
         weight: Relative weight of this goal (> 0).
         parent_link: Frame in which the target is expressed; None is the robot root.
         axes: The workspace axes constrained by the goal, a subset of ``"xyz"``; None: all.
         trajectory: Reference of a path goal, a read-only mapping with a ``type`` among
             :data:`TRAJECTORY_TYPES`; None for the other goal types.
+        offset: The goal point on ``link``, in the link frame [m] (a tool centre point);
+            position, path and pose goals.
+        orientation: Target rotation of ``link`` in the world as a unit quaternion
+            ``(w, x, y, z)`` (pose goals; ``rpy`` in the file is converted); else None.
+        angle_tolerance: Pose and axis goals: reached when the orientation error is
+            below this [rad].
+        axis: Axis goals: the unit axis in the link frame; else None.
+        direction: Axis goals: the unit world direction the axis should point along at
+            t = 0; else None.
+        angular_velocity: Axis goals: the direction turns at this angular velocity
+            [rad/s] (world frame); None: at rest.
     """
 
     type: GoalType
@@ -93,6 +114,12 @@ class GoalSpec:
     parent_link: str | None = None
     axes: str | None = None
     trajectory: Mapping[str, Any] | None = None
+    offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    orientation: tuple[float, float, float, float] | None = None
+    angle_tolerance: float = DEFAULT_ANGLE_TOLERANCE
+    axis: tuple[float, float, float] | None = None
+    direction: tuple[float, float, float] | None = None
+    angular_velocity: tuple[float, float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -133,7 +160,8 @@ class UrdfRobotSpec:
     """A user robot described by a URDF file.
 
     Attributes:
-        urdf: Path of the URDF file (resolved against the scenario file's directory).
+        urdf: Path of the URDF file: relative to the scenario file's directory, absolute, or
+            ``package://NAME/...`` (see :func:`dynfab.robots.mesh_paths.resolve_uri`).
         goal_link: Default goal link of the robot.
         collision_spheres: Spheres used for obstacle and self-collision avoidance.
         self_collision_pairs: Pairs (i, j) of indices into ``collision_spheres``.
@@ -304,6 +332,8 @@ def _goal_for_robot(
         return goal
     link = robot.goal_link if goal.link is None else goal.link
     _check_link(link, f"{field}.link", links)
+    if robot.planar and goal.type in ("pose", "axis"):
+        raise ScenarioError(f"{field}.type", f"{goal.type} goals need a robot in space; this robot is planar")
     if goal.parent_link is not None:
         _check_link(goal.parent_link, f"{field}.parent_link", links)
     if robot.planar and goal.axes is not None and "z" in goal.axes:
@@ -338,11 +368,14 @@ def _robot(value: object, field: str, base_dir: Path) -> str | UrdfRobotSpec:
         optional=("collision_spheres", "self_collision_pairs", "planar", "package_dirs", "joints",
                   "locked"),
     )
-    urdf = base_dir / _string(data["urdf"], f"{field}.urdf")
-    if not urdf.is_file():
-        raise ScenarioError(f"{field}.urdf", f"file not found: {urdf}")
     package_dirs = tuple(base_dir / _string(d, f"{field}.package_dirs[{i}]")
                          for i, d in enumerate(_list(data.get("package_dirs", []), f"{field}.package_dirs")))
+    uri = _string(data["urdf"], f"{field}.urdf")
+    urdf = resolve_uri(uri, base_dir, package_dirs)
+    if urdf is None:
+        raise ScenarioError(f"{field}.urdf", f"file not found: {uri} (a path relative to the scenario "
+                            "file, absolute, or package://NAME/... found through package_dirs, "
+                            "DYNFAB_PACKAGE_PATH or an installed example-robot-data / pybullet)")
     joints = None
     if "joints" in data:
         joints = tuple(_string(j, f"{field}.joints[{i}]")
@@ -423,6 +456,10 @@ def _goal(value: object, field: str) -> GoalSpec:
     goal_type = cast(GoalType, _choice(data["type"], f"{field}.type", _GOAL_TYPES))
     if goal_type == "joint":
         _check_keys(data, field, ("type", "position"), ("tolerance", "weight"))
+    elif goal_type == "pose":
+        return _pose_goal(data, field)
+    elif goal_type == "axis":
+        return _axis_goal(data, field)
     else:
         target = "position" if goal_type == "position" else "trajectory"
         _check_keys(data, field, ("type", target), _WORKSPACE_KEYS)
@@ -444,7 +481,76 @@ def _goal(value: object, field: str) -> GoalSpec:
         parent_link=_optional_string(data, "parent_link", field),
         axes=axes,
         trajectory=trajectory,
+        offset=_offset(data, field),
     )
+
+
+def _pose_goal(data: Mapping[str, Any], field: str) -> GoalSpec:
+    """Parse a ``pose`` goal: a point on the link and a rotation (quaternion or rpy)."""
+    _check_keys(data, field, ("type", "position"), _POSE_KEYS)
+    if ("orientation" in data) == ("rpy" in data):
+        raise ScenarioError(field, "expected exactly one of 'orientation' [w, x, y, z] or 'rpy' [roll, pitch, yaw]")
+    try:
+        if "orientation" in data:
+            orientation = unit_quaternion(_vector(data["orientation"], f"{field}.orientation", (4,)))
+        else:
+            orientation = quaternion_from_rpy(_vector(data["rpy"], f"{field}.rpy", (3,)))
+    except ShapeError as error:
+        key = "orientation" if "orientation" in data else "rpy"
+        raise ScenarioError(f"{field}.{key}", str(error)) from None
+    return GoalSpec(
+        type="pose",
+        link=_optional_string(data, "link", field),
+        position=_vector(data["position"], f"{field}.position", (3,)),
+        tolerance=_positive(data.get("tolerance", 0.05), f"{field}.tolerance"),
+        weight=_positive(data.get("weight", 1.0), f"{field}.weight"),
+        offset=_offset(data, field),
+        orientation=orientation,
+        angle_tolerance=_angle_tolerance(data, field),
+    )
+
+
+def _axis_goal(data: Mapping[str, Any], field: str) -> GoalSpec:
+    """Parse an ``axis`` goal: a link axis that should point along a world direction."""
+    _check_keys(data, field, ("type", "axis", "direction"), _AXIS_KEYS)
+    angular_velocity = None
+    if "angular_velocity" in data:
+        x, y, z = _vector(data["angular_velocity"], f"{field}.angular_velocity", (3,))
+        angular_velocity = (x, y, z)
+    return GoalSpec(
+        type="axis",
+        link=_optional_string(data, "link", field),
+        weight=_positive(data.get("weight", 1.0), f"{field}.weight"),
+        axis=_unit(data["axis"], f"{field}.axis"),
+        direction=_unit(data["direction"], f"{field}.direction"),
+        angle_tolerance=_angle_tolerance(data, field),
+        angular_velocity=angular_velocity,
+    )
+
+
+def _offset(data: Mapping[str, Any], field: str) -> tuple[float, float, float]:
+    """``offset``: a point in the link frame [m], the origin if absent."""
+    if "offset" not in data:
+        return (0.0, 0.0, 0.0)
+    x, y, z = _vector(data["offset"], f"{field}.offset", (3,))
+    return (x, y, z)
+
+
+def _unit(value: object, field: str) -> tuple[float, float, float]:
+    """A non-zero 3-vector, normalised."""
+    vector = _vector(value, field, (3,))
+    try:
+        return unit_vector(vector)
+    except ValueError:
+        raise ScenarioError(field, "expected a non-zero direction, got [0, 0, 0]") from None
+
+
+def _angle_tolerance(data: Mapping[str, Any], field: str) -> float:
+    """``angle_tolerance`` in (0, π] [rad]."""
+    tolerance = _positive(data.get("angle_tolerance", DEFAULT_ANGLE_TOLERANCE), f"{field}.angle_tolerance")
+    if tolerance > math.pi:
+        raise ScenarioError(f"{field}.angle_tolerance", f"expected at most pi rad, got {tolerance:g}")
+    return tolerance
 
 
 def _goal_position(value: object, field: str, axes: str | None) -> tuple[float, ...]:
