@@ -1,7 +1,8 @@
-"""The ``dynfab`` command: ``run`` a scenario file, or a ``demo``.
+"""The ``dynfab`` command: ``run`` a scenario file, ``check`` a recorded run, or a ``demo``.
 
-Exit codes: 0 success (the run finished, whatever its metrics), 2 invalid input (one
-line on stderr naming the field), 1 unexpected failure.
+Exit codes: 0 success (the run finished, whatever its metrics; a check found nothing),
+2 invalid input (one line on stderr naming the field), 3 ``check`` found a collision, a
+self-collision or a joint outside its limits, 1 unexpected failure.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import sys
 from importlib.resources import files
 from pathlib import Path
 
+from dynfab.scenario.recording import RecordingError, load_recording, recording_of, save_recording
 from dynfab.scenario.runner import RunResult, link_path, run_scenario
 from dynfab.scenario.schema import PLANNERS, Scenario, ScenarioError, load_scenario
 
@@ -33,6 +35,11 @@ def main(argv: list[str] | None = None) -> int:
     run.add_argument("file", type=Path, help="scenario YAML file")
     run.add_argument("--planner", choices=PLANNERS, help="override the scenario's planner")
     _output_options(run)
+    check = commands.add_parser("check", help="check a recorded run on the robot's collision meshes: collisions, "
+                                              "self-collisions, joint limits (exit 3 if any)")
+    check.add_argument("recording", type=Path, help="a recording written by dynfab run --record")
+    check.add_argument("file", type=Path, help="the scenario YAML file of the run")
+    check.add_argument("--json", action="store_true", help="print the findings as one JSON object on stdout")
     demo = commands.add_parser("demo", help="spheres: the Panda reaching a goal among spheres (default); "
                                             "dynamic: following a circle past a moving sphere, DF vs SF; "
                                             "boxer: a differential-drive base among discs; "
@@ -49,6 +56,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.command == "experiment":
         return _experiment(args.name, args.runs, args.seed, args.out, args.jobs)
+    if args.command == "check":
+        return _check(args.recording, args.file, args.json)
     if args.command == "run":
         path, planners = args.file, [args.planner]
     else:
@@ -63,6 +72,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"dynfab: error: {error}", file=sys.stderr)
         return 2
     _report(results, args.json)
+    if args.record is not None:
+        try:
+            _record(results[0], args.record)
+        except OSError as error:
+            print(f"dynfab: error: --record: cannot write {args.record} ({error.strerror})", file=sys.stderr)
+            return 2
     if args.plot is not None:
         _plot(results[0], args.plot)
         print(f"dynfab: plot written to {args.plot}", file=sys.stderr)
@@ -105,6 +120,40 @@ def _experiment(name: str, runs: int, seed: int, out: Path | None, jobs: int | N
     return 0
 
 
+def _record(result: RunResult, path: Path) -> None:
+    """Write the run's recording (scenario/recording.py) to ``path``."""
+    joints = result.robot.kinematics.joint_names
+    velocities = ("v", "omega") + joints[3:] if result.robot.base is not None else joints
+    save_recording(path, recording_of(result.record, joints, velocities, result.scenario.dt))
+    print(f"dynfab: recording written to {path}", file=sys.stderr)
+
+
+def _check(recording_path: Path, scenario_path: Path, as_json: bool) -> int:
+    """``dynfab check``: 0 if the recording is clean, 3 if not, 2 on invalid input."""
+    from dynfab.scenario.recording_check import check_recording
+
+    try:
+        report = check_recording(load_scenario(scenario_path), load_recording(recording_path))
+    except (ScenarioError, RecordingError) as error:
+        print(f"dynfab: error: {error}", file=sys.stderr)
+        return 2
+    findings = report.to_dict()
+    if as_json:
+        print(json.dumps(findings))
+    else:
+        print(f"{recording_path}: {findings['samples']} samples, "
+              f"{'no collision, no self-collision, joints within limits' if report.ok else 'VIOLATIONS'}")
+        print(f"  clearance {_shown(report.clearance)} m, min self distance {_shown(report.min_self_distance)} m")
+        for key in ("collisions", "self_collisions"):
+            for c in findings[key]:
+                print(f"  {key[:-1].replace('_', '-')}: {c['link']} - {c['other']} from t = {c['first_time']:.3f} s, "
+                      f"{c['samples']} samples, distance {c['distance']:.4g} m")
+        for v in findings["joint_limit_violations"]:
+            print(f"  joint limit: {v['joint']} from t = {v['first_time']:.3f} s, {v['samples']} samples, "
+                  f"worst {v['worst']:.6g} outside [{v['lower']:.6g}, {v['upper']:.6g}]")
+    return 0 if report.ok else 3
+
+
 def _run(path: Path, scenario: Scenario) -> RunResult:
     header = (f"dynfab: {path.name}: robot {scenario.robot if isinstance(scenario.robot, str) else 'urdf'}, "
               f"planner {scenario.planner}, {scenario.duration:g} s at dt {scenario.dt:g} s")
@@ -114,6 +163,8 @@ def _run(path: Path, scenario: Scenario) -> RunResult:
 def _output_options(parser: argparse.ArgumentParser, default_plot: Path | None = None) -> None:
     parser.add_argument("--json", action="store_true", help="print the metrics as one JSON object on stdout")
     parser.add_argument("--plot", type=Path, default=default_plot, help="write a PNG of the run")
+    parser.add_argument("--record", type=Path, metavar="OUT.npz",
+                        help="write t, q, qdot, qddot (one row per control step) and joint_names of the (first) run")
 
 
 class _ProgressBar:

@@ -19,7 +19,8 @@ from dynfab.sim import Record
 
 JSON_KEYS = [
     "success", "goal_reached", "collision", "time_to_goal", "clearance",
-    "path_length", "summed_error", "solver_time_ms", "steps", "orientation_error",
+    "path_length", "summed_error", "solver_time_ms", "steps", "orientation_error", "sphere_clearance",
+    "self_collision", "min_self_distance",
 ]
 
 
@@ -189,6 +190,8 @@ def test_to_dict_has_exactly_the_contract_keys() -> None:
     assert json.loads(json.dumps(computed)) == computed
     assert all(type(computed[key]) is bool for key in ("success", "goal_reached", "collision"))
     assert type(computed["steps"]) is int
+    assert computed["sphere_clearance"] == computed["clearance"]  # spheres only: the same figure
+    assert computed["self_collision"] is None and computed["min_self_distance"] is None
 
 
 def test_mismatched_samples_raise() -> None:

@@ -38,6 +38,12 @@ class Metrics:
         orientation_error: Final orientation error of the primary pose or axis goal (else
             of the first one) [rad]: the angle of ``R_dᵀ R`` for a pose, the angle between
             ``R a`` and ``d`` for an axis; None without such goals.
+        sphere_clearance: The sphere figure of ``clearance`` [m], kept when ``clearance``
+            comes from collision meshes (scenario/exact_metrics.py); None without obstacles.
+        self_collision: Two checked links touched (collision meshes); None for robots
+            measured by spheres.
+        min_self_distance: Smallest distance between checked links [m] (collision
+            meshes); None for robots measured by spheres.
     """
 
     success: bool
@@ -50,6 +56,9 @@ class Metrics:
     solver_time_ms: float
     steps: int
     orientation_error: float | None = None
+    sphere_clearance: float | None = None
+    self_collision: bool | None = None
+    min_self_distance: float | None = None
 
     def to_dict(self) -> dict[str, bool | int | float | None]:
         """The metrics as a JSON-ready dict with the keys of DESIGN.md section 5."""
@@ -133,6 +142,7 @@ def compute_metrics(
         solver_time_ms=float(np.mean(record.solver_time)) * 1e3,
         steps=record.steps,
         orientation_error=None if angles is None else float(angles[-1]),
+        sphere_clearance=clearance,
     )
 
 

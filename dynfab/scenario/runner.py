@@ -11,9 +11,12 @@ import numpy as np
 
 from dynfab.geometry.orientation import direction_angle, rotation_angle
 from dynfab.motion.references import References
+from dynfab.robots.mesh_sweep import MeshSweep, sweep_meshes
 from dynfab.scenario.controllers import Controller, make_controller
+from dynfab.scenario.exact_metrics import mesh_model_for, obstacle_shapes, with_mesh_metrics
 from dynfab.scenario.references import goal_axes, scenario_references
 from dynfab.scenario.metrics import Metrics, clearance_over_time, compute_metrics, shape_clearance_over_time
+from dynfab.scenario.start_state import check_joint_limits, check_start_collisions
 from dynfab.robots import load_robot, robot_from_urdf
 from dynfab.robots.builtin import UnknownRobotError
 from dynfab.robots.robot import CollisionSphere, Robot
@@ -41,6 +44,8 @@ class RunResult:
         obstacle_centers: obstacle centres over time (T, m, 3) (a plane: its point).
         clearance: minimum clearance at each sample (T,) [m] (inf without obstacles).
         controller: the controller that ran (its planner, fallback count, ...).
+        mesh_sweep: the collision-mesh distances of the run (contacts, minima); None for
+            robots measured by spheres (see scenario/exact_metrics.py).
     """
 
     scenario: Scenario
@@ -52,6 +57,7 @@ class RunResult:
     obstacle_centers: np.ndarray
     clearance: np.ndarray
     controller: Controller
+    mesh_sweep: MeshSweep | None = None
 
 
 def robot_for(scenario: Scenario) -> Robot:
@@ -77,30 +83,32 @@ def robot_for(scenario: Scenario) -> Robot:
 
 
 def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None = None) -> RunResult:
-    """Build the robot and controller, simulate ``scenario.duration`` and compute metrics.
+    """Build the robot and controller, check the start state, simulate
+    ``scenario.duration`` and compute metrics.
 
     Raises:
-        ScenarioError: if the scenario does not fit the robot or the planner.
+        ScenarioError: if the scenario does not fit the robot or the planner, or the start
+            state is outside the joint limits or in collision (scenario/start_state.py).
     """
     robot = robot_for(scenario)
     scenario = validate_for_robot(scenario, robot)
-    references = scenario_references(scenario, robot)
-    controller = make_controller(scenario, robot, references)
     state = scenario.initial_state
+    check_joint_limits(state.q, robot)
+    references = scenario_references(scenario, robot)
+    mesh_model = mesh_model_for(robot)
+    start_centres = obstacle_centres(references, np.zeros(1))
+    check_start_collisions(state.q, robot, mesh_model, obstacle_shapes(scenario.obstacles, start_centres))
+    controller = make_controller(scenario, robot, references)
     model = DoubleIntegrator() if robot.base is None else DifferentialDrive()
     substeps = 1 if robot.base is None else BASE_SUBSTEPS
     record = simulate(controller, state.q, state.qdot, scenario.dt, scenario.duration, substeps=substeps,
                       model=model, progress=progress)
-    samples = record.q.shape[0]
     goal = scenario.goals[0]
     goal_positions = _goal_coordinates(robot, scenario, record.q)
     goal_reference = goal_positions if goal.type == "axis" else references.goals[0].sample(record.t)[0]
     orientation_errors = _orientation_errors(robot, scenario, references, record.q, record.t)
     centres, radii = _sphere_centres(robot, record.q)
-    obstacle_centers = np.zeros((samples, len(scenario.obstacles), 3))
-    for k, trajectory in enumerate(references.obstacles):
-        positions = trajectory.sample(record.t)[0]
-        obstacle_centers[:, k, : positions.shape[1]] = positions
+    obstacle_centers = obstacle_centres(references, record.t)
     spheres = [k for k, o in enumerate(scenario.obstacles) if o.type == "sphere"]
     shapes = [k for k, o in enumerate(scenario.obstacles) if o.type != "sphere"]
     sphere_centres = obstacle_centers[:, spheres]
@@ -116,10 +124,23 @@ def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None
     solve_times = getattr(controller, "solve_times", None)
     if solve_times:  # a planner that re-plans less often than it is called (MPC)
         metrics = dataclasses.replace(metrics, solver_time_ms=1e3 * float(np.mean(solve_times)))
+    mesh_sweep = None
+    if mesh_model is not None:
+        mesh_sweep = sweep_meshes(mesh_model, record.q, obstacle_shapes(scenario.obstacles, obstacle_centers))
+        metrics = with_mesh_metrics(metrics, mesh_sweep)
     clearance = np.minimum(clearance_over_time(centres, radii, sphere_centres, sphere_radii, planar=robot.planar),
                            shape_clearance)
     return RunResult(scenario, robot, record, metrics, goal_positions, goal_reference, obstacle_centers, clearance,
-                     controller)
+                     controller, mesh_sweep)
+
+
+def obstacle_centres(references: References, times: np.ndarray) -> np.ndarray:
+    """Obstacle centres at ``times``, shape (T, m, 3) [m] (planar ones get z = 0)."""
+    centres = np.zeros((len(times), len(references.obstacles), 3))
+    for k, trajectory in enumerate(references.obstacles):
+        positions = trajectory.sample(times)[0]
+        centres[:, k, : positions.shape[1]] = positions
+    return centres
 
 
 def _goal_coordinates(robot: Robot, scenario: Scenario, qs: np.ndarray) -> np.ndarray:

@@ -1,0 +1,95 @@
+"""Checks of a scenario's start state before anything runs (ScenarioError, exit 2).
+
+- Every joint within its limits: ``lower - JOINT_LIMIT_TOLERANCE <= q_i <= upper + ...``.
+- No collision with an obstacle and no self-collision at ``t = 0``: on the collision
+  meshes for a robot that has them (scenario/exact_metrics.py), else on the collision
+  spheres (obstacle clearance ``d_o(R_oᵀ (p_i - c_o)) - r_i < 0`` with the exact signed
+  distance ``d_o`` of the obstacle's shape, in the plane of the shape's origin for planar
+  robots; self pairs ``||p_i - p_j|| - r_i - r_j < 0``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from dynfab.geometry.distance import shape_distance
+from dynfab.robots.mesh_collision import MeshCollisionModel
+from dynfab.robots.mesh_sweep import PlacedShape, sweep_meshes
+from dynfab.robots.robot import Robot
+from dynfab.scenario.schema import ScenarioError
+
+__all__ = ["JOINT_LIMIT_TOLERANCE", "check_joint_limits", "check_start_collisions"]
+
+#: A start value this far beyond a limit is still accepted (round-off in files) [rad or m].
+JOINT_LIMIT_TOLERANCE = 1e-9
+
+_FIELD = "initial_state.q"
+
+
+def check_joint_limits(q: ArrayLike, robot: Robot) -> None:
+    """Raise if a start joint value is outside its limits.
+
+    Raises:
+        ScenarioError: ``initial_state.q[3] (elbow_joint): 3.5 is outside [-3.14159, 3.14159]``.
+    """
+    kinematics = robot.kinematics
+    for i, value in enumerate(np.asarray(q, dtype=float)):
+        lower, upper = kinematics.lower[i], kinematics.upper[i]
+        if not lower - JOINT_LIMIT_TOLERANCE <= value <= upper + JOINT_LIMIT_TOLERANCE:
+            raise ScenarioError(f"{_FIELD}[{i}] ({kinematics.joint_names[i]})",
+                                f"{value:.6g} is outside [{lower:.6g}, {upper:.6g}]")
+
+
+def check_start_collisions(q: ArrayLike, robot: Robot, mesh_model: MeshCollisionModel | None,
+                           obstacles: Sequence[PlacedShape]) -> None:
+    """Raise if the robot starts in collision with an obstacle or with itself.
+
+    Args:
+        q: Start configuration, shape (dof,).
+        robot: The robot.
+        mesh_model: Its mesh model, or None to check its collision spheres.
+        obstacles: The obstacles, placed at ``t = 0`` by their first placement.
+
+    Raises:
+        ScenarioError: On ``initial_state.q``, naming the link and obstacle or the two links.
+    """
+    if mesh_model is not None:
+        sweep = sweep_meshes(mesh_model, np.asarray(q, dtype=float)[None, :], obstacles)
+        if sweep.obstacle_contacts:
+            contact = sweep.obstacle_contacts[0]
+            raise ScenarioError(_FIELD, f"the start state is in collision: link '{contact.first}' touches "
+                                        f"{contact.second} (distance {contact.depth:.3g} m)")
+        if sweep.self_contacts:
+            contact = sweep.self_contacts[0]
+            raise ScenarioError(_FIELD, f"the start state is in self-collision: links '{contact.first}' and "
+                                        f"'{contact.second}' touch (distance {contact.depth:.3g} m)")
+        return
+    _check_start_spheres(q, robot, obstacles)
+
+
+def _check_start_spheres(q: ArrayLike, robot: Robot, obstacles: Sequence[PlacedShape]) -> None:
+    spheres = robot.collision_spheres
+    if not spheres:
+        return
+    centers = np.asarray(robot.sphere_centers(np.asarray(q, dtype=float)), dtype=float)
+    radii = robot.sphere_radii
+    dimension = 2 if robot.planar else 3
+    for obstacle in obstacles:
+        placement = obstacle.placements[0]
+        offsets = centers - np.array(placement.position)
+        if robot.planar:
+            offsets[:, 2] = 0.0
+        gaps = shape_distance(obstacle.shape, offsets @ placement.rotation) - radii
+        i = int(np.argmin(gaps))
+        if gaps[i] < 0.0:
+            raise ScenarioError(_FIELD, f"the start state is in collision: collision sphere {i} of link "
+                                        f"'{spheres[i].link}' overlaps {obstacle.name} by {-gaps[i]:.3g} m")
+    for i, j in robot.self_collision_pairs:
+        gap = float(np.linalg.norm(centers[i, :dimension] - centers[j, :dimension]) - radii[i] - radii[j])
+        if gap < 0.0:
+            raise ScenarioError(_FIELD, f"the start state is in self-collision: collision spheres {i} "
+                                        f"(link '{spheres[i].link}') and {j} (link '{spheres[j].link}') "
+                                        f"overlap by {-gap:.3g} m")
