@@ -13,8 +13,9 @@ The fit (deterministic for a given seed):
    take the one that covers most uncovered samples until all are covered.
 4. Refine: drop spheres whose samples others cover, then shrink every sphere to the
    smallest radius that still covers the samples nearest to it.
-5. Check on an independent, denser sample; samples found more than ``tolerance`` outside
-   join the fit set and the fit is repeated (at most a few times).
+5. Check on the vertices of the mesh subdivided to short edges (every surface point is
+   near one); vertices found outside join the fit set and the fit is repeated (at most a
+   few times); the last misses grow the radius of their nearest sphere.
 
 Coverage of a surface point ``s`` by spheres ``(c_i, R_i)``:
 
@@ -34,13 +35,13 @@ import trimesh
 from scipy import sparse
 from scipy.spatial import cKDTree
 
-__all__ = ["FittedSphere", "SphereFit", "SphereFitParameters", "fit_spheres",
+__all__ = ["FittedSphere", "SphereFit", "SphereFitParameters", "check_points", "fit_spheres",
            "outside_distances", "sphere_bulges", "surface_samples"]
 
 #: Shrinking-ball iterations; the radius converges in a handful.
 _SHRINK_ITERATIONS = 30
 #: Fit/verify rounds: a round adds the verification samples found outside to the fit set.
-_ROUNDS = 4
+_ROUNDS = 2
 
 
 @dataclass(frozen=True)
@@ -52,23 +53,27 @@ class SphereFitParameters:
             the knob that trades sphere count for coverage.
         max_bulge: Largest allowed distance a sphere reaches out of the body [m].
         spacing: Mean distance between the surface samples the fit covers [m].
-        check_factor: The verification sample is this many times denser (by count).
+        check_edge: Coverage is checked on the vertices of the meshes subdivided to edges of
+            at most this length [m]; every surface point lies within ``check_edge / sqrt(3)``
+            of one of them, and the distance outside grows at most 1:1 with distance, so
+            ``coverage = max over vertices + check_edge / sqrt(3)`` bounds every point.
         seed: Seed of the surface sampling.
     """
 
     tolerance: float = 0.01
     max_bulge: float = 0.02
     spacing: float = 0.008
-    check_factor: int = 4
+    check_edge: float = 0.004
     seed: int = 0
 
     def __post_init__(self) -> None:
-        for name in ("tolerance", "max_bulge", "spacing"):
+        for name in ("tolerance", "max_bulge", "spacing", "check_edge"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0.0) or (name != "max_bulge" and value == 0.0):
                 raise ValueError(f"sphere fitting: {name} must be a positive number, got {value!r}")
-        if self.check_factor < 1:
-            raise ValueError(f"sphere fitting: check_factor must be >= 1, got {self.check_factor!r}")
+        if self.check_edge / np.sqrt(3.0) >= self.tolerance:
+            raise ValueError(f"sphere fitting: check_edge must be below sqrt(3) x tolerance, "
+                             f"got {self.check_edge!r}")
 
 
 @dataclass(frozen=True)
@@ -90,7 +95,8 @@ class SphereFit:
 
     Attributes:
         spheres: The spheres.
-        coverage: Largest distance of a checked surface point outside all spheres [m].
+        coverage: Upper bound of the largest distance of a surface point outside all
+            spheres [m] (see :attr:`SphereFitParameters.check_edge`).
         bulge: Largest bulge of a sphere out of the body [m].
         samples: Number of surface points the coverage was checked on.
     """
@@ -110,22 +116,21 @@ def fit_spheres(meshes: Sequence[trimesh.Trimesh],
     """
     parts = _components(meshes)
     points, normals = surface_samples(parts, parameters.spacing, parameters.seed)
-    check, _ = surface_samples(parts, parameters.spacing / np.sqrt(parameters.check_factor),
-                               parameters.seed + 1)
+    check = check_points(parts, parameters.check_edge)
+    target = parameters.tolerance - parameters.check_edge / np.sqrt(3.0)
     for _ in range(_ROUNDS):
         centers, radii = _fit(parts, points, normals, parameters)
-        outside = outside_distances(check, centers, radii)
-        missed = outside > parameters.tolerance
+        missed = outside_distances(check, centers, radii) > target
         if not missed.any():
             break
         points = np.vstack([points, check[missed]])
         normals = np.vstack([normals, _closest_normals(parts, check[missed])])
-    radii = _patched(check, centers, radii, parameters.tolerance)
-    outside = outside_distances(check, centers, radii)
+    radii = _patched(check, centers, radii, target)
+    outside = outside_distances(check, centers, radii).max(initial=0.0) + parameters.check_edge / np.sqrt(3.0)
     bulges = sphere_bulges(parts, centers, radii)
     spheres = tuple(FittedSphere(tuple(float(x) for x in c), float(r))  # type: ignore[arg-type]
                     for c, r in zip(centers, radii))
-    return SphereFit(spheres=spheres, coverage=float(outside.max(initial=0.0)),
+    return SphereFit(spheres=spheres, coverage=float(outside),
                      bulge=float(bulges.max(initial=0.0)), samples=len(check))
 
 
@@ -154,6 +159,21 @@ def surface_samples(parts: Sequence[trimesh.Trimesh], spacing: float,
         kept_points.append(points[~buried])
         kept_normals.append(normals[~buried])
     return np.vstack(kept_points), np.vstack(kept_normals)
+
+
+def check_points(parts: Sequence[trimesh.Trimesh], edge: float) -> np.ndarray:
+    """Vertices of the parts subdivided until no edge is longer than ``edge`` [m], without
+    those buried inside another closed part; shape (N, 3)."""
+    kept = []
+    for i, part in enumerate(parts):
+        vertices, _ = trimesh.remesh.subdivide_to_size(part.vertices, part.faces, max_edge=edge,
+                                                        max_iter=20)
+        buried = np.zeros(len(vertices), dtype=bool)
+        for j, other in enumerate(parts):
+            if j != i and other.is_watertight:
+                buried |= other.contains(vertices)
+        kept.append(vertices[~buried])
+    return np.vstack(kept)
 
 
 def _spread_vertices(part: trimesh.Trimesh, spacing: float) -> np.ndarray:

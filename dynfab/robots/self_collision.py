@@ -4,13 +4,14 @@ As MoveIt's setup assistant does for links, at the level of *bodies* (links weld
 fixed or locked joints): skip a body against itself and against its neighbours in the
 kinematic tree (bodies without spheres in between are looked through), sample
 configurations uniformly within the joint limits, skip body pairs whose spheres touch in
-more than ``always_fraction`` of them, and of the rest keep every sphere pair whose
-clearance
+more than ``always_fraction`` of them, and of the rest keep every sphere pair that is the
+closest pair of its two bodies in a sample where their clearance
 
     d_ij(q) = |c_i(q) - c_j(q)| - r_i - r_j   [m]
 
-comes below ``margin`` in at least one sample. Pairs that never come that close are left
-out: they cannot meet (or meet too rarely for the sample to see; raise ``samples``).
+comes below ``margin``: whenever two bodies come close in the sample, the pair that
+would touch first is kept apart. Pairs that never come that close are left out: they
+cannot meet (or meet too rarely for the sample to see; raise ``samples``).
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ class PairSelection:
 
     Attributes:
         samples: Random configurations [-].
-        margin: A sphere pair is kept if its clearance comes below this in a sample [m].
+        margin: A body pair counts as close in a sample if its clearance is below this [m].
         always_fraction: Body pairs in contact in more than this share of the samples are
             skipped (they touch by design) [-].
         seed: Seed of the configuration sampling.
@@ -68,10 +69,11 @@ def select_pairs(kinematics: Kinematics, spheres: Sequence[CollisionSphere],
                     - radii[first, None] - radii[None, second])
             if np.mean(gaps.min(axis=(1, 2)) < 0.0) > selection.always_fraction:
                 continue
-            closest = gaps.min(axis=0)
-            pairs.extend((int(min(i, j)), int(max(i, j)))
-                         for (u, v) in zip(*np.nonzero(closest < selection.margin))
-                         for i, j in [(first[u], second[v])])
+            flat = gaps.reshape(len(gaps), -1)
+            near = flat.min(axis=1) < selection.margin
+            for cell in np.unique(np.argmin(flat[near], axis=1)):
+                u, v = divmod(int(cell), len(second))
+                pairs.append((int(min(first[u], second[v])), int(max(first[u], second[v]))))
     return tuple(sorted(pairs))
 
 
