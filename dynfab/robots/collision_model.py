@@ -28,7 +28,7 @@ from .urdf import MeshFile, UrdfModel, load_urdf
 __all__ = ["CollisionModel", "LinkFit", "auto_collision_model", "cache_dir", "fit_link_spheres"]
 
 #: Bump when the fit or the file layout changes, so that old entries are not reused.
-_CACHE_VERSION = 2
+_CACHE_VERSION = 3
 
 
 @dataclass(frozen=True)
