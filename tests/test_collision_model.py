@@ -150,16 +150,20 @@ def test_missing_mesh_of_a_moving_link_names_the_link(tmp_path: Path) -> None:
 
 
 def test_builtin_panda_spheres_cover_frankas_meshes() -> None:
-    """The built-in Panda's fitted table (panda_spheres.py) against example-robot-data's meshes; the
-    hand, fingers closed, sits 0.1034 m behind dynfab's panda_hand frame."""
+    """The built-in Panda's fitted table (panda_spheres.py) against example-robot-data's
+    meshes; the hand and the closed fingers are placed in dynfab's panda_hand frame, which is
+    example-robot-data's panda_hand moved 0.1034 m along its z axis."""
     urdf = load_urdf(arm_urdf("panda"))
-    shift = {"panda_hand": 0.1034, "panda_leftfinger": 0.1034 - 0.0584, "panda_rightfinger": 0.1034 - 0.0584}
+    kinematics = Kinematics(urdf, joints=[f"panda_joint{i}" for i in range(1, 8)])
     centres = np.array([center for _, center, _ in PANDA_FITTED_SPHERES])
     radii = np.array([radius for _, _, radius in PANDA_FITTED_SPHERES])
     links = np.array([link for link, _, _ in PANDA_FITTED_SPHERES])
-    for link in [f"panda_link{i}" for i in range(8)] + list(shift):
+    hand = ("panda_hand", "panda_leftfinger", "panda_rightfinger")
+    for link in [f"panda_link{i}" for i in range(8)] + list(hand):
         surface = _independent_surface(link_collision_meshes(urdf, link))
-        mine = links == ("panda_hand" if link in shift else link)
-        offset = np.array([0.0, 0.0, shift.get(link, 0.0)])
-        outside = outside_distances(surface - offset, centres[mine], radii[mine])
+        if link in hand:
+            transform = np.array(kinematics.transform(np.zeros(7), link, parent="panda_hand"))
+            surface = surface @ transform[:3, :3].T + transform[:3, 3] - [0.0, 0.0, 0.1034]
+        mine = links == ("panda_hand" if link in hand else link)
+        outside = outside_distances(surface, centres[mine], radii[mine])
         assert outside.max() <= 0.01 + 1e-9, (link, outside.max())
