@@ -14,7 +14,7 @@ from .panda_spheres import PANDA_FITTED_PAIRS, PANDA_FITTED_SPHERES
 from .robot import CollisionSphere, DifferentialDriveBase, Robot
 from .urdf import load_urdf, parse_urdf
 
-__all__ = ["BUILTIN_ROBOTS", "UnknownRobotError", "load_robot", "robot_from_urdf"]
+__all__ = ["BUILTIN_ROBOTS", "UnknownRobotError", "load_robot", "panda_robot", "robot_from_urdf"]
 
 
 class UnknownRobotError(ValueError):
@@ -173,9 +173,20 @@ def _builtin_kinematics(filename: str) -> Kinematics:
 
 
 def _panda() -> Robot:
-    """The Franka Panda with its collision spheres and self-collision pairs
-    (:data:`PANDA_SPHERE_MODEL` says which)."""
-    if PANDA_SPHERE_MODEL == "fitted":
+    """The Franka Panda with the spheres :data:`PANDA_SPHERE_MODEL` names."""
+    return panda_robot(PANDA_SPHERE_MODEL)
+
+
+def panda_robot(sphere_model: str) -> Robot:
+    """The Franka Panda with its ``"fitted"`` or ``"hand-written"`` collision spheres and
+    self-collision pairs (see :data:`PANDA_SPHERE_MODEL`).
+
+    Raises:
+        ValueError: Another ``sphere_model``.
+    """
+    if sphere_model not in ("fitted", "hand-written"):
+        raise ValueError(f"panda sphere_model must be fitted or hand-written, got {sphere_model!r}")
+    if sphere_model == "fitted":
         return Robot(name="panda", kinematics=_builtin_kinematics("panda.urdf"),
                      goal_link="panda_hand",
                      collision_spheres=tuple(CollisionSphere(link, center, radius)
