@@ -12,6 +12,7 @@ import trimesh
 
 from dynfab.geometry.sphere_fitting import outside_distances
 from dynfab.robots import Kinematics, load_urdf
+from dynfab.robots.builtin import panda_robot
 from dynfab.robots.collision_model import CollisionModel, auto_collision_model
 from dynfab.robots.link_meshes import LinkMeshError, link_collision_meshes
 from dynfab.robots.panda_spheres import PANDA_FITTED_SPHERES
@@ -167,3 +168,16 @@ def test_builtin_panda_spheres_cover_frankas_meshes() -> None:
         mine = links == ("panda_hand" if link in hand else link)
         outside = outside_distances(surface, centres[mine], radii[mine])
         assert outside.max() <= 0.01 + 1e-9, (link, outside.max())
+
+
+def test_fitted_panda_pairs_follow_the_rules_and_are_apart_at_the_default() -> None:
+    panda = panda_robot("fitted")
+    spheres, pairs = panda.collision_spheres, panda.self_collision_pairs
+    depth = {f"panda_link{i}": i for i in range(8)} | {"panda_hand": 7}  # link7 + hand: one body
+    assert len(set(pairs)) == len(pairs) > 50
+    assert all(abs(depth[spheres[a].link] - depth[spheres[b].link]) >= 2 for a, b in pairs)
+    centres, radii = panda.sphere_centers(panda.default_q), panda.sphere_radii
+    gaps = [np.linalg.norm(centres[a] - centres[b]) - radii[a] - radii[b] for a, b in pairs]
+    assert min(gaps) > 0.01
+    with pytest.raises(ValueError, match="sphere_model"):
+        panda_robot("guessed")
