@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import math
 import sys
 from importlib.resources import files
 from pathlib import Path
@@ -53,7 +54,21 @@ def main(argv: list[str] | None = None) -> int:
     experiment.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
     experiment.add_argument("--out", type=Path, help="output directory (default dynfab-experiments/NAME)")
     experiment.add_argument("--jobs", type=_at_least_one, help="worker processes (default: the number of CPUs)")
+    spheres = commands.add_parser("spheres", help="fit collision spheres to a URDF's collision geometry, "
+                                                  "print their coverage, write them as scenario YAML")
+    spheres.add_argument("urdf", type=Path, help="URDF file")
+    spheres.add_argument("--out", type=Path, help="write collision_spheres and self_collision_pairs as YAML")
+    spheres.add_argument("--plot", type=Path, help="write a PNG of meshes and spheres")
+    spheres.add_argument("--tolerance", type=_positive_number, default=0.01,
+                         help="largest distance of a mesh surface point outside all spheres [m] (default 0.01)")
+    spheres.add_argument("--package-dir", type=Path, action="append", default=[],
+                         help="folder where package:// URIs resolve (repeatable)")
+    spheres.add_argument("--joints", nargs="+", help="active joints (default: every movable, non-mimic joint)")
     args = parser.parse_args(argv)
+    if args.command == "spheres":
+        from dynfab.spheres_command import spheres_command
+
+        return spheres_command(args.urdf, args.out, args.plot, args.tolerance, args.package_dir, args.joints)
     if args.command == "experiment":
         return _experiment(args.name, args.runs, args.seed, args.out, args.jobs)
     if args.command == "check":
@@ -89,6 +104,17 @@ def _at_least_one(text: str) -> int:
     if not text.isdigit() or int(text) < 1:
         raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
     return int(text)
+
+
+def _positive_number(text: str) -> float:
+    """A positive finite number from the command line."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0.0):
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return value
 
 
 def _experiment(name: str, runs: int, seed: int, out: Path | None, jobs: int | None) -> int:

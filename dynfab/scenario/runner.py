@@ -18,7 +18,10 @@ from dynfab.scenario.references import goal_axes, scenario_references
 from dynfab.scenario.metrics import Metrics, clearance_over_time, compute_metrics, shape_clearance_over_time
 from dynfab.scenario.start_state import check_joint_limits, check_start_collisions
 from dynfab.robots import load_robot, robot_from_urdf
+from dynfab.geometry.sphere_fitting import SphereFitParameters
 from dynfab.robots.builtin import UnknownRobotError
+from dynfab.robots.collision_model import auto_collision_model
+from dynfab.robots.link_meshes import LinkMeshError
 from dynfab.robots.robot import CollisionSphere, Robot
 from dynfab.scenario.schema import Scenario, ScenarioError, UrdfRobotSpec, validate_for_robot
 from dynfab.sim import DifferentialDrive, DoubleIntegrator, Record, simulate
@@ -65,11 +68,13 @@ def robot_for(scenario: Scenario) -> Robot:
     spec = scenario.robot
     if isinstance(spec, UrdfRobotSpec):
         try:
+            spheres, pairs = _collision_model(spec)
             return robot_from_urdf(
-                spec.urdf, spec.goal_link,
-                tuple(CollisionSphere(s.link, s.center, s.radius) for s in spec.collision_spheres),
-                self_collision_pairs=spec.self_collision_pairs, planar=spec.planar,
+                spec.urdf, spec.goal_link, spheres,
+                self_collision_pairs=pairs, planar=spec.planar,
                 joints=spec.joints, locked=dict(spec.locked), package_dirs=spec.package_dirs)
+        except LinkMeshError as error:
+            raise ScenarioError("robot.collision_spheres", str(error).splitlines()[0]) from error
         except (OSError, ValueError) as error:
             message = str(error).splitlines()[0]
             key, _, rest = message.partition(": ")
@@ -80,6 +85,20 @@ def robot_for(scenario: Scenario) -> Robot:
         return load_robot(spec)
     except UnknownRobotError as error:
         raise ScenarioError("robot", str(error)) from error
+
+
+def _collision_model(spec: UrdfRobotSpec) -> tuple[tuple[CollisionSphere, ...], tuple[tuple[int, int], ...]]:
+    """The spheres and pairs a URDF robot spec names, fitting / selecting (cached) for ``auto``."""
+    explicit = None if spec.collision_spheres == "auto" else tuple(
+        CollisionSphere(s.link, s.center, s.radius) for s in spec.collision_spheres)
+    if explicit is not None and spec.self_collision_pairs != "auto":
+        return explicit, spec.self_collision_pairs  # type: ignore[return-value]
+    model = auto_collision_model(spec.urdf, joints=spec.joints, locked=dict(spec.locked),
+                                 package_dirs=spec.package_dirs,
+                                 parameters=SphereFitParameters(tolerance=spec.sphere_tolerance),
+                                 spheres=explicit)
+    pairs = model.self_collision_pairs if spec.self_collision_pairs == "auto" else spec.self_collision_pairs
+    return model.spheres, pairs  # type: ignore[return-value]
 
 
 def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None = None) -> RunResult:

@@ -202,8 +202,13 @@ class UrdfRobotSpec:
         urdf: Path of the URDF file: relative to the scenario file's directory, absolute, or
             ``package://NAME/...`` (see :func:`dynfab.robots.mesh_paths.resolve_uri`).
         goal_link: Default goal link of the robot.
-        collision_spheres: Spheres used for obstacle and self-collision avoidance.
-        self_collision_pairs: Pairs (i, j) of indices into ``collision_spheres``.
+        collision_spheres: Spheres used for obstacle and self-collision avoidance, or
+            ``"auto"``: fitted to the links' collision geometry (see
+            :mod:`dynfab.robots.collision_model`).
+        self_collision_pairs: Pairs (i, j) of indices into ``collision_spheres``, or
+            ``"auto"``: chosen by sampling configurations (the default with auto spheres).
+        sphere_tolerance: With auto spheres: largest distance of a collision-mesh surface
+            point outside all spheres [m].
         planar: True if the workspace is the xy-plane (goals [x, y]).
         package_dirs: Folders where ``package://`` mesh URIs are looked up (resolved
             against the scenario file's directory).
@@ -214,8 +219,9 @@ class UrdfRobotSpec:
 
     urdf: Path
     goal_link: str
-    collision_spheres: tuple[CollisionSphereSpec, ...] = ()
-    self_collision_pairs: tuple[tuple[int, int], ...] = ()
+    collision_spheres: tuple[CollisionSphereSpec, ...] | Literal["auto"] = ()
+    self_collision_pairs: tuple[tuple[int, int], ...] | Literal["auto"] = ()
+    sphere_tolerance: float = 0.01
     planar: bool = False
     package_dirs: tuple[Path, ...] = ()
     joints: tuple[str, ...] | None = None
@@ -348,7 +354,8 @@ def validate_for_robot(scenario: Scenario, robot: Robot) -> Scenario:
                   f" (one per velocity: {', '.join(velocity_names)})")
     if isinstance(scenario.robot, UrdfRobotSpec):
         _check_link(scenario.robot.goal_link, "robot.goal_link", links)
-        for i, sphere in enumerate(scenario.robot.collision_spheres):
+        explicit = scenario.robot.collision_spheres
+        for i, sphere in enumerate(() if explicit == "auto" else explicit):
             _check_link(sphere.link, f"robot.collision_spheres[{i}].link", links)
     goals = tuple(
         _goal_for_robot(goal, f"goal[{i}]", robot, links)
@@ -411,7 +418,7 @@ def _robot(value: object, field: str, base_dir: Path) -> str | UrdfRobotSpec:
         field,
         required=("urdf", "goal_link"),
         optional=("collision_spheres", "self_collision_pairs", "planar", "package_dirs", "joints",
-                  "locked"),
+                  "locked", "sphere_tolerance"),
     )
     package_dirs = tuple(base_dir / _string(d, f"{field}.package_dirs[{i}]")
                          for i, d in enumerate(_list(data.get("package_dirs", []), f"{field}.package_dirs")))
@@ -427,16 +434,14 @@ def _robot(value: object, field: str, base_dir: Path) -> str | UrdfRobotSpec:
                        for i, j in enumerate(_list(data["joints"], f"{field}.joints")))
     locked_data = _mapping(data.get("locked", {}), f"{field}.locked")
     locked = {str(name): _number(value, f"{field}.locked.{name}") for name, value in locked_data.items()}
-    spheres_field = f"{field}.collision_spheres"
-    spheres = tuple(
-        _collision_sphere(sphere, f"{spheres_field}[{i}]")
-        for i, sphere in enumerate(_list(data.get("collision_spheres", []), spheres_field))
-    )
-    pairs_field = f"{field}.self_collision_pairs"
-    pairs = tuple(
-        _sphere_pair(pair, f"{pairs_field}[{i}]", len(spheres))
-        for i, pair in enumerate(_list(data.get("self_collision_pairs", []), pairs_field))
-    )
+    spheres = _spheres(data.get("collision_spheres", []), f"{field}.collision_spheres")
+    pairs = _pairs(data.get("self_collision_pairs", "auto" if spheres == "auto" else []),
+                   f"{field}.self_collision_pairs", spheres)
+    tolerance = 0.01
+    if "sphere_tolerance" in data:
+        if spheres != "auto":
+            raise ScenarioError(f"{field}.sphere_tolerance", "only applies to collision_spheres: auto")
+        tolerance = _positive(data["sphere_tolerance"], f"{field}.sphere_tolerance")
     planar = data.get("planar", False)
     if not isinstance(planar, bool):
         raise ScenarioError(f"{field}.planar", f"expected true or false, got {describe(planar)}")
@@ -445,11 +450,36 @@ def _robot(value: object, field: str, base_dir: Path) -> str | UrdfRobotSpec:
         goal_link=_string(data["goal_link"], f"{field}.goal_link"),
         collision_spheres=spheres,
         self_collision_pairs=pairs,
+        sphere_tolerance=tolerance,
         planar=planar,
         package_dirs=package_dirs,
         joints=joints,
         locked=MappingProxyType(locked),
     )
+
+
+def _spheres(value: object, field: str) -> tuple[CollisionSphereSpec, ...] | Literal["auto"]:
+    """Parse ``collision_spheres``: ``auto`` or a list of spheres."""
+    if value == "auto":
+        return "auto"
+    if isinstance(value, str):
+        raise ScenarioError(field, f"expected auto or a list of {{link, center, radius}}, got {value!r}")
+    return tuple(_collision_sphere(sphere, f"{field}[{i}]") for i, sphere in enumerate(_list(value, field)))
+
+
+def _pairs(value: object, field: str, spheres: tuple[CollisionSphereSpec, ...] | Literal["auto"]
+           ) -> tuple[tuple[int, int], ...] | Literal["auto"]:
+    """Parse ``self_collision_pairs``: ``auto`` or index pairs into explicit spheres."""
+    if value == "auto":
+        return "auto"
+    if isinstance(value, str):
+        raise ScenarioError(field, f"expected auto or a list of [i, j] sphere index pairs, got {value!r}")
+    pairs = _list(value, field)
+    if spheres == "auto" and pairs:
+        raise ScenarioError(field, "index pairs need explicit collision_spheres; with "
+                            "collision_spheres: auto use self_collision_pairs: auto")
+    count = 0 if spheres == "auto" else len(spheres)
+    return tuple(_sphere_pair(pair, f"{field}[{i}]", count) for i, pair in enumerate(pairs))
 
 
 def _collision_sphere(value: object, field: str) -> CollisionSphereSpec:

@@ -1,0 +1,182 @@
+"""A robot's collision model made automatically: spheres fitted to every link's
+``<collision>`` geometry and the sphere pairs to keep apart, cached on disk.
+
+The cache key is the SHA-256 of the URDF's bytes, the bytes of every collision mesh it
+references, the fitting and pair-selection parameters and the active / locked joints, so
+that any change refits and an unchanged robot loads in milliseconds. The cache folder is
+``$DYNFAB_CACHE_DIR`` or ``~/.cache/dynfab``; entries are JSON files.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from dynfab.geometry.sphere_fitting import SphereFitParameters, fit_spheres
+
+from .kinematics import Kinematics
+from .link_meshes import LinkMeshError, link_collision_meshes
+from .robot import CollisionSphere
+from .self_collision import PairSelection, bodies, select_pairs
+from .urdf import MeshFile, UrdfModel, load_urdf
+
+__all__ = ["CollisionModel", "LinkFit", "auto_collision_model", "cache_dir", "fit_link_spheres"]
+
+#: Bump when the fit or the file layout changes, so that old entries are not reused.
+_CACHE_VERSION = 3
+
+
+@dataclass(frozen=True)
+class LinkFit:
+    """The spheres of one link and how well they cover its collision meshes.
+
+    Attributes:
+        link: Link name.
+        spheres: Its spheres, centres in the link frame [m].
+        coverage: Largest distance of a mesh surface point outside all its spheres [m].
+        bulge: Largest distance one of its spheres reaches out of the meshes [m].
+    """
+
+    link: str
+    spheres: tuple[CollisionSphere, ...]
+    coverage: float
+    bulge: float
+
+
+@dataclass(frozen=True)
+class CollisionModel:
+    """Spheres per link and the self-collision pairs between them.
+
+    Attributes:
+        links: One entry per link with collision geometry, in depth-first order.
+        self_collision_pairs: Index pairs into :attr:`spheres`.
+        from_cache: True if this was read from the disk cache.
+    """
+
+    links: tuple[LinkFit, ...]
+    self_collision_pairs: tuple[tuple[int, int], ...]
+    from_cache: bool = False
+
+    @property
+    def spheres(self) -> tuple[CollisionSphere, ...]:
+        """All spheres, link by link."""
+        return tuple(sphere for fit in self.links for sphere in fit.spheres)
+
+
+def fit_link_spheres(kinematics: Kinematics,
+                     parameters: SphereFitParameters = SphereFitParameters()) -> tuple[LinkFit, ...]:
+    """Spheres for every link of the tree with ``<collision>`` geometry.
+
+    Links welded to the root whose mesh files are missing are skipped (they never move
+    and nothing can be learnt about them); for a link that moves it is an error.
+
+    Raises:
+        LinkMeshError: A moving link's collision mesh is missing or unreadable (names
+            the link and the URI).
+    """
+    body_of = bodies(kinematics)
+    fixed = body_of[kinematics.root_link]
+    fits = []
+    for link in kinematics.link_names:
+        try:
+            meshes = link_collision_meshes(kinematics.model, link)
+        except LinkMeshError:
+            if body_of[link] == fixed:
+                continue
+            raise
+        if not meshes:
+            continue
+        fit = fit_spheres(meshes, parameters)
+        spheres = tuple(CollisionSphere(link, s.center, s.radius) for s in fit.spheres)
+        fits.append(LinkFit(link=link, spheres=spheres, coverage=fit.coverage, bulge=fit.bulge))
+    return tuple(fits)
+
+
+def auto_collision_model(path: str | os.PathLike[str], joints: Sequence[str] | None = None,
+                         locked: Mapping[str, float] | None = None,
+                         package_dirs: Sequence[str | os.PathLike[str]] = (),
+                         parameters: SphereFitParameters = SphereFitParameters(),
+                         selection: PairSelection = PairSelection(),
+                         spheres: Sequence[CollisionSphere] | None = None,
+                         cache: Path | None = None) -> CollisionModel:
+    """Fitted spheres (unless ``spheres`` are given) and selected pairs of a URDF robot.
+
+    Args:
+        path: URDF file.
+        joints: Active joints (see :class:`~dynfab.robots.kinematics.Kinematics`).
+        locked: Values of the other movable joints [rad or m].
+        package_dirs: Where ``package://`` mesh URIs resolve.
+        parameters: Sphere fitting parameters.
+        selection: Pair selection parameters.
+        spheres: Use these spheres (one pseudo-link entry each) and only select pairs.
+        cache: Cache folder; :func:`cache_dir` if None.
+
+    Raises:
+        OSError, UrdfError: The URDF cannot be read.
+        LinkMeshError: A moving link's mesh is missing or unreadable.
+        ValueError: Unknown joints or locked names.
+    """
+    model = load_urdf(path, package_dirs)
+    kinematics = Kinematics(model, joints=joints, locked=locked)
+    key = _key(Path(path), model, kinematics, parameters, selection, spheres)
+    entry = (cache_dir() if cache is None else cache) / f"collision-{key}.json"
+    if entry.is_file():
+        try:
+            return _decode(json.loads(entry.read_text(encoding="utf-8")))
+        except (ValueError, KeyError, TypeError):
+            pass  # a damaged entry is refitted and overwritten
+    if spheres is None:
+        links = fit_link_spheres(kinematics, parameters)
+    else:
+        links = tuple(LinkFit(s.link, (s,), float("nan"), float("nan")) for s in spheres)
+    all_spheres = [s for fit in links for s in fit.spheres]
+    result = CollisionModel(links=links,
+                            self_collision_pairs=select_pairs(kinematics, all_spheres, selection))
+    entry.parent.mkdir(parents=True, exist_ok=True)
+    temporary = entry.with_suffix(f".{os.getpid()}.tmp")
+    temporary.write_text(json.dumps(_encode(result)), encoding="utf-8")
+    temporary.replace(entry)
+    return result
+
+
+def cache_dir() -> Path:
+    """``$DYNFAB_CACHE_DIR`` or ``~/.cache/dynfab``."""
+    configured = os.environ.get("DYNFAB_CACHE_DIR")
+    return Path(configured) if configured else Path.home() / ".cache" / "dynfab"
+
+
+def _key(path: Path, model: UrdfModel, kinematics: Kinematics, parameters: SphereFitParameters,
+         selection: PairSelection, spheres: Sequence[CollisionSphere] | None) -> str:
+    """SHA-256 over everything the result depends on."""
+    digest = hashlib.sha256()
+    digest.update(f"v{_CACHE_VERSION}\n".encode())
+    digest.update(path.read_bytes())
+    for link in model.links:
+        for geometry in link.collisions:
+            if isinstance(geometry.shape, MeshFile) and geometry.shape.path is not None:
+                digest.update(Path(geometry.shape.path).read_bytes())
+    described = {"fit": dataclasses.asdict(parameters), "pairs": dataclasses.asdict(selection),
+                 "joints": list(kinematics.joint_names), "locked": sorted(kinematics.locked.items()),
+                 "spheres": None if spheres is None else [dataclasses.asdict(s) for s in spheres]}
+    digest.update(json.dumps(described, sort_keys=True).encode())
+    return digest.hexdigest()
+
+
+def _encode(model: CollisionModel) -> dict[str, object]:
+    return {"links": [{"link": fit.link, "coverage": fit.coverage, "bulge": fit.bulge,
+                       "spheres": [[*s.center, s.radius] for s in fit.spheres]} for fit in model.links],
+            "self_collision_pairs": [list(pair) for pair in model.self_collision_pairs]}
+
+
+def _decode(data: dict[str, object]) -> CollisionModel:
+    links = tuple(LinkFit(link=fit["link"], coverage=float(fit["coverage"]), bulge=float(fit["bulge"]),
+                          spheres=tuple(CollisionSphere(fit["link"], (x, y, z), r)
+                                        for x, y, z, r in fit["spheres"]))
+                  for fit in data["links"])  # type: ignore[union-attr]
+    pairs = tuple((int(a), int(b)) for a, b in data["self_collision_pairs"])  # type: ignore[union-attr]
+    return CollisionModel(links=links, self_collision_pairs=pairs, from_cache=True)

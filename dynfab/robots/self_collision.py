@@ -1,0 +1,142 @@
+"""Which collision-sphere pairs of a robot to keep apart, found by sampling configurations.
+
+As MoveIt's setup assistant does for links, at the level of *bodies* (links welded by
+fixed or locked joints): skip a body against itself and against its neighbours in the
+kinematic tree (bodies without spheres in between are looked through), sample
+configurations uniformly within the joint limits, skip body pairs whose spheres touch in
+more than ``always_fraction`` of them, and of the rest keep every sphere pair that is the
+closest pair of its two bodies in a sample where their clearance
+
+    d_ij(q) = |c_i(q) - c_j(q)| - r_i - r_j   [m]
+
+comes below ``margin``: whenever two bodies come close in the sample, the pair that
+would touch first is kept apart. Pairs that never come that close are left out: they
+cannot meet (or meet too rarely for the sample to see; raise ``samples``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from .kinematics import Kinematics
+from .robot import CollisionSphere
+from .urdf import Joint
+
+__all__ = ["PairSelection", "bodies", "sample_configurations", "select_pairs", "sphere_centres"]
+
+
+@dataclass(frozen=True)
+class PairSelection:
+    """How self-collision pairs are chosen.
+
+    Attributes:
+        samples: Random configurations [-].
+        margin: A body pair counts as close in a sample if its clearance is below this [m].
+        always_fraction: Body pairs in contact in more than this share of the samples are
+            skipped (they touch by design) [-].
+        seed: Seed of the configuration sampling.
+    """
+
+    samples: int = 3000
+    margin: float = 0.02
+    always_fraction: float = 0.95
+    seed: int = 0
+
+
+def select_pairs(kinematics: Kinematics, spheres: Sequence[CollisionSphere],
+                 selection: PairSelection = PairSelection()) -> tuple[tuple[int, int], ...]:
+    """Index pairs ``(i, j)``, ``i < j``, of ``spheres`` to keep apart (see the module)."""
+    body_of = bodies(kinematics)
+    sphere_body = np.array([body_of[s.link] for s in spheres])
+    carriers = set(sphere_body.tolist())
+    neighbours = _neighbours(kinematics, body_of, carriers)
+    q = sample_configurations(kinematics, selection.samples, selection.seed)
+    centres = sphere_centres(kinematics, spheres, q)
+    radii = np.array([s.radius for s in spheres])
+    pairs: list[tuple[int, int]] = []
+    ordered = sorted(carriers)
+    for a_index, a in enumerate(ordered):
+        for b in ordered[a_index + 1:]:
+            if b in neighbours[a]:
+                continue
+            first = np.flatnonzero(sphere_body == a)
+            second = np.flatnonzero(sphere_body == b)
+            gaps = (np.linalg.norm(centres[:, first, None, :] - centres[:, None, second, :], axis=3)
+                    - radii[first, None] - radii[None, second])
+            if np.mean(gaps.min(axis=(1, 2)) < 0.0) > selection.always_fraction:
+                continue
+            flat = gaps.reshape(len(gaps), -1)
+            near = flat.min(axis=1) < selection.margin
+            for cell in np.unique(np.argmin(flat[near], axis=1)):
+                u, v = divmod(int(cell), len(second))
+                pairs.append((int(min(first[u], second[v])), int(max(first[u], second[v]))))
+    return tuple(sorted(pairs))
+
+
+def bodies(kinematics: Kinematics) -> dict[str, int]:
+    """Body number of every link of the tree: links joined by fixed joints, or by movable
+    joints that are neither active nor follow an active joint, share a body."""
+    active = set(kinematics.joint_names)
+    body_of: dict[str, int] = {}
+    for link in kinematics.link_names:
+        joint = kinematics.model.parent_joint(link)
+        if link == kinematics.root_link or joint is None:
+            body_of[link] = len(set(body_of.values()))
+        elif _rigid(joint, active):
+            body_of[link] = body_of[joint.parent]
+        else:
+            body_of[link] = max(body_of.values()) + 1
+    return body_of
+
+
+def sample_configurations(kinematics: Kinematics, count: int, seed: int) -> np.ndarray:
+    """``count`` configurations uniform within the limits (unlimited joints: [-pi, pi]),
+    shape (count, dof)."""
+    lower = np.where(np.isfinite(kinematics.lower), kinematics.lower, -np.pi)
+    upper = np.where(np.isfinite(kinematics.upper), kinematics.upper, np.pi)
+    return np.random.default_rng(seed).uniform(lower, upper, size=(count, kinematics.dof))
+
+
+def sphere_centres(kinematics: Kinematics, spheres: Sequence[CollisionSphere],
+                   q: np.ndarray) -> np.ndarray:
+    """Root-frame centres of ``spheres`` at each row of ``q``, shape (N, k, 3) [m]."""
+    q = np.atleast_2d(q)
+    symbol = ca.SX.sym("q", kinematics.dof)
+    points = kinematics.positions(symbol, [(s.link, s.center) for s in spheres])
+    function = ca.Function("centres", [symbol], [ca.vec(points)]).map(len(q))
+    values = np.array(function(q.T))  # (3k, N), column-major (k, 3) per sample
+    return values.T.reshape(len(q), 3, len(spheres)).transpose(0, 2, 1)
+
+
+def _rigid(joint: Joint, active: set[str]) -> bool:
+    """True if ``joint`` never moves with ``q``."""
+    if joint.type == "fixed":
+        return True
+    mimic = joint.mimic
+    leader = joint.name if mimic is None else mimic.joint
+    return leader not in active
+
+
+def _neighbours(kinematics: Kinematics, body_of: dict[str, int], carriers: set[int]) -> dict[int, set[int]]:
+    """Bodies with spheres next to each body with spheres, looking through bodies without."""
+    links: dict[int, set[int]] = {body: set() for body in body_of.values()}
+    for link in kinematics.link_names:
+        joint = kinematics.model.parent_joint(link)
+        if joint is not None and link != kinematics.root_link and body_of[link] != body_of[joint.parent]:
+            links[body_of[link]].add(body_of[joint.parent])
+            links[body_of[joint.parent]].add(body_of[link])
+    neighbours: dict[int, set[int]] = {}
+    for start in carriers:
+        seen, frontier = {start}, [start]
+        while frontier:
+            body = frontier.pop()
+            for other in links[body] - seen:
+                seen.add(other)
+                if other not in carriers:
+                    frontier.append(other)
+        neighbours[start] = seen - {start}
+    return neighbours
