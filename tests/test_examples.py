@@ -19,7 +19,8 @@ def test_examples_are_present() -> None:
     names = {path.relative_to(EXAMPLES).as_posix() for path in FILES}
     assert {"panda_reach.yaml", "panda_spheres.yaml", "panda_joint_goal.yaml", "panda_multi_goal.yaml",
             "point_spheres.yaml", "custom_urdf/arm_spheres.yaml", "panda_table_box.yaml",
-            "panda_moving_box.yaml"} <= names
+            "panda_moving_box.yaml", "panda_pose_down.yaml", "panda_path_tool_down.yaml",
+            "ur5_table_pose.yaml"} <= names
 
 
 @pytest.mark.parametrize("path", FILES, ids=lambda path: path.relative_to(EXAMPLES).as_posix())
@@ -47,3 +48,15 @@ def test_multi_goal_example_reaches_its_secondary_goal() -> None:
     link7 = ca.Function("link7", [q], [kinematics.position(q, secondary.link)])
     final_xy = np.array(link7(result.record.q[-1])).ravel()[:2]
     assert np.linalg.norm(final_xy - np.array(secondary.position)) < secondary.tolerance
+
+
+def test_the_api_example_with_a_shipped_urdf_reaches_its_pose() -> None:
+    import re
+    import subprocess
+    import sys
+
+    completed = subprocess.run([sys.executable, str(EXAMPLES / "ur5_api.py")], capture_output=True, text=True,
+                               timeout=600, check=True)
+    match = re.search(r"error ([0-9.]+) m; tool z tilted ([0-9.]+) deg", completed.stdout)
+    assert match, completed.stdout + completed.stderr
+    assert float(match.group(1)) < 0.01 and float(match.group(2)) < 2.0

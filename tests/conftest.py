@@ -1,0 +1,23 @@
+"""Session-wide test setup."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+
+import pytest
+
+
+@pytest.fixture(autouse=True, scope="session")
+def collision_model_cache(request: pytest.FixtureRequest) -> Iterator[None]:
+    """Automatic collision models (``collision_spheres: auto``) go to pytest's persistent
+    cache folder, not the user's ``~/.cache/dynfab``; entries are keyed by content, so every
+    test that fits the same arm shares one fit."""
+    folder = str(request.config.cache.mkdir("dynfab-collision-models"))
+    previous = os.environ.get("DYNFAB_CACHE_DIR")
+    os.environ["DYNFAB_CACHE_DIR"] = folder
+    yield
+    if previous is None:
+        os.environ.pop("DYNFAB_CACHE_DIR", None)
+    else:
+        os.environ["DYNFAB_CACHE_DIR"] = previous
