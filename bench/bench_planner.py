@@ -30,20 +30,30 @@ PANDA_URDF = BENCH_DIR.parent / "dynfab" / "robots" / "data" / "panda.urdf"
 Q0 = np.array([1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0])
 
 
-def measure_ours(spheres: int, steps: int, dynamic: bool = False) -> dict:
+def measure_ours(spheres: int, steps: int, dynamic: bool = False, scene: bool = False) -> dict:
     """Build the planner and time ``compute`` (run in a fresh interpreter by :func:`main`).
     ``dynamic``: the dynamic-fabric planner (goal and obstacles with velocities and
-    accelerations), with moving obstacles."""
+    accelerations), with moving obstacles. ``scene``: also 2 box slots and a pose goal (the
+    hand's position and all three of its axes)."""
+    from dynfab.fabric.leaves.orientation import OrientationGoalConfig
+    from dynfab.fabric.parameters import ShapeSlots
     from dynfab.fabric.planner import FabricPlanner, GoalConfig, PlannerConfig
     from dynfab.robots import load_robot
 
     start = time.perf_counter()
     robot = load_robot("panda")
-    planner = FabricPlanner(robot, PlannerConfig(goals=(GoalConfig(link="panda_hand"),), obstacle_slots=spheres,
-                                                 dynamic=dynamic))
+    goals = (GoalConfig(link="panda_hand"),) + ((OrientationGoalConfig(link="panda_hand"),) if scene else ())
+    planner = FabricPlanner(robot, PlannerConfig(goals=goals, obstacle_slots=spheres, dynamic=dynamic,
+                                                 shape_slots=ShapeSlots(box=2 if scene else 0)))
     build_s = time.perf_counter() - start
     rng = np.random.default_rng(0)
     planner.parameters.goal_position[0][:] = [0.5, -0.4, 0.3]
+    if scene:
+        planner.parameters.goal_position[1][:] = goals[1].target(np.diag([1.0, -1.0, -1.0]))
+        boxes = planner.parameters.boxes
+        boxes.position[:] = [[0.5, 0.3, 0.2], [0.3, -0.5, 0.6]]
+        boxes.orientation[:] = [1.0, 0.0, 0.0, 0.0]
+        boxes.dimensions[:] = [0.2, 0.3, 0.4]
     planner.parameters.obstacle_position[:] = rng.uniform([-0.6, -0.8, 0.05], [0.8, 0.8, 1.0], size=(spheres, 3))
     planner.parameters.obstacle_radius[:] = 0.15
     if dynamic:
@@ -63,9 +73,9 @@ def measure_ours(spheres: int, steps: int, dynamic: bool = False) -> dict:
             "nan_fraction": non_finite / steps}
 
 
-def _ours_in_fresh_process(spheres: int, steps: int, dynamic: bool = False) -> dict:
+def _ours_in_fresh_process(spheres: int, steps: int, dynamic: bool = False, scene: bool = False) -> dict:
     code = ("import json, sys; sys.path.insert(0, %r); from bench_planner import measure_ours; "
-            "print(json.dumps(measure_ours(%d, %d, %r)))" % (str(BENCH_DIR), spheres, steps, dynamic))
+            "print(json.dumps(measure_ours(%d, %d, %r, %r)))" % (str(BENCH_DIR), spheres, steps, dynamic, scene))
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
@@ -97,6 +107,13 @@ def main(argv: list[str] | None = None) -> int:
         dyn = _ours_in_fresh_process(n, args.steps, dynamic=True)
         print(f"{n:>7} spheres | build {dyn['build_s']:.2f} s | step median {dyn['step_ms_median']:.4f} ms | "
               f"{dyn['n_instructions']} SX instructions")
+    print()
+    print("a real scene: 5 spheres + 2 boxes + pose goal vs 5 spheres + position goal (static, same run):")
+    plain = _ours_in_fresh_process(5, args.steps)
+    scene = _ours_in_fresh_process(5, args.steps, scene=True)
+    print(f"  step median {scene['step_ms_median']:.4f} vs {plain['step_ms_median']:.4f} ms "
+          f"({scene['step_ms_median'] / plain['step_ms_median']:.2f}x) | {scene['n_instructions']} vs "
+          f"{plain['n_instructions']} SX instructions | build {scene['build_s']:.2f} vs {plain['build_s']:.2f} s")
     if missing:
         print(REFERENCE_MISSING_MESSAGE)
     return 0

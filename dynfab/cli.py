@@ -49,14 +49,14 @@ def main(argv: list[str] | None = None) -> int:
     _output_options(demo, default_plot=Path("dynfab-demo.png"))
     experiment = commands.add_parser("experiment", help="run one of the paper's experiments as a seeded series "
                                                         "(parallel, resumable) and summarize it beside the paper")
-    experiment.add_argument("name", help="exp1, exp2a, exp2b, exp3, exp4, exp5 or exp6")
+    experiment.add_argument("name", help="exp1, exp2a, exp2b, exp3, exp4, exp5, exp6 or arms")
     experiment.add_argument("--runs", type=_at_least_one, default=50, help="number of seeds (default 50)")
     experiment.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
     experiment.add_argument("--out", type=Path, help="output directory (default dynfab-experiments/NAME)")
     experiment.add_argument("--jobs", type=_at_least_one, help="worker processes (default: the number of CPUs)")
     spheres = commands.add_parser("spheres", help="fit collision spheres to a URDF's collision geometry, "
                                                   "print their coverage, write them as scenario YAML")
-    spheres.add_argument("urdf", type=Path, help="URDF file")
+    spheres.add_argument("urdf", help="URDF file, or package://NAME/... (see the README)")
     spheres.add_argument("--out", type=Path, help="write collision_spheres and self_collision_pairs as YAML")
     spheres.add_argument("--plot", type=Path, help="write a PNG of meshes and spheres")
     spheres.add_argument("--tolerance", type=_positive_number, default=0.01,

@@ -17,6 +17,7 @@ import numpy as np
 
 from dynfab.geometry.sphere_fitting import SphereFitParameters, surface_samples
 from dynfab.robots import Kinematics, load_urdf
+from dynfab.robots.mesh_paths import resolve_uri
 from dynfab.robots.collision_model import CollisionModel, auto_collision_model
 from dynfab.robots.link_meshes import link_collision_meshes
 
@@ -26,9 +27,14 @@ __all__ = ["coverage_table", "scenario_yaml", "spheres_command"]
 _STEP = 1e-4
 
 
-def spheres_command(urdf: Path, out: Path | None, plot: Path | None, tolerance: float,
+def spheres_command(urdf_name: str, out: Path | None, plot: Path | None, tolerance: float,
                     package_dirs: Sequence[Path], joints: Sequence[str] | None) -> int:
-    """Run the command; 0 on success, 2 on invalid input (one line on stderr)."""
+    """Run the command for a URDF path or ``package://`` URI; 0 on success, 2 on invalid
+    input (one line on stderr)."""
+    urdf = resolve_uri(urdf_name, Path.cwd(), package_dirs)
+    if urdf is None:
+        print(f"dynfab: error: URDF not found: {urdf_name}", file=sys.stderr)
+        return 2
     try:
         model = auto_collision_model(urdf, joints=joints, package_dirs=package_dirs,
                                      parameters=SphereFitParameters(tolerance=tolerance))

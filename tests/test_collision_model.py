@@ -18,7 +18,7 @@ from dynfab.robots.link_meshes import LinkMeshError, link_collision_meshes
 from dynfab.robots.panda_spheres import PANDA_FITTED_SPHERES
 from dynfab.robots.robot import CollisionSphere
 from dynfab.robots.self_collision import PairSelection, bodies, select_pairs, sphere_centres
-from tests.robot_files import arm_urdf
+from robot_files import arm_urdf
 
 ARMS = ("ur5", "kinova", "xarm7", "panda")
 #: Sphere count a typical arm link may need (the brief says about 10); the UR5's 0.55 m upper

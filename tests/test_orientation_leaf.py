@@ -14,7 +14,7 @@ from dynfab.geometry.orientation import direction_angle, rotation_angle, unit_ve
 from dynfab.geometry.shapes import quaternion_matrix, unit_quaternion
 from dynfab.motion.directions import RotatingDirections
 from dynfab.robots import load_robot
-from tests.test_maps import check_map_against_finite_differences
+from test_maps import check_map_against_finite_differences
 
 RNG = np.random.default_rng(11)
 PANDA = load_robot("panda")

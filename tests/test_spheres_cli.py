@@ -11,7 +11,7 @@ import yaml
 
 from dynfab.cli import main
 from dynfab.robots import Kinematics, load_urdf
-from tests.robot_files import arm_urdf
+from robot_files import arm_urdf
 
 THREE_LINKS = Path(__file__).parent / "data" / "three_links.urdf"
 UR5_Q = [0.0, -1.57, 1.57, -1.57, -1.57, 0.0]
@@ -73,7 +73,8 @@ def _run(tmp_path: Path, scenario: dict[str, object], capsys: pytest.CaptureFixt
 def test_written_yaml_runs_as_a_scenario_like_auto(tmp_path: Path, capsys: pytest.CaptureFixture[str],
                                                    shared_cache: Path) -> None:
     out = tmp_path / "ur5.yaml"
-    assert main(["spheres", str(arm_urdf("ur5")), "--out", str(out)]) == 0
+    assert main(["spheres", "package://example-robot-data/robots/ur_description/urdf/ur5_robot.urdf",
+                 "--out", str(out)]) == 0
     capsys.readouterr()
     pasted = _run(tmp_path, _ur5_scenario(yaml.safe_load(out.read_text())), capsys)
     auto = _run(tmp_path, _ur5_scenario({"collision_spheres": "auto"}), capsys)
