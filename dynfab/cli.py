@@ -15,7 +15,7 @@ import sys
 from importlib.resources import files
 from pathlib import Path
 
-from dynfab.scenario.recording import RecordingError, load_recording, recording_of, save_recording
+from dynfab.scenario.recording import RecordingError, load_recording, run_recording, save_recording
 from dynfab.scenario.runner import RunResult, link_path, run_scenario
 from dynfab.scenario.schema import PLANNERS, Scenario, ScenarioError, load_scenario
 
@@ -54,6 +54,8 @@ def main(argv: list[str] | None = None) -> int:
     experiment.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
     experiment.add_argument("--out", type=Path, help="output directory (default dynfab-experiments/NAME)")
     experiment.add_argument("--jobs", type=_at_least_one, help="worker processes (default: the number of CPUs)")
+    experiment.add_argument("--record", action="store_true",
+                            help="also write each run's recording to OUT/recordings/ (for dynfab check)")
     spheres = commands.add_parser("spheres", help="fit collision spheres to a URDF's collision geometry, "
                                                   "print their coverage, write them as scenario YAML")
     spheres.add_argument("urdf", help="URDF file, or package://NAME/... (see the README)")
@@ -70,7 +72,7 @@ def main(argv: list[str] | None = None) -> int:
 
         return spheres_command(args.urdf, args.out, args.plot, args.tolerance, args.package_dir, args.joints)
     if args.command == "experiment":
-        return _experiment(args.name, args.runs, args.seed, args.out, args.jobs)
+        return _experiment(args.name, args.runs, args.seed, args.out, args.jobs, args.record)
     if args.command == "check":
         return _check(args.recording, args.file, args.json)
     if args.command == "run":
@@ -117,7 +119,7 @@ def _positive_number(text: str) -> float:
     return value
 
 
-def _experiment(name: str, runs: int, seed: int, out: Path | None, jobs: int | None) -> int:
+def _experiment(name: str, runs: int, seed: int, out: Path | None, jobs: int | None, record: bool) -> int:
     """``dynfab experiment``: run the series, print its summary; 2 for an unknown name or an
     output directory of another series, 1 if a run failed, 130 on Ctrl-C (resumable)."""
     from dynfab.experiments.registry import EXPERIMENTS
@@ -129,7 +131,7 @@ def _experiment(name: str, runs: int, seed: int, out: Path | None, jobs: int | N
         return 2
     out = Path("dynfab-experiments") / name if out is None else out
     try:
-        result = run_series(EXPERIMENTS[name], runs, seed, out, jobs, progress=sys.stderr)
+        result = run_series(EXPERIMENTS[name], runs, seed, out, jobs, progress=sys.stderr, record=record)
     except SeriesError as error:
         print(f"dynfab: error: {error}", file=sys.stderr)
         return 2
@@ -148,9 +150,7 @@ def _experiment(name: str, runs: int, seed: int, out: Path | None, jobs: int | N
 
 def _record(result: RunResult, path: Path) -> None:
     """Write the run's recording (scenario/recording.py) to ``path``."""
-    joints = result.robot.kinematics.joint_names
-    velocities = ("v", "omega") + joints[3:] if result.robot.base is not None else joints
-    save_recording(path, recording_of(result.record, joints, velocities, result.scenario.dt))
+    save_recording(path, run_recording(result.robot, result.record, result.scenario.dt))
     print(f"dynfab: recording written to {path}", file=sys.stderr)
 
 

@@ -37,3 +37,12 @@ def test_an_arm_reaches_its_goal_and_the_recording_checks_clean(seed: int, tmp_p
     report = json.loads(capsys.readouterr().out)
     assert report["ok"] and not report["collisions"] and not report["self_collisions"]
     assert not report["joint_limit_violations"]
+
+
+def test_a_recorded_series_writes_one_recording_per_run(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from dynfab.experiments.series import run_series
+
+    result = run_series(EXPERIMENTS["arms"], 1, 6, tmp_path, jobs=1, record=True)
+    recording = tmp_path / "recordings" / "arms_6_static-fabric.npz"
+    assert result.records[0].metrics["success"] and recording.is_file()
+    assert main(["check", str(recording), str(tmp_path / "scenarios" / "arms_6_static-fabric.yaml")]) == 0

@@ -157,7 +157,7 @@ def test_a_directory_another_series_is_running_in_is_refused(tmp_path: Path) -> 
 
 
 def test_registry_figures_belong_to_the_planners_compared() -> None:
-    assert list(EXPERIMENTS) == ["exp1", "exp2a", "exp2b", "exp3", "exp4", "exp5", "exp6"]
+    assert list(EXPERIMENTS) == ["exp1", "exp2a", "exp2b", "exp3", "exp4", "exp5", "exp6", "arms"]
     for name, experiment in EXPERIMENTS.items():
         assert experiment.name == name and experiment.planners
         for figure in experiment.figures:

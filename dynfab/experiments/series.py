@@ -44,6 +44,7 @@ from matplotlib.ticker import MaxNLocator
 from dynfab.experiments.registry import Experiment, PaperRatio, Quantity
 from dynfab.scenario.metrics import Metrics
 from dynfab.viz.plots import plot_run
+from dynfab.scenario.recording import run_recording, save_recording
 from dynfab.scenario.runner import RunResult, run_scenario
 from dynfab.scenario.schema import load_scenario
 
@@ -179,7 +180,7 @@ def scenario_file(out_dir: Path, experiment: str, seed: int, planner: str) -> Pa
 
 
 def run_series(experiment: Experiment, runs: int, seed: int, out_dir: str | Path, jobs: int | None = None,
-               progress: IO[str] | None = None) -> SeriesResult:
+               progress: IO[str] | None = None, record: bool = False) -> SeriesResult:
     """Run ``experiment`` on seeds ``seed .. seed + runs - 1`` with each of its planners.
 
     Writes the scenario files, runs the missing (seed, planner) pairs over ``jobs``
@@ -193,6 +194,8 @@ def run_series(experiment: Experiment, runs: int, seed: int, out_dir: str | Path
         out_dir: output directory, created if needed.
         jobs: worker processes, >= 1; default ``os.cpu_count()``.
         progress: stream for a progress bar (done/total, rate, ETA); None is silent.
+        record: also write each run's recording to
+            ``out_dir/recordings/<exp>_<seed>_<planner>.npz`` (``dynfab check`` reads them).
 
     Raises:
         ValueError: ``runs`` or ``jobs`` < 1.
@@ -213,8 +216,11 @@ def run_series(experiment: Experiment, runs: int, seed: int, out_dir: str | Path
         files = _write_scenarios(experiment, seeds, out, done)
         pending = [pair for pair in files if pair not in done]
         bar = None if progress is None else _Progress(progress, experiment.name, len(files), len(files) - len(pending))
-        for record in _execute(experiment.name, pending, files, jobs, log, bar):
-            done[(record.seed, record.planner)] = record
+        recordings = out / "recordings" if record else None
+        if recordings is not None:
+            recordings.mkdir(exist_ok=True)
+        for entry in _execute(experiment.name, pending, files, jobs, log, bar, recordings):
+            done[(entry.seed, entry.planner)] = entry
         records = tuple(done[pair] for pair in files)
         summary = summarize(experiment, records)
         _write_csv(out / "runs.csv", records, experiment.name)
@@ -295,15 +301,18 @@ def _write_scenarios(experiment: Experiment, seeds: Sequence[int], out: Path,
 
 
 def _execute(experiment: str, pending: list[Pair], files: dict[Pair, Path], jobs: int, log: Path,
-             bar: _Progress | None) -> Iterator[RunRecord]:
-    """Run the pending pairs over ``jobs`` processes; append and yield each as it finishes."""
+             bar: _Progress | None, recordings: Path | None) -> Iterator[RunRecord]:
+    """Run the pending pairs over ``jobs`` processes; append and yield each as it finishes
+    (writing its recording into ``recordings`` if given)."""
     if not pending:
         return
     executor = ProcessPoolExecutor(max_workers=min(jobs, len(pending)),
                                    mp_context=multiprocessing.get_context("spawn"))
     try:
         futures: dict[Future[tuple[dict[str, MetricValue], float]], Pair] = {
-            executor.submit(_run_file, str(files[pair])): pair for pair in pending}
+            executor.submit(_run_file, str(files[pair]),
+                            None if recordings is None else str(recordings / (files[pair].stem + ".npz"))): pair
+            for pair in pending}
         remaining = set(futures)
         with log.open("a", encoding="utf-8") as file:
             while remaining:
@@ -325,11 +334,14 @@ def _execute(experiment: str, pending: list[Pair], files: dict[Pair, Path], jobs
         executor.shutdown(wait=True, cancel_futures=True)
 
 
-def _run_file(path: str) -> tuple[dict[str, MetricValue], float]:
-    """Worker: run one scenario file; its metrics and wall time [s]."""
+def _run_file(path: str, recording: str | None) -> tuple[dict[str, MetricValue], float]:
+    """Worker: run one scenario file (recording it to ``recording`` if given); its metrics
+    and wall time [s]."""
     start = time.perf_counter()
-    metrics = run_scenario(load_scenario(path)).metrics.to_dict()
-    return metrics, time.perf_counter() - start
+    result = run_scenario(load_scenario(path))
+    if recording is not None:
+        save_recording(recording, run_recording(result.robot, result.record, result.scenario.dt))
+    return result.metrics.to_dict(), time.perf_counter() - start
 
 
 class _Progress:

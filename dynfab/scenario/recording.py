@@ -23,9 +23,10 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from dynfab.robots.robot import Robot
 from dynfab.sim import Record
 
-__all__ = ["Recording", "RecordingError", "load_recording", "recording_of", "save_recording"]
+__all__ = ["Recording", "RecordingError", "load_recording", "recording_of", "run_recording", "save_recording"]
 
 _ARRAYS = ("t", "q", "qdot", "qddot")
 
@@ -53,6 +54,13 @@ def recording_of(record: Record, joint_names: tuple[str, ...], velocity_names: t
     qddot = np.vstack([record.qddot, np.zeros((1, record.qdot.shape[1]))])
     return Recording(np.array(record.t), np.array(record.q), np.array(record.qdot), qddot,
                      tuple(joint_names), tuple(velocity_names), float(dt))
+
+
+def run_recording(robot: Robot, record: Record, dt: float) -> Recording:
+    """The recording of a run of ``robot``, naming its joints and velocity coordinates."""
+    joints = robot.kinematics.joint_names
+    velocities = ("v", "omega") + joints[3:] if robot.base is not None else joints
+    return recording_of(record, joints, velocities, dt)
 
 
 def save_recording(path: str | Path, recording: Recording) -> None:
