@@ -114,3 +114,16 @@ def test_auto_with_a_missing_mesh_names_the_link(tmp_path: Path, capsys: pytest.
     path.write_text(yaml.safe_dump(scenario))
     assert main(["run", str(path)]) == 2
     assert "robot.collision_spheres: link 'c'" in capsys.readouterr().err
+
+
+def test_a_urdf_without_collision_geometry_is_named(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    arm = Path(__file__).parent.parent / "examples" / "custom_urdf" / "arm.urdf"
+    assert main(["spheres", str(arm)]) == 2
+    assert "no link of arm.urdf below 'base_link' has <collision> geometry" in capsys.readouterr().err
+    scenario = {"robot": {"urdf": str(arm), "goal_link": "tool", "collision_spheres": "auto"},
+                "planner": "static-fabric", "dt": 0.01, "duration": 0.1, "initial_state": {"q": [0, 0, 0]},
+                "goal": [{"type": "position", "position": [0.3, 0.1, 0.3]}]}
+    path = tmp_path / "scenario.yaml"
+    path.write_text(yaml.safe_dump(scenario), encoding="utf-8")
+    assert main(["run", str(path)]) == 2
+    assert capsys.readouterr().err.startswith("dynfab: error: robot.collision_spheres: no link of arm.urdf")

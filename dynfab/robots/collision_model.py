@@ -118,7 +118,8 @@ def auto_collision_model(path: str | os.PathLike[str], joints: Sequence[str] | N
 
     Raises:
         OSError, UrdfError: The URDF cannot be read.
-        LinkMeshError: A moving link's mesh is missing or unreadable.
+        LinkMeshError: A moving link's mesh is missing or unreadable, or no link has
+            collision geometry.
         ValueError: Unknown joints or locked names.
     """
     model = load_urdf(path, package_dirs)
@@ -127,11 +128,16 @@ def auto_collision_model(path: str | os.PathLike[str], joints: Sequence[str] | N
     entry = (cache_dir() if cache is None else cache) / f"collision-{key}.json"
     if entry.is_file():
         try:
-            return _decode(json.loads(entry.read_text(encoding="utf-8")))
+            cached = _decode(json.loads(entry.read_text(encoding="utf-8")))
         except (ValueError, KeyError, TypeError):
             pass  # a damaged entry is refitted and overwritten
+        else:
+            if spheres is None:
+                _check_not_empty(cached.links, path, kinematics)
+            return cached
     if spheres is None:
         links = fit_link_spheres(kinematics, parameters)
+        _check_not_empty(links, path, kinematics)
     else:
         links = tuple(LinkFit(s.link, (s,), float("nan"), float("nan")) for s in spheres)
     all_spheres = [s for fit in links for s in fit.spheres]
@@ -142,6 +148,13 @@ def auto_collision_model(path: str | os.PathLike[str], joints: Sequence[str] | N
     temporary.write_text(json.dumps(_encode(result)), encoding="utf-8")
     temporary.replace(entry)
     return result
+
+
+def _check_not_empty(links: Sequence[LinkFit], path: str | os.PathLike[str], kinematics: Kinematics) -> None:
+    """Raise if no link got a sphere: the URDF has no collision geometry to fit."""
+    if not any(fit.spheres for fit in links):
+        raise LinkMeshError(f"no link of {Path(path).name} below '{kinematics.root_link}' has <collision> "
+                            "geometry to fit spheres to; give collision_spheres by hand")
 
 
 def cache_dir() -> Path:
