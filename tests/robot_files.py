@@ -5,6 +5,7 @@ from __future__ import annotations
 import importlib.metadata
 from pathlib import Path
 
+import numpy as np
 import pybullet_data
 
 
@@ -34,3 +35,19 @@ ARMS: dict[str, tuple[str, str]] = {
 def arm_urdf(name: str) -> Path:
     """The URDF of one of :data:`ARMS`."""
     return example_robot_data_dir() / ARMS[name][0]
+
+
+def folded_configuration(model: object, seed: int) -> tuple[np.ndarray, list[float]]:
+    """A UR5-like configuration (joints in [-3, 3] rad) where two checked links of a mesh
+    collision model overlap by more than 1 cm, found by a seeded random search; with the
+    distance of every checked pair there [m]."""
+    from dynfab.geometry.exact_collision import exact_distance
+
+    rng = np.random.default_rng(seed)
+    for _ in range(400):
+        q = rng.uniform(-3.0, 3.0, len(model.kinematics.joint_names))
+        poses = model.link_poses(q)[0]
+        depths = [exact_distance(model.meshes[i], poses[i], model.meshes[j], poses[j]) for i, j in model.pairs]
+        if min(depths) < -0.01:
+            return q, depths
+    raise AssertionError("no configuration folded into itself found")

@@ -11,10 +11,9 @@ from typing import Any
 import numpy as np
 import pytest
 import yaml
-from robot_files import arm_urdf
+from robot_files import arm_urdf, folded_configuration
 
 from dynfab.cli import main
-from dynfab.geometry.exact_collision import exact_distance
 from dynfab.geometry.shapes import Box, Placement
 from dynfab.robots import load_robot
 from dynfab.robots.mesh_sweep import PlacedShape, sweep_meshes
@@ -196,15 +195,7 @@ def test_start_in_collision_on_meshes(tmp_path: Path, capsys: pytest.CaptureFixt
 
 def test_start_in_self_collision_on_meshes(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     model = mesh_model_for(robot_for(scenario_from_dict(UR5)))
-    rng = np.random.default_rng(11)
-    for _ in range(400):  # search a configuration folded into itself
-        q = rng.uniform(-3.0, 3.0, 6)
-        poses = model.link_poses(q)[0]
-        depths = [exact_distance(model.meshes[i], poses[i], model.meshes[j], poses[j]) for i, j in model.pairs]
-        if min(depths) < -0.01:
-            break
-    else:
-        pytest.fail("no self-colliding UR5 configuration found")
+    q, depths = folded_configuration(model, seed=11)
     touching = [(model.links[i], model.links[j]) for (i, j), depth in zip(model.pairs, depths) if depth <= 0.0]
     message = error_of(scenario_file(tmp_path, with_q(UR5, [float(x) for x in q])), capsys)
     assert message.startswith("dynfab: error: initial_state.q: the start state is in self-collision: links ")

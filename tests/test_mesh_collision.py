@@ -6,7 +6,7 @@ import itertools
 
 import numpy as np
 import pytest
-from robot_files import arm_urdf
+from robot_files import arm_urdf, folded_configuration
 
 from dynfab.geometry.exact_collision import exact_distance, placement_matrix, shape_geometry
 from dynfab.geometry.shapes import Box, Placement, Plane, Sphere, quaternion_from_rpy
@@ -113,15 +113,7 @@ def test_sweep_minima_and_contacts_are_those_of_brute_force(ur5) -> None:  # typ
 
 
 def test_an_arm_folded_into_itself_is_a_self_collision(ur5) -> None:  # type: ignore[no-untyped-def]
-    rng = np.random.default_rng(7)
-    for _ in range(400):  # random search for a configuration where two checked links overlap
-        q = rng.uniform(-3.0, 3.0, 6)
-        poses = ur5.link_poses(q)[0]
-        depths = [exact_distance(ur5.meshes[i], poses[i], ur5.meshes[j], poses[j]) for i, j in ur5.pairs]
-        if min(depths) < -0.01:
-            break
-    else:
-        pytest.fail("no self-colliding configuration found")
+    q, depths = folded_configuration(ur5, seed=7)
     sweep = sweep_meshes(ur5, np.vstack([np.zeros(6), q]), [])
     assert sweep.clearance is None
     assert sweep.min_self_distance == pytest.approx(min(depths), abs=1e-12)
