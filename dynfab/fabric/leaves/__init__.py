@@ -1,0 +1,1 @@
+"""Fabric leaves, one behaviour per file: goals, orientations, obstacles, shapes, limits, self-collision."""
