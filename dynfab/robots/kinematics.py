@@ -4,15 +4,11 @@ A link pose is the product of the joint transforms on the path from the root,
 
     T_root_link(q) = prod_j  T_origin_j @ M_j(q_j),
 
-with ``T_origin = [R(rpy), xyz; 0, 1]``, ``R(rpy) = Rz(yaw) Ry(pitch) Rx(roll)`` and the
-joint motion ``M`` a rotation about the unit axis ``a`` (Rodrigues,
-``R = cos(q) I + sin(q) [a]_x + (1 - cos(q)) a a^T``) or a translation ``q a``.
-
-The expressions are built entry by entry with constants folded: products with exact
-0 and +-1 are skipped, so axis-aligned axes and right-angle origins (all of the Panda)
-cost nothing beyond the sines and cosines and the dense products. Rotation entries of
-an origin within 1e-12 of 0 or +-1 are snapped to these values (``cos(pi/2)`` is
-6e-17 in floating point).
+with ``T_origin = [R, xyz; 0, 1]`` (URDF's ``rpy``: ``R = Rz(yaw) Ry(pitch) Rx(roll)``)
+and the joint motion ``M`` of :mod:`dynfab.robots.pose_algebra`, which builds the
+expressions entry by entry with constants folded (axis-aligned axes and right-angle
+origins, all of the Panda, cost nothing beyond the sines and cosines). A locked joint's
+motion is a constant.
 
 Each query compiles (once, cached) a CasADi SX ``Function`` of ``q`` and calls it with
 the given ``q``, so the same method works for ``SX`` (returns the expression, inlined),
@@ -23,43 +19,22 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass
 from typing import Union
 
 import casadi as ca
 import numpy as np
 
+from .pose_algebra import (IDENTITY, Pose, Scalar, apply, column, compose, homogeneous, inverse, matrix,
+                           motion_pose, origin_pose, sx)
 from .urdf import Joint, UrdfModel
 
 __all__ = ["Kinematics", "UnknownLinkError"]
 
-Scalar = Union[float, ca.SX]
-"""A Python float (constant, folded at build time) or a 1x1 SX expression."""
 CasadiLike = Union[ca.SX, ca.MX, ca.DM]
 Point = tuple[str, tuple[float, float, float]]
 
-_SNAP_TOLERANCE = 1e-12
-
-
 class UnknownLinkError(ValueError):
     """A link name that is not part of the kinematic tree."""
-
-
-@dataclass(frozen=True)
-class _Pose:
-    """A rigid transform with scalar entries: ``x_parent = rot @ x_child + pos``.
-
-    Attributes:
-        rot: Rotation matrix as three rows of three scalars [-].
-        pos: Translation as three scalars [m].
-    """
-
-    rot: tuple[tuple[Scalar, Scalar, Scalar], ...]
-    pos: tuple[Scalar, Scalar, Scalar]
-
-
-_IDENTITY = _Pose(rot=((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
-                  pos=(0.0, 0.0, 0.0))
 
 
 class Kinematics:
@@ -158,7 +133,7 @@ class Kinematics:
         """
         parent = self._check_links(link, parent)
         key = ("transform", link, parent)
-        return self._call(key, q, lambda b: _homogeneous(b.relative(link, parent)))
+        return self._call(key, q, lambda b: homogeneous(b.relative(link, parent)))
 
     def rotation(self, q: object, link: str, parent: str | None = None) -> CasadiLike:
         """Rotation matrix R (3x3) of ``link`` in the frame of ``parent`` (root if None).
@@ -167,7 +142,7 @@ class Kinematics:
         """
         parent = self._check_links(link, parent)
         key = ("rotation", link, parent)
-        return self._call(key, q, lambda b: _matrix(b.relative(link, parent).rot))
+        return self._call(key, q, lambda b: matrix(b.relative(link, parent).rot))
 
     def position(self, q: object, link: str, parent: str | None = None,
                  offset: Sequence[float] = (0.0, 0.0, 0.0)) -> CasadiLike:
@@ -185,7 +160,7 @@ class Kinematics:
         point = _as_offset(offset)
         key = ("position", link, parent, point)
         return self._call(
-            key, q, lambda b: _column(b.point(link, parent, point)))
+            key, q, lambda b: column(b.point(link, parent, point)))
 
     def positions(self, q: object, points: Iterable[tuple[str, Sequence[float]]]
                   ) -> CasadiLike:
@@ -204,10 +179,10 @@ class Kinematics:
         key = ("positions", pts)
 
         def build(b: _Builder) -> ca.SX:
-            rows = [_apply(b.relative(link, self.root_link), off) for link, off in pts]
+            rows = [apply(b.relative(link, self.root_link), off) for link, off in pts]
             if not rows:
                 return ca.SX(0, 3)
-            return ca.vertcat(*[ca.horzcat(*[_sx(x) for x in row]) for row in rows])
+            return ca.vertcat(*[ca.horzcat(*[sx(x) for x in row]) for row in rows])
 
         return self._call(key, q, build)
 
@@ -249,16 +224,16 @@ class _Builder:
     def __init__(self, kinematics: Kinematics, q: ca.SX) -> None:
         self._kin = kinematics
         self._q = q
-        self._joint_poses: dict[str, _Pose] = {}
-        self._chains: dict[tuple[str, str], _Pose] = {}
+        self._joint_poses: dict[str, Pose] = {}
+        self._chains: dict[tuple[str, str], Pose] = {}
 
-    def relative(self, link: str, parent: str) -> _Pose:
+    def relative(self, link: str, parent: str) -> Pose:
         """Pose of ``link`` in ``parent``: via their lowest common ancestor."""
         common = self._common_ancestor(link, parent)
         pose = self._chain(common, link)
         if common == parent:
             return pose
-        return _compose(_inverse(self._chain(common, parent)), pose)
+        return compose(inverse(self._chain(common, parent)), pose)
 
     def point(self, link: str, parent: str,
               point: Sequence[Scalar]) -> tuple[Scalar, Scalar, Scalar]:
@@ -273,11 +248,11 @@ class _Builder:
             if child == common:
                 break
             joint = self._kin._parent_joint[child]
-            v = _apply(self._origin(joint), _apply(self._motion(joint), v))
+            v = apply(self._origin(joint), apply(self._motion(joint), v))
         down = self._ancestors(parent)
         for child in reversed(down[:down.index(common)]):
             joint = self._kin._parent_joint[child]
-            v = _apply(_inverse(self._motion(joint)), _apply(_inverse(self._origin(joint)), v))
+            v = apply(inverse(self._motion(joint)), apply(inverse(self._origin(joint)), v))
         return v
 
     def _common_ancestor(self, link: str, parent: str) -> str:
@@ -292,34 +267,34 @@ class _Builder:
             chain.append(self._kin._parent_joint[chain[-1]].parent)
         return chain
 
-    def _chain(self, base: str, link: str) -> _Pose:
+    def _chain(self, base: str, link: str) -> Pose:
         """Pose of ``link`` in its ancestor ``base``, memoised."""
         if link == base:
-            return _IDENTITY
+            return IDENTITY
         key = (base, link)
         if key not in self._chains:
             joint = self._kin._parent_joint[link]
-            self._chains[key] = _compose(self._chain(base, joint.parent),
+            self._chains[key] = compose(self._chain(base, joint.parent),
                                          self._joint_pose(joint))
         return self._chains[key]
 
-    def _joint_pose(self, joint: Joint) -> _Pose:
+    def _joint_pose(self, joint: Joint) -> Pose:
         """``T_origin @ M(q_joint)``, memoised per joint."""
         if joint.name not in self._joint_poses:
-            self._joint_poses[joint.name] = _compose(self._origin(joint),
+            self._joint_poses[joint.name] = compose(self._origin(joint),
                                                      self._motion(joint))
         return self._joint_poses[joint.name]
 
-    def _origin(self, joint: Joint) -> _Pose:
+    def _origin(self, joint: Joint) -> Pose:
         """The constant origin transform of ``joint``."""
-        return _origin_pose(joint.origin.xyz, joint.origin.rotation)
+        return origin_pose(joint.origin.xyz, joint.origin.rotation)
 
-    def _motion(self, joint: Joint) -> _Pose:
+    def _motion(self, joint: Joint) -> Pose:
         """The joint motion ``M(q_joint)``, memoised per joint."""
         key = "motion:" + joint.name
         if key not in self._joint_poses:
-            self._joint_poses[key] = (_IDENTITY if joint.type == "fixed" else
-                                      _motion_pose(joint, self._joint_value(joint)))
+            self._joint_poses[key] = (IDENTITY if joint.type == "fixed" else
+                                      motion_pose(joint, self._joint_value(joint)))
         return self._joint_poses[key]
 
     def _joint_value(self, joint: Joint) -> Scalar:
@@ -339,129 +314,6 @@ class _Builder:
     def _own_value(self, name: str) -> Scalar:
         index = self._kin._index.get(name)
         return self._kin.locked[name] if index is None else self._q[index]
-
-
-# ---------------------------------------------------------------------- pose algebra
-
-
-def _lincomb(terms: Iterable[tuple[Scalar, Scalar]]) -> Scalar:
-    """``sum(a * b)`` with constants folded and products by 0, +-1 skipped."""
-    constant = 0.0
-    plus: list[ca.SX] = []
-    minus: list[ca.SX] = []
-    for a, b in terms:
-        a_const, b_const = isinstance(a, float), isinstance(b, float)
-        if a_const and b_const:
-            constant += a * b
-            continue
-        if (a_const and a == 0.0) or (b_const and b == 0.0):
-            continue
-        if a_const or b_const:
-            k, e = (a, b) if a_const else (b, a)
-            if k == 1.0:
-                plus.append(e)
-            elif k == -1.0:
-                minus.append(e)
-            elif k > 0.0:
-                plus.append(k * e)
-            else:
-                minus.append((-k) * e)
-        else:
-            plus.append(a * b)
-    if not plus and not minus:
-        return constant
-    if plus:
-        result = plus[0]
-        for e in plus[1:]:
-            result = result + e
-    else:
-        result = -minus[0]
-        minus = minus[1:]
-    for e in minus:
-        result = result - e
-    return result + constant if constant != 0.0 else result
-
-
-def _compose(a: _Pose, b: _Pose) -> _Pose:
-    """``a @ b``: rotation ``Ra Rb``, translation ``Ra pb + pa``."""
-    rot = tuple(tuple(_lincomb((a.rot[i][k], b.rot[k][j]) for k in range(3))
-                      for j in range(3)) for i in range(3))
-    pos = tuple(_lincomb([(a.rot[i][k], b.pos[k]) for k in range(3)] + [(1.0, a.pos[i])])
-                for i in range(3))
-    return _Pose(rot=rot, pos=pos)  # type: ignore[arg-type]
-
-
-def _inverse(a: _Pose) -> _Pose:
-    """``a^-1``: rotation ``R^T``, translation ``-R^T p``."""
-    rot = tuple(tuple(a.rot[j][i] for j in range(3)) for i in range(3))
-    pos = tuple(_lincomb([(-1.0, _lincomb((rot[i][k], a.pos[k]) for k in range(3)))])
-                for i in range(3))
-    return _Pose(rot=rot, pos=pos)  # type: ignore[arg-type]
-
-
-def _apply(pose: _Pose, point: Sequence[Scalar]) -> tuple[Scalar, Scalar, Scalar]:
-    """``R @ point + p``."""
-    return tuple(_lincomb([(pose.rot[i][k], point[k]) for k in range(3)]
-                          + [(1.0, pose.pos[i])]) for i in range(3))
-
-
-def _origin_pose(xyz: tuple[float, float, float],
-                 rotation: Sequence[Sequence[float]]) -> _Pose:
-    """Constant pose ``[rotation, xyz]`` with near-0/+-1 rotation entries snapped."""
-    snapped = tuple(tuple(_snap(float(x)) for x in row) for row in rotation)
-    return _Pose(rot=snapped, pos=(float(xyz[0]), float(xyz[1]), float(xyz[2])))
-
-
-def _snap(x: float) -> float:
-    """Round ``x`` to 0, 1 or -1 if it is within floating-point noise of them."""
-    for target in (0.0, 1.0, -1.0):
-        if abs(x - target) < _SNAP_TOLERANCE:
-            return target
-    return float(x)
-
-
-def _motion_pose(joint: Joint, value: Scalar) -> _Pose:
-    """Joint motion ``M(q)``: Rodrigues rotation or translation along the axis; a float
-    ``value`` (a locked joint) gives a constant pose."""
-    a = joint.axis
-    if joint.type == "prismatic":
-        return _Pose(rot=_IDENTITY.rot,
-                     pos=tuple(_lincomb([(a[i], value)]) for i in range(3)))  # type: ignore
-    if isinstance(value, float):
-        c, s = math.cos(value), math.sin(value)
-    else:
-        c, s = ca.cos(value), ca.sin(value)
-    skew = ((0.0, -a[2], a[1]), (a[2], 0.0, -a[0]), (-a[1], a[0], 0.0))
-    rot = tuple(tuple(
-        _lincomb([(_snap((1.0 if i == j else 0.0) - a[i] * a[j]), c),
-                  (_snap(skew[i][j]), s),
-                  (_snap(a[i] * a[j]), 1.0)])
-        for j in range(3)) for i in range(3))
-    return _Pose(rot=rot, pos=(0.0, 0.0, 0.0))  # type: ignore[arg-type]
-
-
-# ---------------------------------------------------------------------- conversions
-
-
-def _sx(x: Scalar) -> ca.SX:
-    """A scalar as a 1x1 SX."""
-    return ca.SX(x) if isinstance(x, float) else x
-
-
-def _matrix(rows: Sequence[Sequence[Scalar]]) -> ca.SX:
-    """Rows of scalars as an SX matrix."""
-    return ca.vertcat(*[ca.horzcat(*[_sx(x) for x in row]) for row in rows])
-
-
-def _column(entries: Sequence[Scalar]) -> ca.SX:
-    """Scalars as an SX column."""
-    return ca.vertcat(*[_sx(x) for x in entries])
-
-
-def _homogeneous(pose: _Pose) -> ca.SX:
-    """``[[R, p], [0, 0, 0, 1]]`` as a 4x4 SX."""
-    rows = [list(pose.rot[i]) + [pose.pos[i]] for i in range(3)]
-    return _matrix(rows + [[0.0, 0.0, 0.0, 1.0]])
 
 
 def _as_offset(offset: Sequence[float]) -> tuple[float, float, float]:
