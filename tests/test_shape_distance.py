@@ -185,3 +185,20 @@ def test_quaternion_rotation_matches_numpy_and_normalises() -> None:
     np.testing.assert_allclose(np.array(rotation(quaternion)), expected, atol=1e-12)
     np.testing.assert_allclose(np.array(rotation(3.0 * np.array(quaternion))), expected, atol=1e-9)
     np.testing.assert_allclose(np.array(rotation([0, 0, 0, 0])), np.eye(3))
+
+
+def test_closed_form_box_derivatives_equal_automatic_differentiation() -> None:
+    from dynfab.geometry.smooth_distance import smooth_box_distance, smooth_box_distance_derivatives
+
+    x, v, size = ca.SX.sym("x", 3), ca.SX.sym("v", 3), ca.SX.sym("s", 3)
+    d = smooth_box_distance(x, size, 0.01)
+    gradient = ca.gradient(d, x)
+    automatic = ca.Function("ad", [x, v, size], [d, gradient, ca.dot(v, ca.mtimes(ca.hessian(d, x)[0], v))])
+    closed = ca.Function("cf", [x, v, size], list(smooth_box_distance_derivatives(x, v, size, 0.01)))
+    rng = np.random.default_rng(4)
+    for _ in range(200):  # points around a box, many near its faces, edges and corners
+        box = rng.uniform(0.05, 0.4, 3)
+        point = rng.uniform(-0.6, 0.6, 3) * np.where(rng.random(3) < 0.3, box / 1.2, 1.0)
+        velocity = rng.normal(size=3)
+        for a, b in zip(automatic(point, velocity, box), closed(point, velocity, box)):
+            np.testing.assert_allclose(np.array(b), np.array(a), rtol=1e-9, atol=1e-12)

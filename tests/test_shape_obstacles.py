@@ -113,6 +113,11 @@ def test_a_box_slot_costs_at_most_three_sphere_slots(panda, dynamic: bool) -> No
     for kind in SHAPE_DIMENSIONS:
         cost = instructions(shape_slots=ShapeSlots(**{kind: 1})) - base
         assert 0 < cost <= 3 * sphere, (kind, cost, sphere)
+    # a further slot, once the robot's spheres are pulled anyway: a box still costs <= 3 spheres
+    scene = instructions(obstacle_slots=5)
+    further_sphere = instructions(obstacle_slots=6) - scene
+    further_box = instructions(obstacle_slots=5, shape_slots=ShapeSlots(box=1)) - scene
+    assert 0 < further_box <= 3 * further_sphere, (further_box, further_sphere)
 
 
 Q0 = np.array([1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0])
