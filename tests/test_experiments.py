@@ -17,11 +17,11 @@ from dynfab.cli import main
 from dynfab.experiments import exp6
 from dynfab.experiments.panda_sampling import PandaSampler
 from dynfab.experiments.registry import EXPERIMENTS, MPC
-from dynfab.experiments.series import (METRIC_KEYS, METRICS, OUTCOMES, SeriesError, SeriesResult, load_records,
-                                       run_series, scenario_file)
+from dynfab.experiments.series import SeriesError, SeriesResult, load_records, run_series, scenario_file
+from dynfab.experiments.series_summary import METRIC_KEYS, METRICS, OUTCOMES
 from dynfab.scenario.runner import run_scenario
 from dynfab.scenario.schema import load_scenario
-from dynfab.motion.trajectories import trajectory_from_mapping
+from dynfab.motion.trajectory_mapping import trajectory_from_mapping
 
 RUNS, JOBS = 2, 2
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"

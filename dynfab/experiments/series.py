@@ -29,38 +29,24 @@ import json
 import multiprocessing
 import os
 import time
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Any
+from typing import IO
 
-import numpy as np
 import yaml
-from matplotlib.figure import Figure
-from matplotlib.ticker import MaxNLocator
 
-from dynfab.experiments.registry import Experiment, PaperRatio, Quantity
-from dynfab.scenario.metrics import Metrics
-from dynfab.viz.plots import plot_run
+from dynfab.experiments.registry import Experiment
+from dynfab.experiments.series_plots import write_plots
+from dynfab.experiments.series_summary import (METRIC_KEYS, MetricValue, RunRecord, SeriesSummary, render_summary,
+                                               summarize, summary_dict)
 from dynfab.scenario.recording import run_recording, save_recording
-from dynfab.scenario.runner import RunResult, run_scenario
+from dynfab.scenario.runner import run_scenario
 from dynfab.scenario.schema import load_scenario
 
-#: The run metrics summarized as mean ± std, with their labels.
-METRICS: dict[Quantity, str] = {
-    "clearance": "clearance [m]",
-    "path_length": "path length [m]",
-    "time_to_goal": "time to goal [s]",
-    "summed_error": "summed error [m]",
-    "solver_time_ms": "solver time [ms]",
-}
-#: The outcomes of a run; every run has exactly one.
-OUTCOMES: tuple[Quantity, ...] = ("success", "collisions", "deadlocks")
-METRIC_KEYS: tuple[str, ...] = tuple(field.name for field in dataclasses.fields(Metrics))
 
-MetricValue = bool | int | float | None
 Pair = tuple[int, str]
 
 
@@ -70,88 +56,6 @@ class SeriesError(ValueError):
 
 class RunError(RuntimeError):
     """A run of the series raised; the message names its scenario file."""
-
-
-@dataclass(frozen=True)
-class RunRecord:
-    """One finished run, as a line of ``runs.jsonl``.
-
-    Attributes:
-        seed: the scenario's seed.
-        planner: the planner that ran it.
-        metrics: ``Metrics.to_dict()`` of the run.
-        wall_time_s: wall time of the whole run (build, simulation, metrics) [s].
-    """
-
-    seed: int
-    planner: str
-    metrics: dict[str, MetricValue]
-    wall_time_s: float
-
-    @property
-    def outcome(self) -> Quantity:
-        """``success``, ``collisions`` or ``deadlocks`` (goal not reached, no collision)."""
-        if self.metrics["success"]:
-            return "success"
-        return "collisions" if self.metrics["collision"] else "deadlocks"
-
-
-@dataclass(frozen=True)
-class Statistic:
-    """Mean and (population) standard deviation of ``n`` values."""
-
-    mean: float
-    std: float
-    n: int
-
-
-@dataclass(frozen=True)
-class PlannerSummary:
-    """One planner's results over the series.
-
-    Attributes:
-        planner: its name.
-        runs: number of runs.
-        outcomes: runs per outcome (``success``, ``collisions``, ``deadlocks``).
-        metrics: per metric of :data:`METRICS`, over the runs where every planner
-            succeeded; None where no such run has a value.
-        own_metrics: the same over this planner's own successful runs.
-        wall_time_s: mean wall time of one run over all its runs [s].
-    """
-
-    planner: str
-    runs: int
-    outcomes: dict[str, int]
-    metrics: dict[str, Statistic | None]
-    own_metrics: dict[str, Statistic | None]
-    wall_time_s: float
-
-
-@dataclass(frozen=True)
-class RatioSummary:
-    """Our value of a paper's ratio: the ratio of the planners' means, or None."""
-
-    paper: PaperRatio
-    ours: float | None
-
-
-@dataclass(frozen=True)
-class SeriesSummary:
-    """The series' results beside the paper's.
-
-    Attributes:
-        experiment: what ran.
-        seeds: the seeds summarized.
-        common_seeds: the seeds where every planner succeeded.
-        planners: one summary per planner, in the experiment's order.
-        ratios: the paper's ratios with ours.
-    """
-
-    experiment: Experiment
-    seeds: tuple[int, ...]
-    common_seeds: tuple[int, ...]
-    planners: tuple[PlannerSummary, ...]
-    ratios: tuple[RatioSummary, ...]
 
 
 @dataclass(frozen=True)
@@ -228,7 +132,7 @@ def run_series(experiment: Experiment, runs: int, seed: int, out_dir: str | Path
         (out / "summary.json").write_text(json.dumps(summary_dict(summary), indent=2) + "\n", encoding="utf-8")
         baseline = [r for r in records if r.planner == experiment.planners[0]]
         example = next((r for r in baseline if not r.metrics["success"]), baseline[0])
-        _write_plots(out / "plots", summary, records, example, files[(example.seed, example.planner)])
+        write_plots(out / "plots", summary, records, example, files[(example.seed, example.planner)])
     return SeriesResult(out, records, len(pending), summary, example)
 
 
@@ -382,109 +286,6 @@ def _duration(seconds: float) -> str:
     return f"{hours}h{minutes:02d}m{seconds:02d}s" if hours else f"{minutes}m{seconds:02d}s"
 
 
-def summarize(experiment: Experiment, records: Sequence[RunRecord]) -> SeriesSummary:
-    """Outcomes per planner, metrics over the seeds where every planner succeeded, and
-    our values of the paper's ratios (ratios of those means)."""
-    by_planner = {p: [r for r in records if r.planner == p] for p in experiment.planners}
-    seeds = tuple(sorted({r.seed for r in records}))
-    succeeded = {(r.seed, r.planner) for r in records if r.metrics["success"]}
-    common = tuple(s for s in seeds if all((s, p) in succeeded for p in experiment.planners))
-    planners = tuple(
-        PlannerSummary(
-            planner=planner,
-            runs=len(own),
-            outcomes={o: sum(r.outcome == o for r in own) for o in OUTCOMES},
-            metrics={m: _statistic([r.metrics[m] for r in own if r.seed in common]) for m in METRICS},
-            own_metrics={m: _statistic([r.metrics[m] for r in own if r.metrics["success"]]) for m in METRICS},
-            wall_time_s=float(np.mean([r.wall_time_s for r in own])),
-        )
-        for planner, own in by_planner.items())
-    means = {(s.planner, m): stat.mean for s in planners for m, stat in s.metrics.items() if stat is not None}
-    ratios = []
-    for ratio in experiment.ratios:
-        top, bottom = means.get((ratio.numerator, ratio.quantity)), means.get((ratio.denominator, ratio.quantity))
-        ours = top / bottom if top is not None and bottom else None
-        ratios.append(RatioSummary(ratio, ours))
-    return SeriesSummary(experiment, seeds, common, planners, tuple(ratios))
-
-
-def _statistic(values: Iterable[MetricValue]) -> Statistic | None:
-    kept = [float(v) for v in values if v is not None]
-    return Statistic(float(np.mean(kept)), float(np.std(kept)), len(kept)) if kept else None
-
-
-def render_summary(summary: SeriesSummary) -> str:
-    """The summary as Markdown: a table with the paper's figures beside ours, the same
-    metrics over each planner's own successes (where those differ from the common
-    ones), the ratio lines and the notes."""
-    experiment, planners = summary.experiment, summary.planners
-    rows = [["", *(cell for p in planners for cell in (p.planner, "paper"))]]
-    for outcome in OUTCOMES:
-        rows.append([outcome, *(cell for p in planners
-                                for cell in (_count(p.outcomes[outcome], p.runs), _paper(experiment, outcome, p.planner)))])
-    for metric, label in METRICS.items():
-        rows.append([label, *(cell for p in planners
-                              for cell in (_shown(p.metrics[metric]), _paper(experiment, metric, p.planner)))])
-    rows.append(["wall time per run [s]", *(cell for p in planners for cell in (f"{p.wall_time_s:.3g}", ""))])
-    lines = [f"# {experiment.name}: {experiment.description}", "",
-             f"Seeds {summary.seeds[0]}..{summary.seeds[-1]} ({len(summary.seeds)} runs per planner). Outcomes "
-             f"over all runs; metrics (mean ± std) over the {len(summary.common_seeds)} runs where every planner "
-             "succeeded, as the paper compares them; wall time over all runs.", "", *_table(rows)]
-    if any(p.outcomes["success"] != len(summary.common_seeds) for p in planners):
-        own = [["", *(f"{p.planner} ({p.outcomes['success']} runs)" for p in planners)]]
-        own += [[label, *(_shown(p.own_metrics[metric]) for p in planners)] for metric, label in METRICS.items()]
-        lines += ["", "The same metrics over each planner's own successful runs:", "", *_table(own)]
-    if summary.ratios:
-        lines += ["", "Ratios of the means (runs where every planner succeeded):", ""]
-        lines += [f"- {METRICS[r.paper.quantity]} {r.paper.numerator} / {r.paper.denominator}: ours "
-                  f"{'–' if r.ours is None else f'{r.ours:.3g}'}, paper {r.paper.text}" for r in summary.ratios]
-    if experiment.notes:
-        lines += ["", experiment.notes]
-    return "\n".join(lines) + "\n"
-
-
-def _table(rows: list[list[str]]) -> list[str]:
-    """Markdown table lines; the first row is the header."""
-    return ["| " + " | ".join(rows[0]) + " |", "|" + "---|" * len(rows[0]),
-            *("| " + " | ".join(row) + " |" for row in rows[1:])]
-
-
-def _count(count: int, runs: int) -> str:
-    return f"{count}/{runs} ({100 * count / runs:.0f} %)"
-
-
-def _paper(experiment: Experiment, quantity: Quantity, planner: str) -> str:
-    figure = experiment.figure(quantity, planner)
-    return "" if figure is None else figure.text
-
-
-def _shown(statistic: Statistic | None) -> str:
-    return "–" if statistic is None else f"{statistic.mean:.3g} ± {statistic.std:.2g}"
-
-
-def _statistics_dict(statistics: dict[str, Statistic | None]) -> dict[str, dict[str, float] | None]:
-    return {m: None if s is None else dataclasses.asdict(s) for m, s in statistics.items()}
-
-
-def summary_dict(summary: SeriesSummary) -> dict[str, Any]:
-    """The summary as a JSON-ready mapping."""
-    experiment = summary.experiment
-    return {
-        "experiment": experiment.name,
-        "description": experiment.description,
-        "seeds": list(summary.seeds),
-        "common_success_seeds": list(summary.common_seeds),
-        "planners": {p.planner: {"runs": p.runs, **p.outcomes, "success_rate": p.outcomes["success"] / p.runs,
-                                 "metrics": _statistics_dict(p.metrics),
-                                 "own_success_metrics": _statistics_dict(p.own_metrics),
-                                 "wall_time_s": p.wall_time_s}
-                     for p in summary.planners},
-        "paper": [dataclasses.asdict(f) for f in experiment.figures],
-        "ratios": [{**dataclasses.asdict(r.paper), "ours": r.ours} for r in summary.ratios],
-        "notes": experiment.notes,
-    }
-
-
 def _write_csv(path: Path, records: Sequence[RunRecord], experiment: str) -> None:
     with path.open("w", encoding="utf-8", newline="") as file:
         writer = csv.writer(file)
@@ -492,75 +293,3 @@ def _write_csv(path: Path, records: Sequence[RunRecord], experiment: str) -> Non
         for r in records:
             values = ("" if r.metrics[k] is None else r.metrics[k] for k in METRIC_KEYS)
             writer.writerow([experiment, r.seed, r.planner, *values, r.wall_time_s])
-
-
-def _write_plots(directory: Path, summary: SeriesSummary, records: Sequence[RunRecord], example: RunRecord,
-                 example_file: Path) -> None:
-    """Box plots of the metrics, outcome bars and the example run (matplotlib's Agg canvas)."""
-    directory.mkdir(parents=True, exist_ok=True)
-    _plot_metrics(directory / "metrics.png", summary, records)
-    _plot_outcomes(directory / "outcomes.png", summary)
-    result = run_scenario(load_scenario(example_file))
-    _plot_example(directory / f"example_{example.seed}_{example.planner}.png", result,
-                  f"{summary.experiment.name}, seed {example.seed}, {example.planner}")
-
-
-def _plot_metrics(path: Path, summary: SeriesSummary, records: Sequence[RunRecord]) -> None:
-    """One box plot per metric, one box per planner, over all runs where the metric has a
-    value (failures included: a collision shows as clearance below zero)."""
-    planners = [p.planner for p in summary.planners]
-    values = {m: [[float(v) for r in records if r.planner == p and (v := r.metrics[m]) is not None] for p in planners]
-              for m in METRICS}
-    shown = [m for m in METRICS if any(values[m])]
-    figure = Figure(figsize=(3.6 * len(shown), 4.2), layout="constrained")
-    for k, metric in enumerate(shown):
-        ax = figure.add_subplot(1, len(shown), k + 1)
-        ax.boxplot(values[metric], tick_labels=planners)
-        ax.set_title(METRICS[metric])
-        ax.grid(True, axis="y", alpha=0.3)
-        if metric == "clearance":
-            ax.axhline(0.0, color="C3", linestyle="--", linewidth=1)
-        if metric == "solver_time_ms":
-            ax.set_yscale("log")
-    figure.suptitle(f"{summary.experiment.name}: metrics over all {len(summary.seeds)} runs per planner "
-                    "(where defined)")
-    figure.savefig(path, dpi=100)
-
-
-def _plot_outcomes(path: Path, summary: SeriesSummary) -> None:
-    """Success, collision and deadlock counts per planner; the paper's as markers, scaled
-    to our number of runs."""
-    figure = Figure(figsize=(6.5, 4.2), layout="constrained")
-    ax = figure.add_subplot()
-    width = 0.8 / len(summary.planners)
-    for k, planner in enumerate(summary.planners):
-        x = np.arange(len(OUTCOMES)) + (k - (len(summary.planners) - 1) / 2) * width
-        ax.bar(x, [planner.outcomes[o] for o in OUTCOMES], width, label=planner.planner)
-        paper = [summary.experiment.figure(o, planner.planner) for o in OUTCOMES]
-        known = [(xi, f.value * planner.runs) for xi, f in zip(x, paper) if f is not None and f.value is not None]
-        if known:
-            ax.plot(*zip(*known), "kD", markersize=6, label="paper (scaled)" if k == 0 else None)
-    ax.set_xticks(np.arange(len(OUTCOMES)), OUTCOMES)
-    ax.set_ylabel("runs")
-    ax.yaxis.set_major_locator(MaxNLocator(integer=True))
-    ax.set_title(f"{summary.experiment.name}: outcomes of {len(summary.seeds)} runs per planner")
-    ax.legend(loc="best", fontsize="small")
-    ax.grid(True, axis="y", alpha=0.3)
-    figure.savefig(path, dpi=100)
-
-
-def _plot_example(path: Path, result: RunResult, title: str) -> None:
-    """The replayed example run: the goal link's path, goal, obstacles and clearance."""
-    goal = result.scenario.goals[0]
-    target = result.goal_reference if goal.type == "path" else goal.position
-    obstacles = result.scenario.obstacles
-    spheres = [k for k, o in enumerate(obstacles) if o.type == "sphere"]
-    shapes = [(o.shape, o.orientation, result.obstacle_centers[:, k]) for k, o in enumerate(obstacles)
-              if o.type != "sphere"]
-    metrics = result.metrics
-    outcome = "success" if metrics.success else "collision" if metrics.collision else "deadlock"
-    plot_run(path, result.goal_positions, [(target, goal.tolerance)], result.obstacle_centers[:, spheres],
-             [obstacles[k].radius for k in spheres], result.robot.planar,
-             clearance_over_time=result.clearance if obstacles else None, times=result.record.t,
-             title=f"{title}: {outcome}", base_path=None if result.robot.base is None else result.record.q[:, :2],
-             shapes=shapes)
