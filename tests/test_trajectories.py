@@ -24,8 +24,8 @@ from dynfab.motion.trajectories import (
     StaticPoint,
     Trajectory,
     TrajectoryError,
-    trajectory_from_mapping,
 )
+from dynfab.motion.trajectory_mapping import trajectory_from_mapping
 
 RNG = np.random.default_rng(7)
 STEP = 1e-5  # [s] central-difference step

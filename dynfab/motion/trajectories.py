@@ -6,19 +6,18 @@ Positions are in [m], velocities in [m/s], accelerations in [m/s²]. The dynamic
 ``(M, f − M ẍ̃)`` (paper eq. 13) consumes all three.
 
 Every trajectory is a frozen dataclass whose fields are validated on construction: an
-invalid field raises :class:`TrajectoryError` naming it, e.g. ``velocity: expected 3
-numbers, got 2``. :func:`trajectory_from_mapping` builds one from a scenario mapping
-(DESIGN.md section 5) and prefixes that name with the mapping's field path.
+invalid field raises :class:`~dynfab.motion.trajectory_values.TrajectoryError` naming it,
+e.g. ``velocity: expected 3 numbers, got 2``.
+:func:`dynfab.motion.trajectory_mapping.trajectory_from_mapping` builds one from a scenario
+mapping (DESIGN.md section 5) and prefixes that name with the mapping's field path.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from numbers import Real
 from typing import Any
 
 import casadi as ca
@@ -26,8 +25,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.interpolate import CubicSpline
 
-from dynfab.describe import describe
 from dynfab.motion.expression import ExpressionError, parse_expression
+from dynfab.motion.trajectory_values import TrajectoryError, numbers, point, positive, scalar, sequence
 
 Samples = tuple[np.ndarray, np.ndarray, np.ndarray]
 """Positions, velocities and accelerations at T times, each of shape (T, d)."""
@@ -36,20 +35,6 @@ Samples = tuple[np.ndarray, np.ndarray, np.ndarray]
 def _derived() -> Any:
     """A dataclass field computed in ``__post_init__``: not an argument, not compared."""
     return dataclasses.field(init=False, repr=False, compare=False)
-
-
-class TrajectoryError(ValueError):
-    """An invalid trajectory field; the message is one line ``<field>: <problem>``.
-
-    Attributes:
-        field: Path of the offending field, e.g. ``waypoints[2]``.
-        problem: What is wrong with it.
-    """
-
-    def __init__(self, field: str, problem: str) -> None:
-        self.field = field
-        self.problem = problem
-        super().__init__(f"{field}: {problem}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -114,7 +99,7 @@ class StaticPoint(Trajectory):
     _position: np.ndarray = _derived()
 
     def __post_init__(self) -> None:
-        _set(self, "position", _numbers(self.position, "position"))
+        _set(self, "position", numbers(self.position, "position"))
 
     @property
     def dimension(self) -> int:
@@ -140,8 +125,8 @@ class LinearTrajectory(Trajectory):
     _velocity: np.ndarray = _derived()
 
     def __post_init__(self) -> None:
-        _set(self, "start", _point(self.start, "start"))
-        _set(self, "velocity", _numbers(self.velocity, "velocity", self._start.size))
+        _set(self, "start", point(self.start, "start"))
+        _set(self, "velocity", numbers(self.velocity, "velocity", self._start.size))
 
     @property
     def dimension(self) -> int:
@@ -190,11 +175,11 @@ class CircleTrajectory(Trajectory):
     _basis: np.ndarray = _derived()
 
     def __post_init__(self) -> None:
-        _set(self, "center", _point(self.center, "center"))
-        _set(self, "radius", _positive(self.radius, "radius"))
-        _set(self, "angular_velocity", _scalar(self.angular_velocity, "angular_velocity"))
-        _set(self, "normal", _numbers(self.normal, "normal", 3))
-        _set(self, "phase", _scalar(self.phase, "phase"))
+        _set(self, "center", point(self.center, "center"))
+        _set(self, "radius", positive(self.radius, "radius"))
+        _set(self, "angular_velocity", scalar(self.angular_velocity, "angular_velocity"))
+        _set(self, "normal", numbers(self.normal, "normal", 3))
+        _set(self, "phase", scalar(self.phase, "phase"))
         if not np.any(self._normal):
             raise TrajectoryError("normal", "must not be the zero vector")
         object.__setattr__(self, "_basis", _plane_basis(self._normal, self._center.size))
@@ -226,11 +211,11 @@ class PolynomialTrajectory(Trajectory):
     _matrices: np.ndarray = _derived()
 
     def __post_init__(self) -> None:
-        axes = _sequence(self.coefficients, "coefficients")
+        axes = sequence(self.coefficients, "coefficients")
         if len(axes) not in (2, 3):
             problem = f"expected 2 or 3 lists (one per axis), got {len(axes)}"
             raise TrajectoryError("coefficients", problem)
-        rows = tuple(_numbers(axis, f"coefficients[{i}]") for i, axis in enumerate(axes))
+        rows = tuple(numbers(axis, f"coefficients[{i}]") for i, axis in enumerate(axes))
         object.__setattr__(self, "coefficients", tuple(tuple(row.tolist()) for row in rows))
         order = max(len(row) for row in rows)
         position = np.zeros((len(rows), order))
@@ -276,7 +261,7 @@ class ExpressionTrajectory(Trajectory):
     _run: Callable[[], None] = _derived()
 
     def __post_init__(self) -> None:
-        texts = _sequence(self.expressions, "expressions")
+        texts = sequence(self.expressions, "expressions")
         if len(texts) not in (2, 3):
             problem = f"expected 2 or 3 expressions (one per axis), got {len(texts)}"
             raise TrajectoryError("expressions", problem)
@@ -359,14 +344,14 @@ class SplineTrajectory(Trajectory):
     _spline: CubicSpline = _derived()
 
     def __post_init__(self) -> None:
-        items = _sequence(self.waypoints, "waypoints")
+        items = sequence(self.waypoints, "waypoints")
         if len(items) < 2:
             raise TrajectoryError("waypoints", f"expected at least 2 waypoints, got {len(items)}")
-        first = _point(items[0], "waypoints[0]")
+        first = point(items[0], "waypoints[0]")
         points = [first]
         for i, item in enumerate(items[1:], 1):
-            points.append(_numbers(item, f"waypoints[{i}]", len(first)))
-        duration = _positive(self.duration, "duration")
+            points.append(numbers(item, f"waypoints[{i}]", len(first)))
+        duration = positive(self.duration, "duration")
         chords = np.linalg.norm(np.diff(np.array(points), axis=0), axis=1)
         for i, chord in enumerate(chords, 1):
             if chord == 0.0:
@@ -392,133 +377,11 @@ class SplineTrajectory(Trajectory):
         return position, velocity, acceleration
 
 
-_KINDS: dict[str, tuple[type[Trajectory], tuple[str, ...], tuple[str, ...]]] = {
-    "linear": (LinearTrajectory, ("start", "velocity"), ()),
-    "circle": (CircleTrajectory, ("center", "radius", "angular_velocity"), ("normal", "phase")),
-    "polynomial": (PolynomialTrajectory, ("coefficients",), ()),
-    "expression": (ExpressionTrajectory, ("x",), ()),
-    "spline": (SplineTrajectory, ("waypoints", "duration"), ()),
-}
-"""Per ``type``: the class, its required and its optional mapping keys."""
-
-_ARGUMENTS: dict[str, str] = {"x": "expressions"}
-"""Mapping keys whose constructor argument has another name."""
-
-
-def trajectory_from_mapping(data: Mapping[str, Any], field: str) -> Trajectory:
-    """Build a trajectory from a scenario's ``trajectory:`` mapping (DESIGN.md section 5).
-
-    - ``{type: linear, start: P, velocity: V}``: :class:`LinearTrajectory`;
-    - ``{type: circle, center: C, radius: R, angular_velocity: W, normal: N, phase: A}``
-      (``normal`` and ``phase`` optional): :class:`CircleTrajectory`;
-    - ``{type: polynomial, coefficients: [[cx0, cx1, ...], [cy0, ...], ...]}``, one list
-      per axis, lowest order first: :class:`PolynomialTrajectory`;
-    - ``{type: expression, x: ["0.5 + 0.1*sin(0.5*t)", "...", "..."]}``:
-      :class:`ExpressionTrajectory`;
-    - ``{type: spline, waypoints: [P0, P1, ...], duration: T}``: :class:`SplineTrajectory`.
-
-    ``polynomial`` is an addition to the DESIGN.md table. ``rrt`` needs the scenario's
-    obstacles and is rejected here: the caller plans the path and builds a spline.
-
-    Args:
-        data: The mapping, as read from YAML (lists or tuples for sequences).
-        field: Field path of the mapping, prefixed to error messages, e.g.
-            ``obstacles[1].trajectory``.
-
-    Raises:
-        TrajectoryError: Not a mapping, unknown or missing keys, unknown ``type``, or any
-            invalid value; the message starts with the full field path, e.g.
-            ``obstacles[1].trajectory.velocity: expected 3 numbers, got 2``.
-    """
-    if not isinstance(data, Mapping):
-        raise TrajectoryError(field, f"expected a mapping, got {describe(data)}")
-    kind = data.get("type")
-    if kind == "rrt":
-        problem = "rrt must be resolved by the caller (it plans around the scenario's obstacles)"
-        raise TrajectoryError(_join(field, "type"), problem)
-    if "type" not in data:
-        raise TrajectoryError(_join(field, "type"), "missing required key")
-    if not isinstance(kind, str) or kind not in _KINDS:
-        problem = f"expected one of {', '.join(_KINDS)}, rrt; got {describe(kind)}"
-        raise TrajectoryError(_join(field, "type"), problem)
-    cls, required, optional = _KINDS[kind]
-    allowed = ("type", *required, *optional)
-    for key in data:
-        if key not in allowed:
-            problem = f"unknown key (allowed: {', '.join(allowed)})"
-            raise TrajectoryError(_join(field, str(key)), problem)
-    for key in required:
-        if key not in data:
-            raise TrajectoryError(_join(field, key), "missing required key")
-    arguments = {_ARGUMENTS.get(key, key): value for key, value in data.items() if key != "type"}
-    try:
-        return cls(**arguments)
-    except TrajectoryError as error:
-        raise TrajectoryError(_join(field, _mapping_path(error.field)), error.problem) from None
-
-
-def _mapping_path(argument_path: str) -> str:
-    """Rename the constructor argument at the root of a field path to its mapping key."""
-    keys = {argument: key for key, argument in _ARGUMENTS.items()}
-    root = argument_path.split("[", 1)[0]
-    return keys.get(root, root) + argument_path[len(root) :]
-
-
-def _join(field: str, key: str) -> str:
-    """Field path of ``key`` inside ``field`` (an empty ``field`` is the top level)."""
-    return f"{field}.{key}" if field else key
-
-
 def _set(instance: Trajectory, name: str, value: Any) -> None:
     """Store a validated field: the public one as given type, ``_name`` as numpy."""
     public = tuple(value.tolist()) if isinstance(value, np.ndarray) else value
     object.__setattr__(instance, name, public)
     object.__setattr__(instance, f"_{name}", value)
-
-
-def _sequence(value: object, field: str) -> list[Any]:
-    """Return ``value`` as a list if it is a list, a tuple or an array (not text)."""
-    if isinstance(value, np.ndarray):
-        return list(value)
-    if not isinstance(value, list | tuple):
-        raise TrajectoryError(field, f"expected a list, got {describe(value)}")
-    return list(value)
-
-
-def _numbers(value: object, field: str, length: int | None = None) -> np.ndarray:
-    """A 1-D float array of finite numbers, non-empty, of ``length`` if given."""
-    items = _sequence(value, field)
-    if length is not None and len(items) != length:
-        raise TrajectoryError(field, f"expected {length} numbers, got {len(items)}")
-    if not items:
-        raise TrajectoryError(field, "expected numbers, got an empty list")
-    return np.array([_scalar(item, f"{field}[{i}]") for i, item in enumerate(items)])
-
-
-def _point(value: object, field: str) -> np.ndarray:
-    """A position in the plane or in space: 2 or 3 finite numbers."""
-    numbers = _numbers(value, field)
-    if numbers.size not in (2, 3):
-        raise TrajectoryError(field, f"expected 2 or 3 numbers, got {numbers.size}")
-    return numbers
-
-
-def _scalar(value: object, field: str) -> float:
-    """A finite real number (booleans and text are not numbers)."""
-    if isinstance(value, bool | np.bool_) or not isinstance(value, Real):
-        raise TrajectoryError(field, f"expected a number, got {describe(value)}")
-    number = float(value)
-    if not math.isfinite(number):
-        raise TrajectoryError(field, f"expected a finite number, got {number}")
-    return number
-
-
-def _positive(value: object, field: str) -> float:
-    """A finite number > 0."""
-    number = _scalar(value, field)
-    if number <= 0.0:
-        raise TrajectoryError(field, f"must be positive, got {number:g}")
-    return number
 
 
 def _plane_basis(normal: np.ndarray, dimension: int) -> np.ndarray:

@@ -1,7 +1,7 @@
 """The goal and obstacle trajectories of a scenario (DESIGN.md section 5).
 
 Static goals and obstacles become trajectories at rest; ``trajectory:`` mappings are built
-by :func:`dynfab.motion.trajectories.trajectory_from_mapping`, except ``{type: rrt, goal: P,
+by :func:`dynfab.motion.trajectory_mapping.trajectory_from_mapping`, except ``{type: rrt, goal: P,
 duration: T}``, which needs the scenario: an RRT (OMPL) plans a path for the goal link
 from its start position to ``P`` around the scenario's static spheres (other shapes are
 left to the fabric), and a spline through that path's waypoints reaches ``P`` at ``T``.
@@ -17,11 +17,17 @@ import numpy as np
 
 from dynfab.geometry.shapes import quaternion_matrix
 from dynfab.motion.directions import RotatingDirections
-from dynfab.motion.references import References
 from dynfab.motion.global_planning import GlobalPlanningError, plan_path
+from dynfab.motion.references import References
+from dynfab.motion.trajectories import (
+    SplineTrajectory,
+    StaticPoint,
+    Trajectory,
+    TrajectoryError,
+)
+from dynfab.motion.trajectory_mapping import trajectory_from_mapping
 from dynfab.robots.robot import Robot
 from dynfab.scenario.schema import GoalSpec, Scenario, ScenarioError
-from dynfab.motion.trajectories import SplineTrajectory, StaticPoint, Trajectory, TrajectoryError, trajectory_from_mapping
 
 _AXES = "xyz"
 #: extra room around start, goal and spheres for the RRT's bounding box [m]
