@@ -6,6 +6,7 @@ integrator joints (robots on a differential-drive base), re-solved at 10 Hz with
 from dynfab.mpc.config import MpcConfig
 from dynfab.mpc.controller import MpcController
 from dynfab.mpc.model import PredictionModel
-from dynfab.mpc.problem import GoalTerm, MpcProblem, Plan, SolveResult
+from dynfab.mpc.problem import MpcProblem
+from dynfab.mpc.values import GoalTerm, Plan, SolveResult
 
 __all__ = ["GoalTerm", "MpcConfig", "MpcController", "MpcProblem", "Plan", "PredictionModel", "SolveResult"]

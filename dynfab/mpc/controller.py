@@ -26,7 +26,8 @@ import numpy as np
 
 from dynfab.motion.references import References
 from dynfab.mpc.config import MpcConfig
-from dynfab.mpc.problem import MpcProblem, Plan
+from dynfab.mpc.problem import MpcProblem
+from dynfab.mpc.values import Plan
 
 #: tolerance on "a solve period has elapsed", for times accumulated in floating point [s]
 _TIME_TOLERANCE = 1e-9
