@@ -24,7 +24,7 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     args = parser.parse_args()
-    per_case = max(1, args.calls // len(CASES))
+    per_case = max(1, -(-args.calls // len(CASES)))  # at least --calls in total
     rows = []
     for index, (robot, dynamic) in enumerate(CASES):
         start = time.perf_counter()
