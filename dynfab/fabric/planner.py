@@ -29,7 +29,7 @@ import numpy as np
 
 from dynfab.fabric.command_bounds import CommandBounds
 from dynfab.fabric.energy import WeightedGeometry
-from dynfab.fabric.leaves.barrier import OBSTACLE_MIN_CLEARANCE, Barrier
+from dynfab.fabric.leaves.barrier import Barrier
 from dynfab.fabric.leaves.goal import GoalAttractor
 from dynfab.fabric.leaves.limits import JointLimitAvoidance
 from dynfab.fabric.leaves.obstacle import SphereObstacleAvoidance
@@ -139,7 +139,7 @@ class PlannerConfig:
         collision)."""
         if robot.base is None:
             return cls(goals=goals, obstacle_slots=obstacle_slots, dynamic=dynamic, shape_slots=shape_slots)
-        barrier = Barrier(geometry_gain=5.0, energy_gain=0.5, horizon=0.5, min_clearance=OBSTACLE_MIN_CLEARANCE)
+        barrier = Barrier(geometry_gain=5.0, energy_gain=0.5, horizon=0.5)
         return cls(goals=goals, obstacle_slots=obstacle_slots, dynamic=dynamic, shape_slots=shape_slots,
                    obstacle_avoidance=SphereObstacleAvoidance(barrier), shape_avoidance=ShapeObstacleAvoidance(barrier),
                    steering=Steering(lookahead=0.5, weight=1.0))
