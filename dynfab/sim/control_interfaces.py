@@ -2,13 +2,15 @@
 
 A planner runs at the control period ``dt`` (e.g. 100 Hz) and returns joint
 accelerations q̈; a robot's joint controller runs faster (1 kHz on a Franka or a UR) and
-takes positions, velocities or torques. :class:`SetpointIntegrator` bridges the two: at
-each planner tick it starts from the measured state and the new q̈, and at each servo
-tick it advances the desired state by the servo period h with q̈ held constant,
+takes positions, velocities or torques. :class:`SetpointIntegrator` bridges the two: it
+starts at the measured state (``reset``), holds each new q̈ of the planner (``hold``) and
+at each servo tick advances the desired state by the servo period h,
 
-    q̇_d ← q̇_d + q̈ h,    q_d ← q_d + q̇_d h − ½ q̈ h²   (exact for constant q̈),
+    q̇_d ← q̇_d + q̈ h,    q_d ← q_d + q̇_d h − ½ q̈ h²   (exact for constant q̈).
 
-so that the desired state is the planner's own double-integrator prediction. The
+The set-points are continuous (Franka's interfaces refuse jumps): the desired state is
+not pulled back to the measured one at each planner tick; the planner closes the loop
+through the state it is given, the joint controller tracks the set-points. The
 interfaces turn a :class:`Setpoint` into the command of one kind of joint controller:
 
 - :class:`PositionInterface`: q_d [rad or m] for a position servo;
@@ -23,7 +25,8 @@ same classes. A real loop looks like::
 
     setpoints = SetpointIntegrator(servo_period=0.001)
     interface = VelocityInterface()
-    every dt:      setpoints.start(q, qdot, planner.compute(q, qdot))
+    once:          setpoints.reset(q, qdot)
+    every dt:      setpoints.hold(planner.compute(q, qdot))
     every 1 ms:    robot.send(interface.command(setpoints.advance(), q, qdot))
 """
 
@@ -75,19 +78,26 @@ class SetpointIntegrator:
         self._velocity: Vector | None = None
         self._acceleration: Vector | None = None
 
-    def start(self, q: ArrayLike, qdot: ArrayLike, qddot: ArrayLike) -> None:
-        """Restart from the measured ``(q, q̇)`` with the planner's new ``q̈``."""
+    def reset(self, q: ArrayLike, qdot: ArrayLike) -> None:
+        """Start the desired state at the measured ``(q, q̇)`` (at the first tick, and after
+        the robot was stopped or held off its path, e.g. by a contact)."""
         self._position = np.array(q, dtype=float)
         self._velocity = np.array(qdot, dtype=float)
-        self._acceleration = np.array(qddot, dtype=float)
-        if not self._position.shape == self._velocity.shape == self._acceleration.shape:
-            raise ValueError(f"q, qdot and qddot must have one shape, got {self._position.shape}, "
-                             f"{self._velocity.shape} and {self._acceleration.shape}")
+        if self._position.shape != self._velocity.shape:
+            raise ValueError(f"q and qdot must have one shape, got {self._position.shape} and {self._velocity.shape}")
+        self._acceleration = np.zeros_like(self._position)
+
+    def hold(self, qddot: ArrayLike) -> None:
+        """The planner's new ``q̈``, held until the next call."""
+        acceleration = np.array(qddot, dtype=float)
+        if self._position is None or acceleration.shape != self._position.shape:
+            raise ValueError("hold() needs a reset() first and one acceleration per joint")
+        self._acceleration = acceleration
 
     def advance(self) -> Setpoint:
         """The setpoint one servo period later."""
         if self._position is None or self._velocity is None or self._acceleration is None:
-            raise RuntimeError("SetpointIntegrator.advance() before start()")
+            raise RuntimeError("SetpointIntegrator.advance() before reset()")
         h, a = self.servo_period, self._acceleration
         self._velocity = self._velocity + a * h
         self._position = self._position + self._velocity * h - 0.5 * a * h * h

@@ -65,7 +65,8 @@ class JointDrive:
         self.data = data
         self.control = control
         self.h = servo_period
-        self._diagonal = scene.model.dof_Madr[scene.joint_dof]
+        model = scene.model  # data.M is the lower triangle in rows (CSR): a row's diagonal comes last
+        self._diagonal = (model.M_rowadr + model.M_rownnz - 1)[scene.joint_dof]
         self._integral = np.zeros(len(scene.joint_dof))
         self._previous: Vector | None = None
 
@@ -76,7 +77,7 @@ class JointDrive:
             torque = command
         else:
             bias = data.qfrc_bias[scene.joint_dof]
-            inertia = data.qM[self._diagonal]
+            inertia = data.M[self._diagonal]
             w = SERVO_BANDWIDTH
             if self.control == "position":
                 previous = command if self._previous is None else self._previous

@@ -21,7 +21,8 @@ robot's self-collision pairs (explicit ``<pair>``\\ s); obstacles never touch ea
 A differential-drive base (``robot.base``): the body below ``base_yaw`` floats (a free
 joint) on a floor plane at z = 0, carried by two drive wheels (hinges with velocity
 actuators, radius and track from :class:`~dynfab.robots.robot.DifferentialDriveBase`,
-friction 1) and frictionless casters (the URDF links named ``caster*``, spheres down to
+friction 1; their contact shape is a sphere of the wheel's radius, which rolls on one
+point: MuJoCo's cylinder-plane contacts made the base hop) and frictionless casters (the URDF links named ``caster*``, spheres down to
 the floor). The floor touches only wheels and casters.
 """
 
@@ -36,7 +37,7 @@ import mujoco
 import numpy as np
 
 from dynfab.geometry.shapes import Box, Capsule, Cylinder, Plane, Shape, Sphere
-from dynfab.robots.robot import BASE_JOINTS, Robot
+from dynfab.robots.robot import BASE_JOINTS, DifferentialDriveBase, Robot
 from dynfab.robots.urdf import Joint, UrdfModel
 from dynfab.sim.mujoco_meshes import link_mesh_file
 
@@ -94,6 +95,7 @@ class MujocoScene:
         base_qpos: qpos address of the base's free joint, or None without a base.
         base_dof: qvel address of the base's free joint, or None.
         wheel_actuators: Velocity actuators of the (left, right) drive wheels, or None.
+        base: The differential-drive base (wheel radius, track), or None.
         mocap: Mocap index of each obstacle (None for a static one).
         robot_bodies: Body ids of the robot.
         obstacle_of_geom: Obstacle index of each obstacle geom id.
@@ -107,6 +109,7 @@ class MujocoScene:
     base_qpos: int | None
     base_dof: int | None
     wheel_actuators: tuple[int, int] | None
+    base: DifferentialDriveBase | None
     mocap: tuple[int | None, ...]
     robot_bodies: frozenset[int]
     obstacle_of_geom: dict[int, int]
@@ -155,7 +158,7 @@ def _scene(model: mujoco.MjModel, robot: Robot, obstacles: Sequence[SceneObstacl
                        effort=np.array(effort, dtype=float),
                        base_qpos=None if base is None else int(base.qposadr[0]),
                        base_dof=None if base is None else int(base.dofadr[0]),
-                       wheel_actuators=wheels, mocap=mocap, robot_bodies=robot_bodies, obstacle_of_geom=geoms)
+                       wheel_actuators=wheels, base=robot.base, mocap=mocap, robot_bodies=robot_bodies, obstacle_of_geom=geoms)
 
 
 class _Builder:
@@ -170,7 +173,8 @@ class _Builder:
         self.root = ET.Element("mujoco", model=robot.name)
         ET.SubElement(self.root, "compiler", angle="radian", inertiafromgeom="false", autolimits="true",
                       boundmass=repr(_BOUND_MASS), boundinertia=repr(_BOUND_INERTIA))
-        ET.SubElement(self.root, "option", timestep=str(PHYSICS_TIMESTEP), integrator="implicitfast")
+        ET.SubElement(self.root, "option", timestep=str(PHYSICS_TIMESTEP), integrator="implicitfast",
+                      cone="elliptic", impratio="10", noslip_iterations="5")
         visual = ET.SubElement(self.root, "visual")
         ET.SubElement(visual, "global", offwidth="1280", offheight="720")
         self.asset = ET.SubElement(self.root, "asset")
@@ -300,8 +304,8 @@ class _Builder:
             axial, radial = 0.5 * mass * base.wheel_radius ** 2, 0.25 * mass * base.wheel_radius ** 2
             ET.SubElement(wheel, "inertial", pos="0 0 0", mass=repr(mass), diaginertia=_numbers((radial, axial, radial)))
             ET.SubElement(wheel, "joint", name=f"wheel_{side}", type="hinge", axis="0 1 0")
-            ET.SubElement(wheel, "geom", name=f"wheel_{side}", type="cylinder", size=f"{base.wheel_radius} 0.02",
-                          quat=_numbers((math.sqrt(0.5), math.sqrt(0.5), 0.0, 0.0)), friction="1 0.005 0.0001",
+            ET.SubElement(wheel, "geom", name=f"wheel_{side}", type="sphere", size=repr(base.wheel_radius),
+                          friction="1 0.005 0.0001",
                           contype=str(_GROUND), conaffinity=str(_GROUND), rgba="0.1 0.1 0.1 1")
             ET.SubElement(self.actuator, "velocity", name=f"wheel_{side}_drive", joint=f"wheel_{side}",
                           kv=str(WHEEL_GAIN), forcerange=f"{-WHEEL_TORQUE} {WHEEL_TORQUE}")
@@ -311,7 +315,8 @@ class _Builder:
             if name.startswith("caster") and name in self.links:
                 height = float(np.asarray(self.kin.position(q, name)).reshape(-1)[2])
                 ET.SubElement(element, "geom", name=f"{name}_wheel", type="sphere", size=repr(height),
-                              friction="0 0 0", condim="1", contype=str(_GROUND), conaffinity=str(_GROUND),
+                              friction="0 0 0", condim="1", priority="1", contype=str(_GROUND),
+                              conaffinity=str(_GROUND),
                               rgba="0.1 0.1 0.1 1")
 
     # ---------------------------------------------------------------- obstacles

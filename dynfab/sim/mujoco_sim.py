@@ -4,12 +4,12 @@ Every control period ``dt`` the planner (``(t, q, u) -> u̇``, as for
 :func:`dynfab.sim.simulate`) sees the robot's state, possibly ``delay`` seconds old and
 with Gaussian ``noise`` of standard deviation σ on every coordinate of q [rad or m] and of
 u [rad/s or m/s] (seeded). Between its calls, each physics step (h = 1 ms) runs what a
-real robot runs: a :class:`~dynfab.sim.control_interfaces.SetpointIntegrator`, started
-from the measured joint state and the planner's q̈, and the ``control`` mode's interface
+real robot runs: a :class:`~dynfab.sim.control_interfaces.SetpointIntegrator` (reset to
+the initial state, then holding each q̈ of the planner), the ``control`` mode's interface
 (:func:`~dynfab.sim.control_interfaces.interface_for`), whose command the joint
 controllers of :mod:`dynfab.sim.mujoco_drives` turn into torques. A differential-drive
-base follows (v, ω) integrated from its measured speeds and the planner's (v̇, ω̇)
-through its wheels' velocity actuators, whatever the mode. Moving obstacles (mocap
+base follows (v, ω) integrated in the same way from the planner's (v̇, ω̇), through its
+wheels' velocity actuators, whatever the mode. Moving obstacles (mocap
 bodies) are placed every physics step.
 
 A non-finite or wrongly sized command, or a state that is no longer finite, exceeds
@@ -152,6 +152,9 @@ class _Loop:
         mujoco.mj_forward(self.model, self.data)
         q, u = self.state.read()
         self.history.append((q, u))
+        base = self.scene.base_qpos is not None
+        self.setpoints.reset(q[3:] if base else q, u[2:] if base else u)
+        self.base_velocity = u[:2].copy() if base else np.zeros(0)
         qs, us = [q], [u]
         commands: list[NDArray[np.float64]] = []
         solver_time: list[float] = []
@@ -195,8 +198,7 @@ class _Loop:
         scene, model, data, h = self.scene, self.model, self.data, self.h
         base = scene.base_qpos is not None
         arm = slice(2, None) if base else slice(None)
-        q_arm = q[3:] if base else q
-        self.setpoints.start(q_arm, u[arm], command[arm])
+        self.setpoints.hold(command[arm])
         times = t + h * np.arange(1, substeps + 1)
         centres = None if self.obstacle_centres is None else self.obstacle_centres(times)
         for i in range(substeps):
@@ -207,8 +209,8 @@ class _Loop:
             setpoint = self.setpoints.advance()
             self.drive.apply(self.interface.command(setpoint, joint_q, joint_u), joint_q, joint_u)
             if base:
-                v, omega = u[:2] + command[:2] * h * (i + 1)
-                data.ctrl[list(scene.wheel_actuators)] = scene.base.wheel_speeds(v, omega)
+                self.base_velocity += command[:2] * h
+                data.ctrl[list(scene.wheel_actuators)] = scene.base.wheel_speeds(*self.base_velocity)
             mujoco.mj_step2(model, data)
             problem = self._diverged(times[i])
             if problem is not None:
