@@ -25,13 +25,14 @@ from dynfab.scenario.fields import TRAJECTORY_TYPES, ScenarioError
 from dynfab.scenario.goal_schema import DEFAULT_ANGLE_TOLERANCE, GoalSpec, GoalType, parse_goal
 from dynfab.scenario.obstacle_schema import OBSTACLE_TYPES, ObstacleSpec, ObstacleType, parse_obstacle
 from dynfab.scenario.robot_schema import BUILTIN_ROBOTS, CollisionSphereSpec, UrdfRobotSpec, parse_robot
+from dynfab.scenario.simulation_schema import SIMULATION_KEYS, Simulation, parse_simulation
 
 if TYPE_CHECKING:
     from dynfab.robots.robot import Robot
 
 __all__ = ["BUILTIN_ROBOTS", "DEFAULT_ANGLE_TOLERANCE", "OBSTACLE_TYPES", "PLANNERS", "TRAJECTORY_TYPES",
            "CollisionSphereSpec", "GoalSpec", "GoalType", "InitialState", "ObstacleSpec", "ObstacleType",
-           "Scenario", "ScenarioError", "UrdfRobotSpec", "load_scenario", "scenario_from_dict",
+           "Scenario", "ScenarioError", "Simulation", "UrdfRobotSpec", "load_scenario", "scenario_from_dict",
            "validate_for_robot"]
 
 
@@ -67,6 +68,8 @@ class Scenario:
         goals: One or more goals; the first is the primary goal.
         obstacles: Obstacles: spheres, boxes, cylinders, capsules, planes (possibly none).
         path: The file the scenario was loaded from; None if built from a mapping.
+        simulation: The simulator (kinematic or MuJoCo) and, under MuJoCo, the control
+            mode, observation delay and noise.
     """
 
     robot: str | UrdfRobotSpec
@@ -77,6 +80,7 @@ class Scenario:
     goals: tuple[GoalSpec, ...]
     obstacles: tuple[ObstacleSpec, ...]
     path: Path | None = None
+    simulation: Simulation = Simulation()
 
 
 def load_scenario(path: str | Path) -> Scenario:
@@ -122,7 +126,7 @@ def scenario_from_dict(data: object, base_dir: str | Path = ".") -> Scenario:
         root,
         "",
         required=("robot", "planner", "dt", "duration", "initial_state", "goal"),
-        optional=("obstacles",),
+        optional=("obstacles",) + SIMULATION_KEYS,
     )
     dt = fields.positive(root["dt"], "dt")
     duration = fields.positive(root["duration"], "duration")
@@ -140,6 +144,7 @@ def scenario_from_dict(data: object, base_dir: str | Path = ".") -> Scenario:
         initial_state=_initial_state(root["initial_state"], "initial_state"),
         goals=tuple(parse_goal(goal, f"goal[{i}]") for i, goal in enumerate(goals)),
         obstacles=tuple(parse_obstacle(obs, f"obstacles[{i}]") for i, obs in enumerate(obstacles)),
+        simulation=parse_simulation(root),
     )
 
 
