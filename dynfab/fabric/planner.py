@@ -22,13 +22,14 @@ conversion.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import casadi as ca
 import numpy as np
 
+from dynfab.fabric.command_bounds import CommandBounds
 from dynfab.fabric.energy import WeightedGeometry
-from dynfab.fabric.leaves.barrier import Barrier
+from dynfab.fabric.leaves.barrier import OBSTACLE_MIN_CLEARANCE, Barrier
 from dynfab.fabric.leaves.goal import GoalAttractor
 from dynfab.fabric.leaves.limits import JointLimitAvoidance
 from dynfab.fabric.leaves.obstacle import SphereObstacleAvoidance
@@ -39,6 +40,7 @@ from dynfab.fabric.linalg import cholesky_solve
 from dynfab.fabric.maps import DifferentialMap, Reference, linear_map, selected
 from dynfab.fabric.nonholonomic import Steering, least_squares_acceleration, velocity_map, velocity_map_derivative
 from dynfab.fabric.parameters import ParameterLayout, ParameterSymbols, RuntimeParameters, ShapeSlots
+from dynfab.robots.limits import MotionLimits
 from dynfab.robots.robot import Robot
 from dynfab.fabric.spec import Spec
 from dynfab.fabric.speed_control import EnvironmentMotion, SpeedControl
@@ -100,6 +102,13 @@ class PlannerConfig:
         steering: for a differential-drive base, the look-ahead term of the
             non-holonomic solve (:class:`dynfab.fabric.nonholonomic.Steering`); ``None`` for the
             paper's plain least squares.
+        limits: velocity, acceleration (and jerk) limits of the velocity coordinates;
+            ``None`` takes the robot's (``robot.limits``). The planner's ``config`` holds
+            the limits in use.
+        control_period: ``Δt`` over which a command is held [s]: the velocity and
+            position bounds look one period ahead (:mod:`dynfab.fabric.command_bounds`).
+        bound_command: make every command executable (:mod:`dynfab.fabric.command_bounds`);
+            ``False`` returns the fabric's raw acceleration (for studying the theory).
     """
 
     goals: tuple[GoalConfig | OrientationGoalConfig, ...]
@@ -115,6 +124,9 @@ class PlannerConfig:
     dynamic: bool = False
     reference_damping: float = 0.05
     steering: Steering | None = None
+    limits: MotionLimits | None = None
+    control_period: float = 0.01
+    bound_command: bool = True
 
     @classmethod
     def for_robot(cls, robot: Robot, goals: tuple[GoalConfig | OrientationGoalConfig, ...], obstacle_slots: int = 0,
@@ -126,7 +138,7 @@ class PlannerConfig:
         collision)."""
         if robot.base is None:
             return cls(goals=goals, obstacle_slots=obstacle_slots, dynamic=dynamic, shape_slots=shape_slots)
-        barrier = Barrier(geometry_gain=5.0, energy_gain=0.5, horizon=0.5)
+        barrier = Barrier(geometry_gain=5.0, energy_gain=0.5, horizon=0.5, min_clearance=OBSTACLE_MIN_CLEARANCE)
         return cls(goals=goals, obstacle_slots=obstacle_slots, dynamic=dynamic, shape_slots=shape_slots,
                    obstacle_avoidance=SphereObstacleAvoidance(barrier), shape_avoidance=ShapeObstacleAvoidance(barrier),
                    steering=Steering(lookahead=0.5, weight=1.0))
@@ -136,6 +148,9 @@ class PlannerConfig:
             raise ValueError("PlannerConfig.goals: at least one goal is required")
         if self.obstacle_slots < 0:
             raise ValueError(f"PlannerConfig.obstacle_slots must be >= 0, got {self.obstacle_slots}")
+        if not (np.isfinite(self.control_period) and self.control_period > 0):
+            raise ValueError(f"PlannerConfig.control_period must be a positive finite number, "
+                             f"got {self.control_period}")
 
 
 class FabricPlanner:
@@ -154,18 +169,26 @@ class FabricPlanner:
     def __init__(self, robot: Robot, config: PlannerConfig) -> None:
         start = time.perf_counter()
         self.robot = robot
+        if config.limits is None:
+            config = replace(config, limits=robot.limits)
+        elif config.limits.names != robot.limits.names:
+            raise ValueError(f"PlannerConfig.limits must name {', '.join(robot.limits.names)}")
         self.config = config
         self._n = robot.kinematics.dof
         self._nv = self._n - 1 if robot.base is not None else self._n
         goal_dimensions = tuple(self._goal_dimension(goal) for goal in config.goals)
         self._layout = ParameterLayout(goal_dimensions, config.obstacle_slots, config.dynamic, config.shape_slots)
+        self._remembers_command = config.bound_command and config.limits.jerk is not None
         self.function = self._build()
-        self._input = np.zeros(self._n + self._nv + self._layout.size)
+        state_size = self._n + self._nv
+        self._input = np.zeros(state_size + self._layout.size + (self._nv if self._remembers_command else 0))
         self._output = np.zeros(self._nv)
         self._buffer, self._evaluate = self.function.buffer()
         self._buffer.set_arg(0, memoryview(self._input))
         self._buffer.set_res(0, memoryview(self._output))
-        self.parameters: RuntimeParameters = self._layout.views(self._input[self._n + self._nv:])
+        self.parameters: RuntimeParameters = self._layout.views(
+            self._input[state_size:state_size + self._layout.size])
+        self._previous_command = self._input[state_size + self._layout.size:]
         for i, goal in enumerate(config.goals):
             self.parameters.goal_weight[i] = goal.weight
         self.fallback_count = 0
@@ -205,9 +228,22 @@ class FabricPlanner:
             raise ValueError(self._describe_non_finite_input())
         self._evaluate()
         if np.isfinite(self._output).all():
-            return self._output.copy()
-        self.fallback_count += 1
-        return -self.config.fallback_braking * qdot
+            command = self._output.copy()
+        else:
+            self.fallback_count += 1
+            command = self._fallback(qdot)
+        if self._remembers_command:
+            self._previous_command[:] = command
+        return command
+
+    def _fallback(self, qdot: np.ndarray) -> np.ndarray:
+        """The safe action ``q̈ = −k q̇``, within the acceleration limits when the command
+        is bounded."""
+        command = -self.config.fallback_braking * qdot
+        if not self.config.bound_command:
+            return command
+        peak = self.config.limits.acceleration
+        return np.clip(command, -peak, peak)
 
     def _describe_non_finite_input(self) -> str:
         n, nv = self._n, self._nv
@@ -264,9 +300,28 @@ class FabricPlanner:
             qddot = least_squares_acceleration(geometry.M + forcing.M, qddot, jacobian, jdot_u,
                                                self.config.steering, q)
             qddot = ca.substitute(qddot, qdot, ca.mtimes(jacobian, velocity))
-        inner = ca.Function("fabric_parts", [q, velocity, params.vector], [qddot])
-        z = ca.SX.sym("z", n + self._nv + self._layout.size)
-        return ca.Function("fabric", [z], [inner(z[:n], z[n:n + self._nv], z[n + self._nv:])], {"cse": True})
+        previous = ca.SX.sym("previous", self._nv if self._remembers_command else 0)
+        if self.config.bound_command:
+            qddot = self._bounds().bounded(self._bounded_positions(q), velocity, qddot,
+                                           previous if self._remembers_command else None)
+        inner = ca.Function("fabric_parts", [q, velocity, params.vector, previous], [qddot])
+        state, size = n + self._nv, self._layout.size
+        z = ca.SX.sym("z", state + size + previous.shape[0])
+        qddot = inner(z[:n], z[n:state], z[state:state + size], z[state + size:])
+        return ca.Function("fabric", [z], [qddot], {"cse": True})
+
+    def _bounds(self) -> CommandBounds:
+        """The command bounds of the velocity coordinates (position limits of the joints
+        they move; none for a base's ``v``, ``ω``)."""
+        kin = self.robot.kinematics
+        index = self.robot.position_index
+        lower = np.array([-np.inf if j is None else kin.lower[j] for j in index])
+        upper = np.array([np.inf if j is None else kin.upper[j] for j in index])
+        return CommandBounds(self.config.limits, lower, upper, self.config.control_period)
+
+    def _bounded_positions(self, q: ca.SX) -> ca.SX:
+        """The configuration variable of each velocity coordinate (0 for a base's ``v``, ``ω``)."""
+        return ca.vertcat(*[ca.SX(0) if j is None else q[j] for j in self.robot.position_index])
 
     def _sphere_maps(self, q: ca.SX, qdot: ca.SX) -> list[DifferentialMap]:
         kin = self.robot.kinematics

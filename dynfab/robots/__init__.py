@@ -2,12 +2,15 @@
 
 from .builtin import UnknownRobotError, load_robot, robot_from_urdf
 from .kinematics import Kinematics, UnknownLinkError
+from .limits import LimitsError, MotionLimits
 from .robot import CollisionSphere, Robot
 from .urdf import UrdfError, UrdfModel, load_urdf, parse_urdf
 
 __all__ = [
     "CollisionSphere",
     "Kinematics",
+    "LimitsError",
+    "MotionLimits",
     "Robot",
     "UnknownLinkError",
     "UnknownRobotError",

@@ -11,7 +11,8 @@ import numpy as np
 
 from .kinematics import Kinematics
 from .panda_spheres import PANDA_FITTED_PAIRS, PANDA_FITTED_SPHERES
-from .robot import CollisionSphere, DifferentialDriveBase, Robot
+from .limits import FRANKA_ACCELERATION, MotionLimits
+from .robot import CollisionSphere, DifferentialDriveBase, Robot, default_limits
 from .urdf import load_urdf, parse_urdf
 
 __all__ = ["BUILTIN_ROBOTS", "UnknownRobotError", "load_robot", "panda_robot", "robot_from_urdf"]
@@ -190,21 +191,26 @@ def panda_robot(sphere_model: str) -> Robot:
     """
     if sphere_model not in ("fitted", "hand-written"):
         raise ValueError(f"panda sphere_model must be fitted or hand-written, got {sphere_model!r}")
+    kinematics = _builtin_kinematics("panda.urdf")
     if sphere_model == "fitted":
-        return Robot(name="panda", kinematics=_builtin_kinematics("panda.urdf"),
-                     goal_link="panda_hand",
-                     collision_spheres=tuple(CollisionSphere(link, center, radius)
-                                             for link, center, radius in PANDA_FITTED_SPHERES),
-                     self_collision_pairs=PANDA_FITTED_PAIRS, planar=False,
-                     default_q=np.array(PANDA_DEFAULT_Q))
-    labels = [label for label, *_ in _PANDA_SPHERES]
-    spheres = tuple(CollisionSphere(link, center, radius)
-                    for _, link, center, radius in _PANDA_SPHERES)
-    pairs = tuple((labels.index(a), labels.index(b)) for a, b in _PANDA_SELF_COLLISION)
-    return Robot(name="panda", kinematics=_builtin_kinematics("panda.urdf"),
-                 goal_link="panda_hand", collision_spheres=spheres,
-                 self_collision_pairs=pairs, planar=False,
-                 default_q=np.array(PANDA_DEFAULT_Q))
+        spheres = tuple(CollisionSphere(link, center, radius) for link, center, radius in PANDA_FITTED_SPHERES)
+        pairs = PANDA_FITTED_PAIRS
+    else:
+        labels = [label for label, *_ in _PANDA_SPHERES]
+        spheres = tuple(CollisionSphere(link, center, radius) for _, link, center, radius in _PANDA_SPHERES)
+        pairs = tuple((labels.index(a), labels.index(b)) for a, b in _PANDA_SELF_COLLISION)
+    return Robot(name="panda", kinematics=kinematics, goal_link="panda_hand", collision_spheres=spheres,
+                 self_collision_pairs=pairs, planar=False, default_q=np.array(PANDA_DEFAULT_Q),
+                 limits=_franka_limits(kinematics, on_base=False))
+
+
+def _franka_limits(kinematics: Kinematics, on_base: bool) -> MotionLimits:
+    """The description's velocity and effort limits with Franka's published acceleration
+    limits on the arm joints (the base keeps the default)."""
+    limits = default_limits(kinematics, on_base)
+    acceleration = np.array(limits.acceleration)
+    acceleration[-len(FRANKA_ACCELERATION):] = FRANKA_ACCELERATION
+    return limits.overridden(acceleration=acceleration)
 
 
 def _point() -> Robot:
@@ -240,10 +246,12 @@ def _boxer_panda() -> Robot:
     named = list(_PANDA_SELF_COLLISION) + [(label, arm) for label, _ in _BOXER_BODY
                                            for arm in _ARM_VS_BODY]
     pairs = tuple((labels.index(a), labels.index(b)) for a, b in named)
-    return Robot(name="boxer-panda", kinematics=_builtin_kinematics("boxer_panda.urdf"),
+    kinematics = _builtin_kinematics("boxer_panda.urdf")
+    return Robot(name="boxer-panda", kinematics=kinematics,
                  goal_link="panda_hand", collision_spheres=spheres,
                  self_collision_pairs=pairs, planar=False,
-                 default_q=np.array(BOXER_PANDA_DEFAULT_Q), base=BOXER_BASE)
+                 default_q=np.array(BOXER_PANDA_DEFAULT_Q), base=BOXER_BASE,
+                 limits=_franka_limits(kinematics, on_base=True))
 
 
 #: Built-in robot names and their constructors.

@@ -53,6 +53,7 @@ class Kinematics:
         dof: Number of active joints.
         lower: Lower position limits, shape (dof,); ``-inf`` if unlimited [rad or m].
         upper: Upper position limits, shape (dof,); ``+inf`` if unlimited [rad or m].
+        effort_limits: Effort limits, shape (dof,); ``inf`` if not given [N m or N].
         velocity_limits: Velocity limits, shape (dof,); ``inf`` if not given
             [rad/s or m/s].
         link_names: Links of the tree in depth-first order from the root.
@@ -110,7 +111,10 @@ class Kinematics:
         self.velocity_limits = np.array(
             [j.limit.velocity if j.limit is not None else math.inf for j in active],
             dtype=float)
-        for array in (self.lower, self.upper, self.velocity_limits):
+        self.effort_limits = np.array(
+            [j.limit.effort if j.limit is not None and j.limit.effort is not None else math.inf
+             for j in active], dtype=float)
+        for array in (self.lower, self.upper, self.velocity_limits, self.effort_limits):
             array.setflags(write=False)
         self._functions: dict[tuple[object, ...], ca.Function] = {}
 

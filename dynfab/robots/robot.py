@@ -9,6 +9,7 @@ import casadi as ca
 import numpy as np
 
 from .kinematics import CasadiLike, Kinematics, UnknownLinkError
+from .limits import MotionLimits, limits_from_joints
 
 __all__ = ["BASE_JOINTS", "CollisionSphere", "DifferentialDriveBase", "Robot"]
 
@@ -118,6 +119,8 @@ class Robot:
         base: The differential-drive base the robot stands on, or None for a
             holonomic robot (fixed arm, point robot): then every configuration
             variable is actuated and velocities are ``qdot``.
+        limits: Velocity, acceleration (jerk, effort) limits of the velocity coordinates;
+            ``None`` derives them from the kinematics (:func:`default_limits`).
 
     Convention for a robot with a ``base``: its first three joints (in the order of
     ``kinematics.joint_names``) are ``base_x`` (prismatic along world x), ``base_y``
@@ -145,6 +148,7 @@ class Robot:
     planar: bool
     default_q: np.ndarray
     base: DifferentialDriveBase | None = None
+    limits: MotionLimits | None = None
 
     def __post_init__(self) -> None:
         kin = self.kinematics
@@ -171,6 +175,26 @@ class Robot:
         object.__setattr__(self, "collision_spheres", tuple(self.collision_spheres))
         object.__setattr__(self, "self_collision_pairs", pairs)
         object.__setattr__(self, "default_q", default_q)
+        limits = default_limits(kin, self.base is not None) if self.limits is None else self.limits
+        names = velocity_names(kin, self.base is not None)
+        if limits.names != names:
+            raise ValueError(f"robot '{self.name}': limits must be given for the velocity "
+                             f"coordinates {', '.join(names)}; got {', '.join(limits.names)}")
+        object.__setattr__(self, "limits", limits)
+
+    @property
+    def velocity_names(self) -> tuple[str, ...]:
+        """The velocity coordinates in order: the joints, or ``(v, omega, arm joints...)``
+        on a differential-drive base."""
+        return velocity_names(self.kinematics, self.base is not None)
+
+    @property
+    def position_index(self) -> tuple[int | None, ...]:
+        """For each velocity coordinate, the configuration index it moves (``None`` for
+        the base's ``v`` and ``omega``, which have no position limits)."""
+        if self.base is None:
+            return tuple(range(self.dof))
+        return (None, None) + tuple(range(3, self.dof))
 
     @property
     def dof(self) -> int:
@@ -194,6 +218,21 @@ class Robot:
         if isinstance(q, (ca.SX, ca.MX)):
             return centers
         return np.array(centers, dtype=float).reshape(len(points), 3)
+
+
+def velocity_names(kin: Kinematics, on_base: bool) -> tuple[str, ...]:
+    """Names of the velocity coordinates (see :class:`Robot`)."""
+    return ("v", "omega") + kin.joint_names[3:] if on_base else kin.joint_names
+
+
+def default_limits(kin: Kinematics, on_base: bool) -> MotionLimits:
+    """Limits from the description (:func:`dynfab.robots.limits.limits_from_joints`); on a
+    base, ``v`` takes ``base_x``'s velocity limit and ``omega`` ``base_yaw``'s."""
+    velocity, effort = kin.velocity_limits, kin.effort_limits
+    if on_base:
+        velocity = np.concatenate([[velocity[0], velocity[2]], velocity[3:]])
+        effort = np.concatenate([[effort[0], effort[2]], effort[3:]])
+    return limits_from_joints(velocity_names(kin, on_base), velocity, effort)
 
 
 def _check_base_joints(name: str, kin: Kinematics) -> None:

@@ -1,0 +1,70 @@
+"""Motion limits of robots: where they come from and how they are checked."""
+
+import math
+
+import numpy as np
+import pytest
+
+from dynfab.robots import LimitsError, MotionLimits, load_robot, robot_from_urdf
+from robot_files import arm_urdf
+
+from dynfab.robots.limits import DEFAULT_ACCELERATION, DEFAULT_VELOCITY, FRANKA_ACCELERATION, limits_from_joints
+
+
+def test_builtin_panda_carries_frankas_published_limits():
+    limits = load_robot("panda").limits
+    assert limits.names == tuple(f"panda_joint{i}" for i in range(1, 8))
+    np.testing.assert_allclose(limits.velocity, [2.175] * 4 + [2.61] * 3)
+    np.testing.assert_allclose(limits.acceleration, FRANKA_ACCELERATION)
+    np.testing.assert_allclose(limits.effort, [87] * 4 + [12] * 3)
+    assert limits.jerk is None
+
+
+def test_base_limits_are_on_forward_speed_and_yaw_rate():
+    robot = load_robot("boxer-panda")
+    assert robot.limits.names[:3] == ("v", "omega", "panda_joint1")
+    assert robot.limits.velocity[0] == pytest.approx(1.9)
+    assert robot.limits.velocity[1] == pytest.approx(2.0)
+    np.testing.assert_allclose(robot.limits.acceleration[2:], FRANKA_ACCELERATION)
+    assert robot.position_index == (None, None) + tuple(range(3, 10))
+
+
+def test_urdf_robot_reads_velocity_limits_and_defaults_acceleration():
+    robot = robot_from_urdf(arm_urdf("ur5"), "tool0", ())
+    assert robot.limits.names == robot.kinematics.joint_names
+    np.testing.assert_allclose(robot.limits.velocity, robot.kinematics.velocity_limits)
+    np.testing.assert_allclose(robot.limits.acceleration, DEFAULT_ACCELERATION)
+
+
+def test_missing_or_zero_velocity_gets_the_default():
+    limits = limits_from_joints(("a", "b", "c"), np.array([math.inf, 0.0, 1.5]))
+    np.testing.assert_allclose(limits.velocity, [DEFAULT_VELOCITY, DEFAULT_VELOCITY, 1.5])
+    assert limits.effort is None
+
+
+@pytest.mark.parametrize("bad, message", [
+    ([1.0, 0.0], r"limits.acceleration\[1\]: must be a positive finite number, got 0.0"),
+    ([1.0, -2.0], r"limits.acceleration\[1\]"),
+    ([math.nan, 1.0], r"limits.acceleration\[0\]"),
+    ([1.0, math.inf], r"limits.acceleration\[1\]"),
+    ([1.0], r"limits.acceleration: must have 2 values"),
+    ("fast", r"limits.acceleration: must be a list of 2 numbers"),
+])
+def test_limits_that_are_not_positive_and_finite_are_refused(bad, message):
+    with pytest.raises(LimitsError, match=message):
+        MotionLimits(("a", "b"), np.ones(2), bad)
+
+
+def test_ratios_are_the_largest_share_of_the_limit():
+    limits = MotionLimits(("a", "b"), np.array([1.0, 2.0]), np.array([10.0, 5.0]))
+    assert limits.velocity_ratio(np.array([[0.5, -3.0], [0.1, 0.1]])) == pytest.approx(1.5)
+    assert limits.acceleration_ratio(np.array([[-10.0, 1.0]])) == pytest.approx(1.0)
+    assert limits.acceleration_ratio(np.zeros((0, 2))) == 0.0
+
+
+def test_limits_must_name_the_robots_velocity_coordinates():
+    import dataclasses
+    robot = load_robot("point")
+    wrong = MotionLimits(("x",), np.ones(1), np.ones(1))
+    with pytest.raises(ValueError, match="velocity coordinates joint_x, joint_y"):
+        dataclasses.replace(robot, limits=wrong)
