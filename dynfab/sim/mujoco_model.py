@@ -91,7 +91,8 @@ class MujocoScene:
             it without a base), shape (n_joints,).
         joint_dof: qvel address of each of them, shape (n_joints,).
         joint_actuators: The motor (torque) actuator of each of them.
-        effort: Effort limit of each of them [N m or N] (``inf`` without one).
+        effort: Effort limit of each of them [N m or N] (``robot.limits.effort``; ``inf``
+            if unknown).
         base_qpos: qpos address of the base's free joint, or None without a base.
         base_dof: qvel address of the base's free joint, or None.
         wheel_actuators: Velocity actuators of the (left, right) drive wheels, or None.
@@ -141,9 +142,8 @@ def _scene(model: mujoco.MjModel, robot: Robot, obstacles: Sequence[SceneObstacl
     kin = robot.kinematics
     names = kin.joint_names[3:] if robot.base is not None else kin.joint_names
     joints = [model.joint(name) for name in names]
-    joint_model = {joint.name: joint for joint in kin.model.joints}
-    effort = [joint_model[name].limit.effort if joint_model[name].limit is not None
-              and joint_model[name].limit.effort is not None else math.inf for name in names]
+    limits = robot.limits.effort
+    effort = np.full(len(names), math.inf) if limits is None else limits[len(limits) - len(names):]
     base = model.joint("base_free") if robot.base is not None else None
     wheels = None
     if robot.base is not None:
