@@ -7,8 +7,8 @@ joint of an active leader is a joint tied to it by an equality ``q = m q_leader 
 (of a locked leader: folded at its value). Each body carries its URDF ``<inertial>``.
 A moving body whose mass, with everything below it, is zero makes the model
 invalid: :class:`MujocoModelError` names the link (no default mass is invented); a
-massless link that carries massive ones (a virtual link between two joints) gets
-MuJoCo's lower bound of 0.1 g and 1e-8 kg m^2.
+massless moving link that carries massive ones (a virtual link between two joints) gets
+0.1 g and 1e-8 kg m^2.
 
 Collision geometry: a URDF robot's collision meshes (convex hulls, STL files from
 :mod:`dynfab.sim.mujoco_meshes`), a robot without meshes (the built-ins) its collision
@@ -47,9 +47,9 @@ __all__ = ["ARMATURE", "PHYSICS_TIMESTEP", "MujocoModelError", "MujocoScene", "S
 PHYSICS_TIMESTEP = 0.001
 #: Reflected rotor inertia added to every hinge [kg m^2] (order of a Franka / UR drive).
 ARMATURE = 0.1
-#: Smallest mass [kg] and principal inertia [kg m^2] of a body: what a massless URDF link
-#: between two joints (x then y of a planar robot) gets; negligible beside real links.
-_BOUND_MASS, _BOUND_INERTIA = 1e-4, 1e-8
+#: Mass [kg] and principal inertia [kg m^2] of a massless URDF link that a joint moves and
+#: that carries massive links (x then y of a planar robot); MuJoCo needs some.
+_VIRTUAL_MASS, _VIRTUAL_INERTIA = 1e-4, 1e-8
 #: Contact bits: robot geoms, obstacles, the floor with wheels and casters.
 _ROBOT, _OBSTACLE, _GROUND = 1, 1, 2
 #: Velocity gain of a wheel drive [N m s/rad] and its torque limit [N m].
@@ -171,8 +171,7 @@ class _Builder:
         self.links = {link.name: link for link in self.model.links}
         self.meshes = any(link.collisions for link in self.model.links)
         self.root = ET.Element("mujoco", model=robot.name)
-        ET.SubElement(self.root, "compiler", angle="radian", inertiafromgeom="false", autolimits="true",
-                      boundmass=repr(_BOUND_MASS), boundinertia=repr(_BOUND_INERTIA))
+        ET.SubElement(self.root, "compiler", angle="radian", inertiafromgeom="false", autolimits="true")
         ET.SubElement(self.root, "option", timestep=str(PHYSICS_TIMESTEP), integrator="implicitfast",
                       cone="elliptic", impratio="10", noslip_iterations="5")
         visual = ET.SubElement(self.root, "visual")
@@ -221,6 +220,9 @@ class _Builder:
         if value is None:
             self._check_mass(joint.child)
             self._joint(child, joint)
+            if child.find("inertial") is None:
+                ET.SubElement(child, "inertial", pos="0 0 0", mass=repr(_VIRTUAL_MASS),
+                              diaginertia=_numbers((_VIRTUAL_INERTIA,) * 3))
 
     def _folded_value(self, joint: Joint) -> float | None:
         """The constant value of a fixed, locked or led-by-a-locked joint; None if it moves."""
