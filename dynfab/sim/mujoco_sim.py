@@ -42,6 +42,12 @@ CONTROL_MODES: tuple[str, ...] = ("torque", "velocity", "position")
 #: A generalized speed above this [rad/s or m/s] counts as a diverged simulation.
 DIVERGED_SPEED = 1e3
 
+#: MuJoCo's warnings of a state it had to reset, and what they mean.
+_INSTABILITIES = ((mujoco.mjtWarning.mjWARN_BADQPOS, "non-finite or huge positions"),
+                  (mujoco.mjtWarning.mjWARN_BADQVEL, "non-finite or huge velocities"),
+                  (mujoco.mjtWarning.mjWARN_BADQACC, "non-finite or huge accelerations"),
+                  (mujoco.mjtWarning.mjWARN_BADCTRL, "non-finite or huge controls"))
+
 ObstacleCentres = Callable[[NDArray[np.float64]], NDArray[np.float64]]
 """``times (T,) [s] -> centres (T, m, 3) [m]`` of the scenario's obstacles."""
 
@@ -224,8 +230,9 @@ class _Loop:
 
     def _diverged(self, t: float) -> str | None:
         data = self.data
-        if data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number > 0:
-            return f"MuJoCo became unstable (bad accelerations) at t = {t:.3f} s"
+        for warning, what in _INSTABILITIES:
+            if data.warning[warning].number > 0:
+                return f"MuJoCo became unstable ({what}) at t = {t:.3f} s"
         if not (np.all(np.isfinite(data.qpos)) and np.all(np.isfinite(data.qvel))):
             return f"the MuJoCo state became non-finite at t = {t:.3f} s"
         if np.max(np.abs(data.qvel), initial=0.0) > DIVERGED_SPEED:
