@@ -56,7 +56,8 @@ def test_interfaces_command_what_their_controller_takes() -> None:
     expected = [2.0 * (3.0 + 100.0 * 0.1 + 0.0) + 1.0, np.clip(0.5 * (-4.0 + 0.0 + 20.0 * 0.2) + 1.0, -2, 2)]
     np.testing.assert_allclose(torque.command(setpoint, q, qdot), expected)
     clipped = TorqueInterface(lambda q, qd, qdd: 1e6 * qdd, 100.0, 20.0, np.array([87.0, 12.0]))
-    np.testing.assert_allclose(clipped.command(setpoint, q, np.zeros(2)), [87.0, -12.0])
+    still = Setpoint(setpoint.position, np.zeros(2), setpoint.acceleration)
+    np.testing.assert_allclose(clipped.command(still, setpoint.position, np.zeros(2)), [87.0, -12.0])
     with pytest.raises(ValueError, match="current"):
         interface_for("current", lambda q, qd, qdd: qdd, np.ones(2))
 
