@@ -16,6 +16,8 @@ armature), and every torque clipped to the joint's effort limit:
 
 from __future__ import annotations
 
+import copy
+
 import mujoco
 import numpy as np
 from numpy.typing import NDArray
@@ -35,13 +37,17 @@ class MujocoInverseDynamics:
 
     The joints are set to ``(q, q̇, q̈)`` on a scratch copy of ``data``; everything else
     (a base's pose and velocity) keeps its current value and zero acceleration. τ covers
-    inertia (with armature), bias forces and passive forces.
+    inertia (with armature), bias forces and passive forces, not constraint forces:
+    like a robot's own dynamics model, it knows nothing of contacts (nor of joint limits and
+    mimic couplings), which it would otherwise try to cancel.
     """
 
     def __init__(self, scene: MujocoScene, data: mujoco.MjData) -> None:
         self.scene = scene
         self.data = data
-        self._scratch = mujoco.MjData(scene.model)
+        self._model = copy.deepcopy(scene.model)
+        self._model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONSTRAINT
+        self._scratch = mujoco.MjData(self._model)
 
     def __call__(self, q: Vector, qdot: Vector, qddot: Vector) -> Vector:
         scene, scratch = self.scene, self._scratch
@@ -51,7 +57,7 @@ class MujocoInverseDynamics:
         scratch.qpos[scene.joint_qpos] = q
         scratch.qvel[scene.joint_dof] = qdot
         scratch.qacc[scene.joint_dof] = qddot
-        mujoco.mj_inverse(scene.model, scratch)
+        mujoco.mj_inverse(self._model, scratch)
         return scratch.qfrc_inverse[scene.joint_dof].copy()
 
 
