@@ -249,7 +249,7 @@ class _Loop:
                 touching.add((a, b))
         for a, b in sorted(touching - self.touching):
             first, second = (a, b) if self.kinds[a] == 1 else (b, a)
-            self.contacts.append(Contact(t, self._name(first), self._name(second)))
+            self.contacts.append(Contact(float(t), self._name(first), self._name(second)))
         self.touching = touching
 
     def _name(self, geom: int) -> str:
