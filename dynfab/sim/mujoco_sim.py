@@ -181,7 +181,10 @@ class _Loop:
             if reason is not None:
                 break
             q, u = self.state.read()
-            qs.append(q), us.append(u), commands.append(command), solver_time.append(elapsed)
+            qs.append(q)
+            us.append(u)
+            commands.append(command)
+            solver_time.append(elapsed)
             if observer is not None:
                 observer((k + 1) * dt, self.data)
             if progress is not None:
