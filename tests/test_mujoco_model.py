@@ -10,7 +10,6 @@ from robot_files import arm_urdf
 
 from dynfab.geometry.shapes import Box, Sphere
 from dynfab.robots import load_robot, robot_from_urdf
-from dynfab.robots.builtin import _builtin_kinematics
 from dynfab.robots.urdf import parse_urdf
 from dynfab.robots.kinematics import Kinematics
 from dynfab.robots.robot import Robot

@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from dynfab.sim.control_interfaces import SetpointIntegrator, interface_for
 from dynfab.sim.mujoco_drives import JointDrive, MujocoInverseDynamics
-from dynfab.sim.mujoco_model import PHYSICS_TIMESTEP, MujocoScene
+from dynfab.sim.mujoco_model import MujocoScene
 from dynfab.sim.mujoco_state import RobotState
 from dynfab.sim.simulator import Controller, ProgressCallback, Record, StopPredicate, n_steps_for
 
@@ -123,8 +123,13 @@ def simulate_mujoco(controller: Controller, scene: MujocoScene, q0: ArrayLike, q
         if not (math.isfinite(value) and value >= 0.0):
             raise ValueError(f"{name} must be a finite number >= 0, got {value}")
     loop = _Loop(scene, control, h, round(delay / h), noise, seed, obstacle_centres)
-    return loop.run(controller, np.array(q0, dtype=float), np.array(qdot0, dtype=float), dt, substeps,
-                    n_steps_for(duration, dt), stop_when, progress, observer)
+    printer = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(lambda text: None)  # the loop reports instabilities itself, in one line
+    try:
+        return loop.run(controller, np.array(q0, dtype=float), np.array(qdot0, dtype=float), dt, substeps,
+                        n_steps_for(duration, dt), stop_when, progress, observer)
+    finally:
+        mujoco.set_mju_user_warning(printer)
 
 
 class _Loop:
