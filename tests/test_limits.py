@@ -68,3 +68,39 @@ def test_limits_must_name_the_robots_velocity_coordinates():
     wrong = MotionLimits(("x",), np.ones(1), np.ones(1))
     with pytest.raises(ValueError, match="velocity coordinates joint_x, joint_y"):
         dataclasses.replace(robot, limits=wrong)
+
+
+def _scenario_with_limits(tmp_path, limits) -> str:
+    import yaml
+    data = {"robot": "panda", "planner": "static-fabric", "dt": 0.01, "duration": 1.0,
+            "initial_state": {"q": [1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0]},
+            "goal": [{"type": "position", "link": "panda_hand", "position": [0.5, 0.3, 0.5], "tolerance": 0.02}],
+            "limits": limits}
+    path = tmp_path / "scenario.yaml"
+    path.write_text(yaml.safe_dump(data), encoding="utf-8")
+    return str(path)
+
+
+@pytest.mark.parametrize("limits, message", [
+    ({"acceleration": [1, 1, 1, 1, 1, 1, 0]}, "limits.acceleration[6]: must be positive, got 0"),
+    ({"velocity": [1, 1, -1, 1, 1, 1, 1]}, "limits.velocity[2]: must be positive, got -1"),
+    ({"jerk": [float("nan")] * 7}, "limits.jerk[0]: expected a finite number, got nan"),
+    ({"acceleration": [1, 1, 1]}, "limits.acceleration: must have 7 values (one per velocity coordinate), got 3"),
+    ({"torque": [1] * 7}, "limits"),
+])
+def test_bad_scenario_limits_are_one_line_errors_with_exit_2(tmp_path, capsys, limits, message) -> None:
+    from dynfab.cli import main
+    assert main(["run", _scenario_with_limits(tmp_path, limits)]) == 2
+    error = capsys.readouterr().err.strip().splitlines()[-1]
+    assert message in error and "Traceback" not in error
+
+
+def test_scenario_limits_bound_the_run(tmp_path, capsys) -> None:
+    import json
+    from dynfab.cli import main
+    assert main(["run", _scenario_with_limits(tmp_path, {"acceleration": [0.5] * 7, "velocity": [0.3] * 7}),
+                 "--json"]) == 0
+    metrics = json.loads(capsys.readouterr().out)
+    assert metrics["max_acceleration_ratio"] <= 1.0 + 1e-9
+    assert metrics["max_velocity_ratio"] <= 1.0 + 1e-9
+    assert metrics["max_acceleration_ratio"] > 0.9   # the limit was binding

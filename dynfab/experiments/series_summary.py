@@ -24,6 +24,13 @@ METRICS: dict[Quantity, str] = {
 }
 
 
+#: Limit ratios summarized as their worst (largest) value over all runs, with their labels.
+LIMIT_RATIOS: dict[str, str] = {
+    "max_velocity_ratio": "max velocity / limit (worst run)",
+    "max_acceleration_ratio": "max acceleration / limit (worst run)",
+}
+
+
 #: The outcomes of a run; every run has exactly one.
 OUTCOMES: tuple[Quantity, ...] = ("success", "collisions", "deadlocks")
 
@@ -79,6 +86,8 @@ class PlannerSummary:
             succeeded; None where no such run has a value.
         own_metrics: the same over this planner's own successful runs.
         wall_time_s: mean wall time of one run over all its runs [s].
+        worst_ratios: per ratio of :data:`LIMIT_RATIOS`, its largest value over all runs
+            (None if no run reports it).
     """
 
     planner: str
@@ -87,6 +96,7 @@ class PlannerSummary:
     metrics: dict[str, Statistic | None]
     own_metrics: dict[str, Statistic | None]
     wall_time_s: float
+    worst_ratios: dict[str, float | None] = dataclasses.field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -131,6 +141,7 @@ def summarize(experiment: Experiment, records: Sequence[RunRecord]) -> SeriesSum
             metrics={m: _statistic([r.metrics[m] for r in own if r.seed in common]) for m in METRICS},
             own_metrics={m: _statistic([r.metrics[m] for r in own if r.metrics["success"]]) for m in METRICS},
             wall_time_s=float(np.mean([r.wall_time_s for r in own])),
+            worst_ratios={m: _worst([r.metrics.get(m) for r in own]) for m in LIMIT_RATIOS},
         )
         for planner, own in by_planner.items())
     means = {(s.planner, m): stat.mean for s in planners for m, stat in s.metrics.items() if stat is not None}
@@ -140,6 +151,11 @@ def summarize(experiment: Experiment, records: Sequence[RunRecord]) -> SeriesSum
         ours = top / bottom if top is not None and bottom else None
         ratios.append(RatioSummary(ratio, ours))
     return SeriesSummary(experiment, seeds, common, planners, tuple(ratios))
+
+
+def _worst(values: Iterable[MetricValue]) -> float | None:
+    kept = [float(v) for v in values if v is not None]
+    return max(kept) if kept else None
 
 
 def _statistic(values: Iterable[MetricValue]) -> Statistic | None:
@@ -159,6 +175,10 @@ def render_summary(summary: SeriesSummary) -> str:
     for metric, label in METRICS.items():
         rows.append([label, *(cell for p in planners
                               for cell in (_shown(p.metrics[metric]), _paper(experiment, metric, p.planner)))])
+    for ratio, label in LIMIT_RATIOS.items():
+        worst = [p.worst_ratios.get(ratio) for p in planners]
+        if any(value is not None for value in worst):
+            rows.append([label, *(cell for value in worst for cell in ("–" if value is None else f"{value:.3g}", ""))])
     rows.append(["wall time per run [s]", *(cell for p in planners for cell in (f"{p.wall_time_s:.3g}", ""))])
     lines = [f"# {experiment.name}: {experiment.description}", "",
              f"Seeds {summary.seeds[0]}..{summary.seeds[-1]} ({len(summary.seeds)} runs per planner). Outcomes "
@@ -211,7 +231,7 @@ def summary_dict(summary: SeriesSummary) -> dict[str, Any]:
         "planners": {p.planner: {"runs": p.runs, **p.outcomes, "success_rate": p.outcomes["success"] / p.runs,
                                  "metrics": _statistics_dict(p.metrics),
                                  "own_success_metrics": _statistics_dict(p.own_metrics),
-                                 "wall_time_s": p.wall_time_s}
+                                 "wall_time_s": p.wall_time_s, **p.worst_ratios}
                      for p in summary.planners},
         "paper": [dataclasses.asdict(f) for f in experiment.figures],
         "ratios": [{**dataclasses.asdict(r.paper), "ours": r.ours} for r in summary.ratios],

@@ -109,9 +109,12 @@ class MpcController:
             self.failures += 1
 
     def _command(self, t: float, qdot: np.ndarray) -> np.ndarray:
-        """The executed plan's acceleration ``u̇`` at ``t``, or the braking action ``−k_b u``."""
+        """The executed plan's acceleration ``u̇`` at ``t``, or the braking action ``−k_b u``
+        within the acceleration limits (a plan keeps them by its bounds, up to the solver's
+        tolerance, which the clip removes)."""
+        peak = self.problem.model.acceleration_limits
         if self._plan is not None:
             stage = math.floor((t - self._plan_time) / self.config.stage_length + _TIME_TOLERANCE)
             if 0 <= stage < self.config.stages:
-                return self._plan.qddot[stage].copy()
-        return -self.config.braking_gain * qdot
+                return np.clip(self._plan.qddot[stage], -peak, peak)
+        return np.clip(-self.config.braking_gain * qdot, -peak, peak)

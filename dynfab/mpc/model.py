@@ -93,27 +93,22 @@ class PredictionModel:
     Attributes:
         configuration_size: n, the size of ``q``.
         differential_drive: whether ``q`` starts with a differential-drive base pose.
-        velocity_limits: bounds ``|u| ≤ u_max`` on the velocity coordinates: the joint
-            velocity limits of a holonomic robot; ``(max_forward_speed, max_yaw_rate,
-            arm joint velocity limits)`` of a robot on a base [m/s, rad/s, rad/s...].
+        velocity_limits: bounds ``|u| ≤ u_max`` on the velocity coordinates
+            (``robot.limits.velocity``: joints, or ``(v, ω, arm joints)`` on a base)
+            [m/s, rad/s, rad/s...].
+        acceleration_limits: bounds ``|u̇| ≤ a_max`` (``robot.limits.acceleration``).
     """
 
     configuration_size: int
     differential_drive: bool
     velocity_limits: np.ndarray
+    acceleration_limits: np.ndarray
 
     @classmethod
     def for_robot(cls, robot: Robot) -> PredictionModel:
         """The model of ``robot``: differential drive if it has a ``base``."""
-        kin = robot.kinematics
-        if robot.base is None:
-            limits = np.asarray(kin.velocity_limits, dtype=float)
-        else:
-            limits = np.concatenate([[robot.base.max_forward_speed, robot.base.max_yaw_rate],
-                                     np.asarray(kin.velocity_limits, dtype=float)[3:]])
-        limits = limits.copy()
-        limits.setflags(write=False)
-        return cls(configuration_size=robot.dof, differential_drive=robot.base is not None, velocity_limits=limits)
+        return cls(configuration_size=robot.dof, differential_drive=robot.base is not None,
+                   velocity_limits=robot.limits.velocity, acceleration_limits=robot.limits.acceleration)
 
     @property
     def velocity_size(self) -> int:

@@ -20,6 +20,7 @@ Over stages k = 0..H at times t_k = t + k h, with one slack ``s_k ≥ 0`` per st
           x_{k+1} = F(x_k, u̇_k),                                          k = 0..H-1
           ||p_j(q_k) − c_o(t_k)|| − r_j − r_o ≥ δ − s_k  every robot sphere j, obstacle o
           q_min ≤ q_k ≤ q_max,  |u_k| ≤ u_max                             k = 1..H
+          |u̇_k| ≤ a_max                                                    k = 0..H-1
 
 ``e_i`` is the position of the goal point (the link origin plus a link-frame offset) on
 the goal's axes in its parent link's frame [m] (or the joint vector for joint goals
@@ -29,9 +30,8 @@ stage time, ``p_j`` a collision sphere's centre and ``c_o(t_k)`` an obstacle's c
 at the stage time, ``δ ≥ 0`` the collision margin (``MpcConfig.collision_margin``,
 0 in the benchmark); planar robots (the point robot, ``boxer``) measure distances in x-y
 only. ``q_min``, ``q_max`` are the URDF's joint limits (infinite ones left out: on a base,
-the yaw is free and x, y keep the URDF's ±10 m); ``u_max`` is the joint velocity limit,
-on a base ``(max_forward_speed, max_yaw_rate)`` of its
-:class:`~dynfab.robots.robot.DifferentialDriveBase` followed by the arm's limits.
+the yaw is free and x, y keep the URDF's ±10 m); ``u_max`` and ``a_max`` are the robot's velocity
+and acceleration limits (``robot.limits``; on a base, ``v`` and ``ω`` first).
 Stage 0 carries no collision or limit constraint and no goal cost: its state is fixed
 by the measurement, so they could only make the problem infeasible. Spheres that no
 joint moves are left out for the same reason. Distances are smoothed,
@@ -228,13 +228,16 @@ class MpcProblem:
 
     def _bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Joint limits ``q_min ≤ q_k ≤ q_max`` and velocity limits ``|u_k| ≤ u_max`` on
-        stages 1..H, ``s ≥ 0``; everything else free."""
+        stages 1..H, acceleration limits ``|u̇_k| ≤ a_max`` on every stage, ``s ≥ 0``;
+        everything else free."""
         lower, upper = np.full(self._size, -np.inf), np.full(self._size, np.inf)
         kin = self.robot.kinematics
         for index in self._index["q"][1:]:
             lower[index], upper[index] = kin.lower, kin.upper
         for index in self._index["qdot"][1:]:
             lower[index], upper[index] = -self.model.velocity_limits, self.model.velocity_limits
+        for index in self._index["qddot"]:
+            lower[index], upper[index] = -self.model.acceleration_limits, self.model.acceleration_limits
         for index in self._index["slack"]:
             lower[index] = 0.0
         return lower, upper

@@ -201,13 +201,13 @@ def panda_robot(sphere_model: str) -> Robot:
         pairs = tuple((labels.index(a), labels.index(b)) for a, b in _PANDA_SELF_COLLISION)
     return Robot(name="panda", kinematics=kinematics, goal_link="panda_hand", collision_spheres=spheres,
                  self_collision_pairs=pairs, planar=False, default_q=np.array(PANDA_DEFAULT_Q),
-                 limits=_franka_limits(kinematics, on_base=False))
+                 limits=_franka_limits(kinematics, None))
 
 
-def _franka_limits(kinematics: Kinematics, on_base: bool) -> MotionLimits:
+def _franka_limits(kinematics: Kinematics, base: DifferentialDriveBase | None) -> MotionLimits:
     """The description's velocity and effort limits with Franka's published acceleration
     limits on the arm joints (the base keeps the default)."""
-    limits = default_limits(kinematics, on_base)
+    limits = default_limits(kinematics, base)
     acceleration = np.array(limits.acceleration)
     acceleration[-len(FRANKA_ACCELERATION):] = FRANKA_ACCELERATION
     return limits.overridden(acceleration=acceleration)
@@ -251,7 +251,7 @@ def _boxer_panda() -> Robot:
                  goal_link="panda_hand", collision_spheres=spheres,
                  self_collision_pairs=pairs, planar=False,
                  default_q=np.array(BOXER_PANDA_DEFAULT_Q), base=BOXER_BASE,
-                 limits=_franka_limits(kinematics, on_base=True))
+                 limits=_franka_limits(kinematics, BOXER_BASE))
 
 
 #: Built-in robot names and their constructors.

@@ -175,7 +175,7 @@ class Robot:
         object.__setattr__(self, "collision_spheres", tuple(self.collision_spheres))
         object.__setattr__(self, "self_collision_pairs", pairs)
         object.__setattr__(self, "default_q", default_q)
-        limits = default_limits(kin, self.base is not None) if self.limits is None else self.limits
+        limits = default_limits(kin, self.base) if self.limits is None else self.limits
         names = velocity_names(kin, self.base is not None)
         if limits.names != names:
             raise ValueError(f"robot '{self.name}': limits must be given for the velocity "
@@ -225,14 +225,15 @@ def velocity_names(kin: Kinematics, on_base: bool) -> tuple[str, ...]:
     return ("v", "omega") + kin.joint_names[3:] if on_base else kin.joint_names
 
 
-def default_limits(kin: Kinematics, on_base: bool) -> MotionLimits:
+def default_limits(kin: Kinematics, base: DifferentialDriveBase | None) -> MotionLimits:
     """Limits from the description (:func:`dynfab.robots.limits.limits_from_joints`); on a
-    base, ``v`` takes ``base_x``'s velocity limit and ``omega`` ``base_yaw``'s."""
+    base, ``v`` and ``omega`` take its ``max_forward_speed`` and ``max_yaw_rate``, and the
+    efforts of ``base_x`` and ``base_yaw``."""
     velocity, effort = kin.velocity_limits, kin.effort_limits
-    if on_base:
-        velocity = np.concatenate([[velocity[0], velocity[2]], velocity[3:]])
+    if base is not None:
+        velocity = np.concatenate([[base.max_forward_speed, base.max_yaw_rate], velocity[3:]])
         effort = np.concatenate([[effort[0], effort[2]], effort[3:]])
-    return limits_from_joints(velocity_names(kin, on_base), velocity, effort)
+    return limits_from_joints(velocity_names(kin, base is not None), velocity, effort)
 
 
 def _check_base_joints(name: str, kin: Kinematics) -> None:

@@ -18,7 +18,7 @@ whose orientation and sizes are written once.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Protocol
 
 import numpy as np
@@ -118,8 +118,8 @@ def make_controller(scenario: Scenario, robot: Robot, references: References) ->
     shape_slots = ShapeSlots(box=kinds.count("box"), cylinder=kinds.count("cylinder"),
                              capsule=kinds.count("capsule"), plane=kinds.count("plane"))
     goals = tuple(config for goal in scenario.goals for config in _goal_configs(goal))
-    config = PlannerConfig.for_robot(robot, goals, kinds.count("sphere"), _FABRIC_PLANNERS[scenario.planner],
-                                     shape_slots)
+    config = replace(PlannerConfig.for_robot(robot, goals, kinds.count("sphere"), _FABRIC_PLANNERS[scenario.planner],
+                                             shape_slots), control_period=scenario.dt)
     planner = FabricPlanner(robot, config)
     slots = _place_obstacles(scenario.obstacles, planner.parameters)
     references = planner_references(scenario, references)

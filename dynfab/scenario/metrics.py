@@ -44,6 +44,9 @@ class Metrics:
             measured by spheres.
         min_self_distance: Smallest distance between checked links [m] (collision
             meshes); None for robots measured by spheres.
+        max_velocity_ratio: ``max_t,i |u_i(t)| / u_max,i`` over the run's velocity
+            coordinates (``robot.limits``); ≤ 1 when the limits held.
+        max_acceleration_ratio: ``max_t,i |u̇_i(t)| / a_max,i`` of the commands.
         contacts: Under MuJoCo, how many contacts began (robot with an obstacle or two
             non-adjacent robot bodies); any counts as a collision. None for the kinematic
             simulator.
@@ -62,6 +65,8 @@ class Metrics:
     sphere_clearance: float | None = None
     self_collision: bool | None = None
     min_self_distance: float | None = None
+    max_velocity_ratio: float | None = None
+    max_acceleration_ratio: float | None = None
     contacts: int | None = None
 
     def to_dict(self) -> dict[str, bool | int | float | None]:

@@ -23,6 +23,7 @@ from dynfab.robots import load_robot, robot_from_urdf
 from dynfab.geometry.sphere_fitting import SphereFitParameters
 from dynfab.robots.builtin import UnknownRobotError
 from dynfab.robots.collision_model import auto_collision_model
+from dynfab.robots.limits import LimitsError
 from dynfab.robots.link_meshes import LinkMeshError
 from dynfab.robots.robot import CollisionSphere, Robot
 from dynfab.scenario.schema import Scenario, ScenarioError, UrdfRobotSpec, validate_for_robot
@@ -75,7 +76,19 @@ class RunResult:
 
 
 def robot_for(scenario: Scenario) -> Robot:
-    """The robot a scenario names (built-in or its own URDF)."""
+    """The robot a scenario names (built-in or its own URDF), with the scenario's limits."""
+    robot = _described_robot(scenario)
+    overrides = scenario.limits
+    try:
+        limits = robot.limits.overridden(overrides.velocity, overrides.acceleration, overrides.jerk)
+    except LimitsError as error:
+        field, _, problem = str(error).partition(": ")
+        raise ScenarioError(field, problem) from None
+    return dataclasses.replace(robot, limits=limits)
+
+
+def _described_robot(scenario: Scenario) -> Robot:
+    """The robot as its description gives it."""
     spec = scenario.robot
     if isinstance(spec, UrdfRobotSpec):
         try:
@@ -164,6 +177,8 @@ def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None
                               path_goal=goal.type == "path", shape_clearance=shape_clearance,
                               orientation_errors=orientation_errors,
                               angle_tolerance=goal.angle_tolerance if goal.type in _ORIENTED else None)
+    metrics = dataclasses.replace(metrics, max_velocity_ratio=robot.limits.velocity_ratio(record.qdot),
+                                  max_acceleration_ratio=robot.limits.acceleration_ratio(record.qddot))
     solve_times = getattr(controller, "solve_times", None)
     if solve_times:  # a planner that re-plans less often than it is called (MPC)
         metrics = dataclasses.replace(metrics, solver_time_ms=1e3 * float(np.mean(solve_times)))

@@ -22,6 +22,7 @@ import yaml
 
 from dynfab.scenario import fields
 from dynfab.scenario.fields import TRAJECTORY_TYPES, ScenarioError
+from dynfab.scenario.limits_schema import LimitsSpec, parse_limits
 from dynfab.scenario.goal_schema import DEFAULT_ANGLE_TOLERANCE, GoalSpec, GoalType, parse_goal
 from dynfab.scenario.obstacle_schema import OBSTACLE_TYPES, ObstacleSpec, ObstacleType, parse_obstacle
 from dynfab.scenario.robot_schema import BUILTIN_ROBOTS, CollisionSphereSpec, UrdfRobotSpec, parse_robot
@@ -68,6 +69,7 @@ class Scenario:
         goals: One or more goals; the first is the primary goal.
         obstacles: Obstacles: spheres, boxes, cylinders, capsules, planes (possibly none).
         path: The file the scenario was loaded from; None if built from a mapping.
+        limits: Overrides of the robot's velocity, acceleration and jerk limits.
         simulation: The simulator (kinematic or MuJoCo) and, under MuJoCo, the control
             mode, observation delay and noise.
     """
@@ -80,6 +82,7 @@ class Scenario:
     goals: tuple[GoalSpec, ...]
     obstacles: tuple[ObstacleSpec, ...]
     path: Path | None = None
+    limits: LimitsSpec = LimitsSpec()
     simulation: Simulation = Simulation()
 
 
@@ -126,7 +129,7 @@ def scenario_from_dict(data: object, base_dir: str | Path = ".") -> Scenario:
         root,
         "",
         required=("robot", "planner", "dt", "duration", "initial_state", "goal"),
-        optional=("obstacles",) + SIMULATION_KEYS,
+        optional=("obstacles", "limits") + SIMULATION_KEYS,
     )
     dt = fields.positive(root["dt"], "dt")
     duration = fields.positive(root["duration"], "duration")
@@ -144,6 +147,7 @@ def scenario_from_dict(data: object, base_dir: str | Path = ".") -> Scenario:
         initial_state=_initial_state(root["initial_state"], "initial_state"),
         goals=tuple(parse_goal(goal, f"goal[{i}]") for i, goal in enumerate(goals)),
         obstacles=tuple(parse_obstacle(obs, f"obstacles[{i}]") for i, obs in enumerate(obstacles)),
+        limits=parse_limits(root["limits"], "limits") if "limits" in root else LimitsSpec(),
         simulation=parse_simulation(root),
     )
 
