@@ -249,9 +249,10 @@ class _Loop:
 
     def _record_contacts(self, t: float) -> None:
         """Note every robot-obstacle or robot-robot geom pair that began touching."""
+        if self.data.ncon == 0 and not self.touching:
+            return
         touching = set()
-        for contact in self.data.contact[: self.data.ncon]:
-            a, b = int(contact.geom1), int(contact.geom2)
+        for a, b in self.data.contact.geom.tolist() if self.data.ncon else ():
             kinds = (self.kinds[a], self.kinds[b])
             if 1 in kinds and 0 not in kinds and kinds != (2, 2):
                 touching.add((a, b))
