@@ -31,6 +31,16 @@ def test_setpoints_integrate_a_held_acceleration_exactly() -> None:
     np.testing.assert_allclose(setpoints.advance().position, last.position + last.velocity * 0.001, atol=1e-15)
 
 
+def test_setpoints_stop_at_the_position_limits() -> None:
+    setpoints = SetpointIntegrator(servo_period=0.01, lower=[-1.0, -np.inf], upper=[0.1, np.inf])
+    setpoints.reset([0.0, 0.0], [1.0, 1.0])
+    setpoints.hold([0.0, 0.0])
+    positions = [setpoints.advance() for _ in range(20)]
+    assert positions[-1].position[0] == 0.1 and positions[-1].velocity[0] == 0.0  # held at the limit
+    assert positions[-1].acceleration[0] == 0.0
+    assert positions[-1].position[1] == pytest.approx(0.2) and positions[-1].velocity[1] == 1.0
+
+
 def test_setpoints_refuse_misuse() -> None:
     setpoints = SetpointIntegrator(servo_period=0.001)
     with pytest.raises(RuntimeError, match="before reset"):

@@ -13,7 +13,7 @@ from dynfab.robots import load_robot, robot_from_urdf
 from dynfab.robots.urdf import parse_urdf
 from dynfab.robots.kinematics import Kinematics
 from dynfab.robots.robot import Robot
-from dynfab.sim.mujoco_model import ARMATURE, MujocoModelError, SceneObstacle, build_scene
+from dynfab.sim.mujoco_model import ARMATURE, LIMIT_MARGIN, MujocoModelError, SceneObstacle, build_scene
 
 
 def test_panda_bodies_carry_the_identified_inertials() -> None:
@@ -28,7 +28,8 @@ def test_panda_bodies_carry_the_identified_inertials() -> None:
         assert principal[0] > 0.0 and principal[0] + principal[1] >= principal[2] - 1e-12  # physical inertia
     assert model.nq == model.nv == model.nu == 7
     assert list(scene.effort) == [87.0] * 4 + [12.0] * 3
-    np.testing.assert_allclose(model.jnt_range[:7, 1], robot.kinematics.upper)
+    np.testing.assert_allclose(model.jnt_range[:7, 1], robot.kinematics.upper + LIMIT_MARGIN)
+    np.testing.assert_allclose(scene.lower, robot.kinematics.lower)
 
 
 def test_panda_mass_matrix_matches_pinocchio() -> None:

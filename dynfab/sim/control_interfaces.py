@@ -6,7 +6,9 @@ takes positions, velocities or torques. :class:`SetpointIntegrator` bridges the 
 starts at the measured state (``reset``), holds each new q̈ of the planner (``hold``) and
 at each servo tick advances the desired state by the servo period h,
 
-    q̇_d ← q̇_d + q̈ h,    q_d ← q_d + q̇_d h − ½ q̈ h²   (exact for constant q̈).
+    q̇_d ← q̇_d + q̈ h,    q_d ← q_d + q̇_d h − ½ q̈ h²   (exact for constant q̈),
+
+stopping at the joints' position limits if it is given them.
 
 The set-points are continuous (Franka's interfaces refuse jumps): the desired state is
 not pulled back to the measured one at each planner tick; the planner closes the loop
@@ -67,13 +69,20 @@ class Setpoint:
 class SetpointIntegrator:
     """Integrates the planner's q̈ into setpoints at the servo rate (module doc)."""
 
-    def __init__(self, servo_period: float) -> None:
+    def __init__(self, servo_period: float, lower: ArrayLike | None = None, upper: ArrayLike | None = None) -> None:
         """Args:
             servo_period: h, the joint controller's period [s] (> 0).
+            lower: Lower position limits [rad or m] (``-inf``: none); a set-point that
+                would leave ``[lower, upper]`` stops at the limit with zero velocity, as
+                a robot refuses set-points beyond its limits (and the joint controller
+                does not wind up against them).
+            upper: Upper position limits [rad or m] (``inf``: none).
         """
         if not (math.isfinite(servo_period) and servo_period > 0.0):
             raise ValueError(f"servo_period must be a positive number of seconds, got {servo_period}")
         self.servo_period = servo_period
+        self.lower = None if lower is None else np.asarray(lower, dtype=float)
+        self.upper = None if upper is None else np.asarray(upper, dtype=float)
         self._position: Vector | None = None
         self._velocity: Vector | None = None
         self._acceleration: Vector | None = None
@@ -101,6 +110,14 @@ class SetpointIntegrator:
         h, a = self.servo_period, self._acceleration
         self._velocity = self._velocity + a * h
         self._position = self._position + self._velocity * h - 0.5 * a * h * h
+        if self.lower is not None or self.upper is not None:
+            lower = -np.inf if self.lower is None else self.lower
+            upper = np.inf if self.upper is None else self.upper
+            outside = (self._position < lower) | (self._position > upper)
+            if np.any(outside):
+                self._position = np.clip(self._position, lower, upper)
+                self._velocity = np.where(outside, 0.0, self._velocity)
+                a = np.where(outside, 0.0, a)
         return Setpoint(self._position.copy(), self._velocity.copy(), a.copy())
 
 

@@ -9,7 +9,8 @@ armature), and every torque clipped to the joint's effort limit:
 - ``torque``: the commanded τ as it is;
 - ``position``: a PD servo on q_d, τ = b + m_ii (ω² (q_d − q) + 2ω (q̇_r − q̇)), with the
   set-point's rate q̇_r = (q_d − q_d,prev) / h as its velocity reference;
-- ``velocity``: a PI velocity drive, τ = b + m_ii (2ω (q̇_d − q̇) + ω² ∫ (q̇_d − q̇) dt).
+- ``velocity``: a PI velocity drive, τ = b + m_ii (2ω (q̇_d − q̇) + ω² ∫ (q̇_d − q̇) dt),
+  whose integral stops while the torque is at its limit (anti-windup).
 
 ω = :data:`SERVO_BANDWIDTH` (critically damped).
 """
@@ -92,6 +93,8 @@ class JointDrive:
                 torque = bias + inertia * (w * w * (command - q) + 2.0 * w * (rate - qdot))
             else:
                 error = command - qdot
-                self._integral += error * self.h
-                torque = bias + inertia * (2.0 * w * error + w * w * self._integral)
+                integral = self._integral + error * self.h
+                torque = bias + inertia * (2.0 * w * error + w * w * integral)
+                unsaturated = np.abs(torque) < scene.effort
+                self._integral = np.where(unsaturated, integral, self._integral)  # anti-windup
         data.ctrl[scene.joint_actuators] = np.clip(torque, -scene.effort, scene.effort)

@@ -1,8 +1,8 @@
 """A MuJoCo model (MJCF) of a robot and its obstacles.
 
 The robot's kinematic tree becomes nested bodies, one per URDF link, each placed by its
-parent joint's origin; active joints become hinges or slides (limits as ranges,
-:data:`ARMATURE` on hinges), locked joints are folded into their body's pose, a mimic
+parent joint's origin; active joints become hinges or slides (limits as ranges
+:data:`LIMIT_MARGIN` beyond the URDF's, :data:`ARMATURE` on hinges), locked joints are folded into their body's pose, a mimic
 joint of an active leader is a joint tied to it by an equality ``q = m q_leader + c``
 (of a locked leader: folded at its value). Each body carries its URDF ``<inertial>``.
 A moving body whose mass, with everything below it, is zero makes the model
@@ -47,6 +47,11 @@ __all__ = ["ARMATURE", "PHYSICS_TIMESTEP", "MujocoModelError", "MujocoScene", "S
 PHYSICS_TIMESTEP = 0.001
 #: Reflected rotor inertia added to every hinge [kg m^2] (order of a Franka / UR drive).
 ARMATURE = 0.1
+#: How far MuJoCo's hard joint stops lie beyond the URDF's position limits [rad or m]:
+#: the planner and the set-points keep within the URDF's limits, the stops catch what
+#: overshoots (MuJoCo's soft stop at the limit itself let joints sink 0.2 mrad into it,
+#: where the planner's limit handling chattered).
+LIMIT_MARGIN = 0.01
 #: Mass [kg] and principal inertia [kg m^2] of a massless URDF link that a joint moves and
 #: that carries massive links (x then y of a planar robot); MuJoCo needs some.
 _VIRTUAL_MASS, _VIRTUAL_INERTIA = 1e-4, 1e-8
@@ -93,6 +98,8 @@ class MujocoScene:
         joint_actuators: The motor (torque) actuator of each of them.
         effort: Effort limit of each of them [N m or N] (``robot.limits.effort``; ``inf``
             if unknown).
+        lower: Lower position limit of each of them [rad or m] (the URDF's; ``-inf``: none).
+        upper: Upper position limit of each of them [rad or m].
         base_qpos: qpos address of the base's free joint, or None without a base.
         base_dof: qvel address of the base's free joint, or None.
         wheel_actuators: Velocity actuators of the (left, right) drive wheels, or None.
@@ -107,6 +114,8 @@ class MujocoScene:
     joint_dof: np.ndarray
     joint_actuators: np.ndarray
     effort: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
     base_qpos: int | None
     base_dof: int | None
     wheel_actuators: tuple[int, int] | None
@@ -155,7 +164,8 @@ def _scene(model: mujoco.MjModel, robot: Robot, obstacles: Sequence[SceneObstacl
     return MujocoScene(model=model, joint_qpos=np.array([int(j.qposadr[0]) for j in joints], dtype=int),
                        joint_dof=np.array([int(j.dofadr[0]) for j in joints], dtype=int),
                        joint_actuators=np.array([model.actuator(f"{n}_motor").id for n in names], dtype=int),
-                       effort=np.array(effort, dtype=float),
+                       effort=np.array(effort, dtype=float), lower=kin.lower[kin.dof - len(names):],
+                       upper=kin.upper[kin.dof - len(names):],
                        base_qpos=None if base is None else int(base.qposadr[0]),
                        base_dof=None if base is None else int(base.dofadr[0]),
                        wheel_actuators=wheels, base=robot.base, mocap=mocap, robot_bodies=robot_bodies, obstacle_of_geom=geoms)
@@ -238,7 +248,7 @@ class _Builder:
         kind = "slide" if joint.type == "prismatic" else "hinge"
         attributes = {"name": joint.name, "type": kind, "axis": _numbers(joint.axis)}
         if joint.limit is not None and math.isfinite(joint.limit.lower) and joint.type != "continuous":
-            attributes["range"] = _numbers((joint.limit.lower, joint.limit.upper))
+            attributes["range"] = _numbers((joint.limit.lower - LIMIT_MARGIN, joint.limit.upper + LIMIT_MARGIN))
         if kind == "hinge":
             attributes["armature"] = str(ARMATURE)
         element = ET.Element("joint", **attributes)

@@ -5,7 +5,8 @@ Every control period ``dt`` the planner (``(t, q, u) -> u̇``, as for
 with Gaussian ``noise`` of standard deviation σ on every coordinate of q [rad or m] and of
 u [rad/s or m/s] (seeded). Between its calls, each physics step (h = 1 ms) runs what a
 real robot runs: a :class:`~dynfab.sim.control_interfaces.SetpointIntegrator` (reset to
-the initial state, then holding each q̈ of the planner), the ``control`` mode's interface
+the initial state, then holding each q̈ of the planner, stopping at the joint limits),
+the ``control`` mode's interface
 (:func:`~dynfab.sim.control_interfaces.interface_for`), whose command the joint
 controllers of :mod:`dynfab.sim.mujoco_drives` turn into torques. A differential-drive
 base follows (v, ω) integrated in the same way from the planner's (v̇, ω̇), through its
@@ -144,7 +145,7 @@ class _Loop:
         self.data = mujoco.MjData(scene.model)
         self.h = h
         self.state = RobotState(scene, self.data)
-        self.setpoints = SetpointIntegrator(h)
+        self.setpoints = SetpointIntegrator(h, scene.lower, scene.upper)
         self.interface = interface_for(control, MujocoInverseDynamics(scene, self.data), scene.effort)
         self.drive = JointDrive(scene, self.data, control, h)
         self.history: deque[tuple[NDArray[np.float64], NDArray[np.float64]]] = deque(maxlen=delay_steps + 1)
