@@ -5,7 +5,8 @@ Every control period ``dt`` the planner (``(t, q, u) -> u̇``, as for
 with Gaussian ``noise`` of standard deviation σ on every coordinate of q [rad or m] and of
 u [rad/s or m/s] (seeded). Between its calls, each physics step (h = 1 ms) runs what a
 real robot runs: a :class:`~dynfab.sim.control_interfaces.SetpointIntegrator` (reset to
-the initial state, then holding each q̈ of the planner, stopping at the joint limits),
+the initial state, then holding each q̈ of the planner, stopping at the joint limits, and
+reset again when the tracking error exceeds :data:`RESYNC_ERROR`),
 the ``control`` mode's interface
 (:func:`~dynfab.sim.control_interfaces.interface_for`), whose command the joint
 controllers of :mod:`dynfab.sim.mujoco_drives` turn into torques. A differential-drive
@@ -30,18 +31,22 @@ import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dynfab.sim.control_interfaces import SetpointIntegrator, interface_for
+from dynfab.sim.control_interfaces import Setpoint, SetpointIntegrator, interface_for
 from dynfab.sim.mujoco_drives import JointDrive, MujocoInverseDynamics
 from dynfab.sim.mujoco_model import MujocoScene
 from dynfab.sim.mujoco_state import RobotState
 from dynfab.sim.simulator import Controller, ProgressCallback, Record, StopPredicate, n_steps_for
 
-__all__ = ["CONTROL_MODES", "DIVERGED_SPEED", "Contact", "MujocoRun", "simulate_mujoco"]
+__all__ = ["CONTROL_MODES", "DIVERGED_SPEED", "RESYNC_ERROR", "Contact", "MujocoRun", "simulate_mujoco"]
 
 #: Control modes of the joints.
 CONTROL_MODES: tuple[str, ...] = ("torque", "velocity", "position")
 #: A generalized speed above this [rad/s or m/s] counts as a diverged simulation.
 DIVERGED_SPEED = 1e3
+#: Tracking error [rad or m] beyond which the set-points restart from the measured state at
+#: the next planner tick (the robot was held off its path, e.g. by a contact): a joint
+#: controller that kept pulling towards the old path would snap back when released.
+RESYNC_ERROR = 0.05
 
 #: MuJoCo's warnings of a state it had to reset, and what they mean.
 _INSTABILITIES = ((mujoco.mjtWarning.mjWARN_BADQPOS, "non-finite or huge positions"),
@@ -146,6 +151,7 @@ class _Loop:
         self.h = h
         self.state = RobotState(scene, self.data)
         self.setpoints = SetpointIntegrator(h, scene.lower, scene.upper)
+        self.setpoint: Setpoint | None = None
         self.interface = interface_for(control, MujocoInverseDynamics(scene, self.data), scene.effort)
         self.drive = JointDrive(scene, self.data, control, h)
         self.history: deque[tuple[NDArray[np.float64], NDArray[np.float64]]] = deque(maxlen=delay_steps + 1)
@@ -213,6 +219,9 @@ class _Loop:
         scene, model, data, h = self.scene, self.model, self.data, self.h
         base = scene.base_qpos is not None
         arm = slice(2, None) if base else slice(None)
+        joint_q = data.qpos[scene.joint_qpos]
+        if self.setpoint is not None and np.max(np.abs(self.setpoint.position - joint_q), initial=0.0) > RESYNC_ERROR:
+            self.setpoints.reset(joint_q, data.qvel[scene.joint_dof])  # held off its path: no wind-up
         self.setpoints.hold(command[arm])
         times = t + h * np.arange(1, substeps + 1)
         centres = None if self.obstacle_centres is None else self.obstacle_centres(times)
@@ -221,8 +230,8 @@ class _Loop:
                 self._set_mocap(centres[i])
             mujoco.mj_step1(model, data)
             joint_q, joint_u = data.qpos[scene.joint_qpos], data.qvel[scene.joint_dof]
-            setpoint = self.setpoints.advance()
-            self.drive.apply(self.interface.command(setpoint, joint_q, joint_u), joint_q, joint_u)
+            self.setpoint = self.setpoints.advance()
+            self.drive.apply(self.interface.command(self.setpoint, joint_q, joint_u), joint_q, joint_u)
             if base:
                 self.base_velocity += command[:2] * h
                 data.ctrl[list(scene.wheel_actuators)] = scene.base.wheel_speeds(*self.base_velocity)
