@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from robot_files import arm_urdf
 
-from dynfab.geometry.shapes import Sphere
+from dynfab.geometry.shapes import Box, Sphere
 from dynfab.robots import load_robot, robot_from_urdf
 from dynfab.robots.builtin import PANDA_DEFAULT_Q
 from dynfab.sim import simulate
@@ -129,3 +129,23 @@ def test_non_finite_command_stops_the_run_cleanly() -> None:
 def test_invalid_options_are_refused(option: str, value: object) -> None:
     with pytest.raises(ValueError, match=option):
         simulate_mujoco(_sinusoid, build_scene(load_robot("panda")), Q0, np.zeros(7), 0.01, 1.0, **{option: value})
+
+
+def test_robot_held_by_an_obstacle_does_not_snap_back_when_released() -> None:
+    """A wall holds the point robot for 1.5 s, then leaves: the set-points restarted from
+    the held state, so the robot resumes at the planner's pace instead of jumping after the
+    path it missed."""
+    def centres(times: np.ndarray) -> np.ndarray:
+        return np.where(times[:, None] < 1.5, [[0.5, 0.0, 0.0]], [[5.0, 5.0, 0.0]])[:, None, :]
+
+    wall = SceneObstacle(Box((0.2, 2.0, 1.0)), (0.5, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0), True)
+
+    def push_right(t: float, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
+        return np.array([np.clip(1.0 - qdot[0], -1.0, 1.0), -qdot[1]])  # towards +x at 1 m/s
+
+    run = simulate_mujoco(push_right, build_scene(load_robot("point"), [wall]), np.zeros(2), np.zeros(2), 0.01,
+                          3.0, obstacle_centres=centres)
+    assert run.contacts and run.contacts[0].other == "obstacles[0]"
+    assert run.record.q[145, 0] == pytest.approx(0.3, abs=0.01)  # held against the wall (0.4 - r)
+    assert np.abs(run.record.qdot[:, 0]).max() < 1.05  # released: no snap beyond the commanded speed
+    assert run.record.q[-1, 0] > 1.0  # on its way again
