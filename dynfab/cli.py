@@ -14,10 +14,14 @@ import math
 import sys
 from importlib.resources import files
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from dynfab.scenario.recording import RecordingError, load_recording, run_recording, save_recording
 from dynfab.scenario.runner import RunResult, link_path, run_scenario
 from dynfab.scenario.schema import PLANNERS, Scenario, ScenarioError, load_scenario
+
+if TYPE_CHECKING:
+    from dynfab.viz.mujoco_video import VideoRecorder
 
 #: ``dynfab demo NAME``: the bundled scenario, and whether the demo also runs the static
 #: baseline on it for comparison.
@@ -35,6 +39,9 @@ def main(argv: list[str] | None = None) -> int:
     run = commands.add_parser("run", help="run a scenario file in the embedded simulator")
     run.add_argument("file", type=Path, help="scenario YAML file")
     run.add_argument("--planner", choices=PLANNERS, help="override the scenario's planner")
+    run.add_argument("--simulator", help="override the scenario's simulator: kinematic or mujoco")
+    run.add_argument("--control", help="under mujoco, the joints' control interface: torque, velocity or position")
+    run.add_argument("--video", type=Path, metavar="RUN.mp4", help="under mujoco, render the run to an MP4 video")
     _output_options(run)
     check = commands.add_parser("check", help="check a recorded run on the robot's collision meshes: collisions, "
                                               "self-collisions, joint limits (exit 3 if any)")
@@ -75,6 +82,7 @@ def main(argv: list[str] | None = None) -> int:
         return _experiment(args.name, args.runs, args.seed, args.out, args.jobs, args.record)
     if args.command == "check":
         return _check(args.recording, args.file, args.json)
+    video = None
     if args.command == "run":
         path, planners = args.file, [args.planner]
     else:
@@ -83,11 +91,19 @@ def main(argv: list[str] | None = None) -> int:
         planners = [None, "static-fabric"] if compare else [None]
     try:
         scenario = load_scenario(path)
-        results = [_run(path, scenario if planner is None else dataclasses.replace(scenario, planner=planner))
+        if args.command == "run":
+            scenario = _with_simulation(scenario, args.simulator, args.control)
+            video = _video_recorder(scenario, args.video)
+        results = [_run(path, scenario if planner is None else dataclasses.replace(scenario, planner=planner), video)
                    for planner in planners]
     except ScenarioError as error:
         print(f"dynfab: error: {error}", file=sys.stderr)
         return 2
+    if results[0].stop_reason is not None:
+        print(f"dynfab: run stopped early: {results[0].stop_reason}; metrics cover the run so far", file=sys.stderr)
+    if video is not None:
+        video.close()
+        print(f"dynfab: video written to {video.path} ({len(video.frames)} frames)", file=sys.stderr)
     _report(results, args.json)
     if args.record is not None:
         try:
@@ -180,10 +196,42 @@ def _check(recording_path: Path, scenario_path: Path, as_json: bool) -> int:
     return 0 if report.ok else 3
 
 
-def _run(path: Path, scenario: Scenario) -> RunResult:
+def _run(path: Path, scenario: Scenario, video: VideoRecorder | None = None) -> RunResult:
+    simulation = scenario.simulation
+    under = (f", mujoco with {simulation.control} control" if simulation.simulator == "mujoco" else "")
     header = (f"dynfab: {path.name}: robot {scenario.robot if isinstance(scenario.robot, str) else 'urdf'}, "
-              f"planner {scenario.planner}, {scenario.duration:g} s at dt {scenario.dt:g} s")
-    return run_scenario(scenario, progress=_ProgressBar(header))
+              f"planner {scenario.planner}, {scenario.duration:g} s at dt {scenario.dt:g} s{under}")
+    return run_scenario(scenario, progress=_ProgressBar(header), observer=video)
+
+
+def _with_simulation(scenario: Scenario, simulator: str | None, control: str | None) -> Scenario:
+    """``scenario`` with the command line's ``--simulator`` and ``--control``.
+
+    Raises:
+        ScenarioError: An unknown value, or ``--control`` for the kinematic simulator.
+    """
+    simulation = scenario.simulation
+    if simulator is not None:
+        simulation = dataclasses.replace(simulation, simulator=simulator)
+    if control is not None:
+        simulation = dataclasses.replace(simulation, control=control)
+        if simulation.simulator != "mujoco":
+            raise ScenarioError("--control", "applies to --simulator mujoco only")
+    return dataclasses.replace(scenario, simulation=simulation)
+
+
+def _video_recorder(scenario: Scenario, path: Path | None) -> VideoRecorder | None:
+    """The recorder of ``--video``, or None without it."""
+    if path is None:
+        return None
+    if scenario.simulation.simulator != "mujoco":
+        raise ScenarioError("--video", "renders MuJoCo runs: add --simulator mujoco")
+    if path.parent != Path() and not path.parent.is_dir():
+        raise ScenarioError("--video", f"folder {path.parent} does not exist")
+    from dynfab.viz.mujoco_video import VideoRecorder, prepare_headless_rendering
+
+    prepare_headless_rendering()
+    return VideoRecorder(path)
 
 
 def _output_options(parser: argparse.ArgumentParser, default_plot: Path | None = None) -> None:
