@@ -63,6 +63,11 @@ def main(argv: list[str] | None = None) -> int:
     experiment.add_argument("--jobs", type=_at_least_one, help="worker processes (default: the number of CPUs)")
     experiment.add_argument("--record", action="store_true",
                             help="also write each run's recording to OUT/recordings/ (for dynfab check)")
+    experiment.add_argument("--simulator", default="kinematic", help="kinematic (default) or mujoco")
+    experiment.add_argument("--control", default="torque", help="under mujoco: torque (default), velocity or position")
+    experiment.add_argument("--delay", type=float, default=0.0, help="under mujoco: observation delay [s]")
+    experiment.add_argument("--noise", type=float, default=0.0,
+                            help="under mujoco: std of the observation noise [rad or m, and per s]")
     spheres = commands.add_parser("spheres", help="fit collision spheres to a URDF's collision geometry, "
                                                   "print their coverage, write them as scenario YAML")
     spheres.add_argument("urdf", help="URDF file, or package://NAME/... (see the README)")
@@ -79,7 +84,7 @@ def main(argv: list[str] | None = None) -> int:
 
         return spheres_command(args.urdf, args.out, args.plot, args.tolerance, args.package_dir, args.joints)
     if args.command == "experiment":
-        return _experiment(args.name, args.runs, args.seed, args.out, args.jobs, args.record)
+        return _experiment(args)
     if args.command == "check":
         return _check(args.recording, args.file, args.json)
     video = None
@@ -135,19 +140,34 @@ def _positive_number(text: str) -> float:
     return value
 
 
-def _experiment(name: str, runs: int, seed: int, out: Path | None, jobs: int | None, record: bool) -> int:
-    """``dynfab experiment``: run the series, print its summary; 2 for an unknown name or an
-    output directory of another series, 1 if a run failed, 130 on Ctrl-C (resumable)."""
+def _experiment(args: argparse.Namespace) -> int:
+    """``dynfab experiment``: run the series, print its summary; 2 for an unknown name, a bad
+    simulation setting or an output directory of another series, 1 if a run failed, 130 on
+    Ctrl-C (resumable)."""
+    from dynfab.experiments.physics import setting_name, under_simulation
     from dynfab.experiments.registry import EXPERIMENTS
     from dynfab.experiments.series import RunError, SeriesError, run_series
+    from dynfab.scenario.simulation_schema import Simulation
 
+    name, runs, seed, out, jobs, record = args.name, args.runs, args.seed, args.out, args.jobs, args.record
     if name not in EXPERIMENTS:
         print(f"dynfab: error: unknown experiment {name!r} (expected one of {', '.join(EXPERIMENTS)})",
               file=sys.stderr)
         return 2
-    out = Path("dynfab-experiments") / name if out is None else out
     try:
-        result = run_series(EXPERIMENTS[name], runs, seed, out, jobs, progress=sys.stderr, record=record)
+        simulation = Simulation(args.simulator, args.control, args.delay, args.noise)
+    except ScenarioError as error:
+        print(f"dynfab: error: --{error.field}: {error.problem}", file=sys.stderr)
+        return 2
+    if simulation.simulator == "kinematic" and simulation != Simulation():
+        print("dynfab: error: --control, --delay and --noise need --simulator mujoco", file=sys.stderr)
+        return 2
+    experiment = under_simulation(EXPERIMENTS[name], simulation)
+    if out is None:
+        suffix = "" if simulation == Simulation() else "-" + setting_name(simulation)
+        out = Path("dynfab-experiments") / (name + suffix)
+    try:
+        result = run_series(experiment, runs, seed, out, jobs, progress=sys.stderr, record=record)
     except SeriesError as error:
         print(f"dynfab: error: {error}", file=sys.stderr)
         return 2
