@@ -37,3 +37,14 @@ def test_bad_settings_are_one_line_errors(tmp_path, capsys, arguments, message) 
     assert main(["experiment", "exp1", "--runs", "1", "--out", str(tmp_path / "out"), *arguments]) == 2
     error = capsys.readouterr().err.strip().splitlines()
     assert len(error) == 1 and message in error[0]
+
+
+def test_a_series_runs_under_mujoco_and_its_scenarios_replay_there(tmp_path) -> None:
+    import json
+    out = tmp_path / "exp2a-mujoco"
+    assert main(["experiment", "exp2a", "--runs", "1", "--jobs", "1", "--simulator", "mujoco", "--out", str(out)]) == 0
+    for scenario in (out / "scenarios").glob("*.yaml"):
+        assert "simulator: mujoco" in scenario.read_text(encoding="utf-8")
+    runs = [json.loads(line) for line in (out / "runs.jsonl").read_text(encoding="utf-8").splitlines()]
+    assert {run["planner"] for run in runs} == {"static-fabric", "dynamic-fabric"}
+    assert all(run["metrics"]["contacts"] is not None for run in runs)   # physics ran: contacts are counted
