@@ -68,6 +68,8 @@ def main(argv: list[str] | None = None) -> int:
     experiment.add_argument("--delay", type=float, default=0.0, help="under mujoco: observation delay [s]")
     experiment.add_argument("--noise", type=float, default=0.0,
                             help="under mujoco: std of the observation noise [rad or m, and per s]")
+    experiment.add_argument("--recovery", action="store_true",
+                            help="recover from stalls by following a global path (off in the paper's runs)")
     spheres = commands.add_parser("spheres", help="fit collision spheres to a URDF's collision geometry, "
                                                   "print their coverage, write them as scenario YAML")
     spheres.add_argument("urdf", help="URDF file, or package://NAME/... (see the README)")
@@ -144,7 +146,7 @@ def _experiment(args: argparse.Namespace) -> int:
     """``dynfab experiment``: run the series, print its summary; 2 for an unknown name, a bad
     simulation setting or an output directory of another series, 1 if a run failed, 130 on
     Ctrl-C (resumable)."""
-    from dynfab.experiments.physics import setting_name, under_simulation
+    from dynfab.experiments.settings import setting_name, with_setting
     from dynfab.experiments.registry import EXPERIMENTS
     from dynfab.experiments.series import RunError, SeriesError, run_series
     from dynfab.scenario.simulation_schema import Simulation
@@ -162,9 +164,9 @@ def _experiment(args: argparse.Namespace) -> int:
     if simulation.simulator == "kinematic" and simulation != Simulation():
         print("dynfab: error: --control, --delay and --noise need --simulator mujoco", file=sys.stderr)
         return 2
-    experiment = under_simulation(EXPERIMENTS[name], simulation)
+    experiment = with_setting(EXPERIMENTS[name], simulation, args.recovery)
     if out is None:
-        suffix = "" if simulation == Simulation() else "-" + setting_name(simulation)
+        suffix = "" if simulation == Simulation() and not args.recovery else "-" + setting_name(simulation, args.recovery)
         out = Path("dynfab-experiments") / (name + suffix)
     try:
         result = run_series(experiment, runs, seed, out, jobs, progress=sys.stderr, record=record)

@@ -72,6 +72,8 @@ class Scenario:
         limits: Overrides of the robot's velocity, acceleration and jerk limits.
         simulation: The simulator (kinematic or MuJoCo) and, under MuJoCo, the control
             mode, observation delay and noise.
+        recovery: Recover from stalls by following a global path
+            (scenario/stall_recovery.py); ``recovery: false`` turns it off.
     """
 
     robot: str | UrdfRobotSpec
@@ -84,6 +86,7 @@ class Scenario:
     path: Path | None = None
     limits: LimitsSpec = LimitsSpec()
     simulation: Simulation = Simulation()
+    recovery: bool = True
 
 
 def load_scenario(path: str | Path) -> Scenario:
@@ -129,7 +132,7 @@ def scenario_from_dict(data: object, base_dir: str | Path = ".") -> Scenario:
         root,
         "",
         required=("robot", "planner", "dt", "duration", "initial_state", "goal"),
-        optional=("obstacles", "limits") + SIMULATION_KEYS,
+        optional=("obstacles", "limits", "recovery") + SIMULATION_KEYS,
     )
     dt = fields.positive(root["dt"], "dt")
     duration = fields.positive(root["duration"], "duration")
@@ -149,6 +152,7 @@ def scenario_from_dict(data: object, base_dir: str | Path = ".") -> Scenario:
         obstacles=tuple(parse_obstacle(obs, f"obstacles[{i}]") for i, obs in enumerate(obstacles)),
         limits=parse_limits(root["limits"], "limits") if "limits" in root else LimitsSpec(),
         simulation=parse_simulation(root),
+        recovery=_flag(root.get("recovery", True), "recovery"),
     )
 
 
@@ -234,6 +238,12 @@ def _check_link(link: str, field: str, links: tuple[str, ...]) -> None:
     """Raise unless ``link`` is one of the robot's links."""
     if link not in links:
         raise ScenarioError(field, f"unknown link {link!r} (robot links: {', '.join(links)})")
+
+
+def _flag(value: object, field: str) -> bool:
+    if not isinstance(value, bool):
+        raise ScenarioError(field, f"expected true or false, got {value!r}")
+    return value
 
 
 def _initial_state(value: object, field: str) -> InitialState:
