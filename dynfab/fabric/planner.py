@@ -27,6 +27,7 @@ from dataclasses import dataclass, field, replace
 import casadi as ca
 import numpy as np
 
+from dynfab.fabric.backends import BACKENDS, planner_function
 from dynfab.fabric.command_bounds import CommandBounds
 from dynfab.fabric.energy import WeightedGeometry
 from dynfab.fabric.leaves.barrier import OBSTACLE_MIN_CLEARANCE, Barrier
@@ -109,6 +110,8 @@ class PlannerConfig:
             position bounds look one period ahead (:mod:`dynfab.fabric.command_bounds`).
         bound_command: make every command executable (:mod:`dynfab.fabric.command_bounds`);
             ``False`` returns the fabric's raw acceleration (for studying the theory).
+        backend: ``"vm"`` interprets the function in CasADi's virtual machine; ``"c"``
+            compiles it to C and caches the library (:mod:`dynfab.fabric.backends`).
     """
 
     goals: tuple[GoalConfig | OrientationGoalConfig, ...]
@@ -127,6 +130,7 @@ class PlannerConfig:
     limits: MotionLimits | None = None
     control_period: float = 0.01
     bound_command: bool = True
+    backend: str = "vm"
 
     @classmethod
     def for_robot(cls, robot: Robot, goals: tuple[GoalConfig | OrientationGoalConfig, ...], obstacle_slots: int = 0,
@@ -151,6 +155,8 @@ class PlannerConfig:
         if not (np.isfinite(self.control_period) and self.control_period > 0):
             raise ValueError(f"PlannerConfig.control_period must be a positive finite number, "
                              f"got {self.control_period}")
+        if self.backend not in BACKENDS:
+            raise ValueError(f"PlannerConfig.backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
 
 
 class FabricPlanner:
@@ -161,7 +167,8 @@ class FabricPlanner:
         robot: the robot.
         config: the configuration it was built with.
         parameters: writable views of the runtime parameters.
-        function: the compiled CasADi function ``z ↦ q̈``.
+        function: the CasADi function ``z ↦ q̈`` (SX, or the loaded C library).
+        backend: the backend in use, ``"vm"`` or ``"c"`` (``"vm"`` if no compiler was found).
         build_time_s: wall time of building and compiling [s].
         fallback_count: how many calls returned the fallback action.
     """
@@ -179,7 +186,8 @@ class FabricPlanner:
         goal_dimensions = tuple(self._goal_dimension(goal) for goal in config.goals)
         self._layout = ParameterLayout(goal_dimensions, config.obstacle_slots, config.dynamic, config.shape_slots)
         self._remembers_command = config.bound_command and config.limits.jerk is not None
-        self.function = self._build()
+        built = planner_function(config.backend, self._build, (robot, config))
+        self.function, self.backend, self._n_instructions = built.function, built.backend, built.n_instructions
         state_size = self._n + self._nv
         self._input = np.zeros(state_size + self._layout.size + (self._nv if self._remembers_command else 0))
         self._output = np.zeros(self._nv)
@@ -197,7 +205,7 @@ class FabricPlanner:
     @property
     def n_instructions(self) -> int:
         """SX instructions evaluated per call."""
-        return self.function.n_instructions()
+        return self._n_instructions
 
     def compute(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
         """The commanded acceleration for the state, with the current parameters. Always
