@@ -15,6 +15,7 @@ import sys
 from importlib.resources import files
 from pathlib import Path
 
+from dynfab.fabric.backends import BACKENDS
 from dynfab.scenario.recording import RecordingError, load_recording, run_recording, save_recording
 from dynfab.scenario.runner import RunResult, link_path, run_scenario
 from dynfab.scenario.schema import PLANNERS, Scenario, ScenarioError, load_scenario
@@ -83,6 +84,8 @@ def main(argv: list[str] | None = None) -> int:
         planners = [None, "static-fabric"] if compare else [None]
     try:
         scenario = load_scenario(path)
+        if args.backend is not None:
+            scenario = dataclasses.replace(scenario, backend=args.backend)
         results = [_run(path, scenario if planner is None else dataclasses.replace(scenario, planner=planner))
                    for planner in planners]
     except ScenarioError as error:
@@ -188,6 +191,8 @@ def _run(path: Path, scenario: Scenario) -> RunResult:
 
 def _output_options(parser: argparse.ArgumentParser, default_plot: Path | None = None) -> None:
     parser.add_argument("--json", action="store_true", help="print the metrics as one JSON object on stdout")
+    parser.add_argument("--backend", choices=BACKENDS,
+                        help="override the scenario's backend: vm (CasADi VM) or c (compiled C, cached)")
     parser.add_argument("--plot", type=Path, default=default_plot, help="write a PNG of the run")
     parser.add_argument("--record", type=Path, metavar="OUT.npz",
                         help="write t, q, qdot, qddot (one row per control step) and joint_names of the (first) run")

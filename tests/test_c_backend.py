@@ -4,6 +4,7 @@ of cache entries, and the fallback without a compiler."""
 from __future__ import annotations
 
 import dataclasses
+import json
 import os
 import subprocess
 import sys
@@ -153,3 +154,22 @@ def test_inputs_digest_follows_robot_and_config() -> None:
     spheres[0] = CollisionSphere(spheres[0].link, spheres[0].center, spheres[0].radius + 1e-9)
     bigger = dataclasses.replace(PANDA, collision_spheres=tuple(spheres))
     assert inputs_digest(bigger, config) != inputs_digest(PANDA, config)
+
+
+@needs_compiler
+def test_run_with_backend_c_gives_the_vm_metrics(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from test_cli import VALID, write_scenario
+
+    from dynfab.cli import main
+
+    path = write_scenario(tmp_path, VALID)
+    assert main(["run", str(path), "--json"]) == 0
+    vm = json.loads(capsys.readouterr().out)
+    assert main(["run", str(path), "--json", "--backend", "c"]) == 0
+    compiled = json.loads(capsys.readouterr().out)
+    assert compiled.pop("solver_time_ms") > 0 and vm.pop("solver_time_ms") > 0
+    assert compiled == vm and compiled["success"]
+    assert main(["run", str(write_scenario(tmp_path, {**VALID, "backend": "c"}, "c.yaml")), "--json"]) == 0
+    from_key = json.loads(capsys.readouterr().out)
+    from_key.pop("solver_time_ms")
+    assert from_key == vm

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 
 import yaml
 
+from dynfab.fabric.backends import BACKENDS
 from dynfab.scenario import fields
 from dynfab.scenario.fields import TRAJECTORY_TYPES, ScenarioError
 from dynfab.scenario.limits_schema import LimitsSpec, parse_limits
@@ -69,6 +70,8 @@ class Scenario:
         obstacles: Obstacles: spheres, boxes, cylinders, capsules, planes (possibly none).
         path: The file the scenario was loaded from; None if built from a mapping.
         limits: Overrides of the robot's velocity, acceleration and jerk limits.
+        backend: How a fabric planner is evaluated: ``"vm"`` (CasADi's virtual machine)
+            or ``"c"`` (compiled C, cached; :mod:`dynfab.fabric.backends`).
     """
 
     robot: str | UrdfRobotSpec
@@ -80,6 +83,7 @@ class Scenario:
     obstacles: tuple[ObstacleSpec, ...]
     path: Path | None = None
     limits: LimitsSpec = LimitsSpec()
+    backend: str = "vm"
 
 
 def load_scenario(path: str | Path) -> Scenario:
@@ -125,7 +129,7 @@ def scenario_from_dict(data: object, base_dir: str | Path = ".") -> Scenario:
         root,
         "",
         required=("robot", "planner", "dt", "duration", "initial_state", "goal"),
-        optional=("obstacles", "limits"),
+        optional=("obstacles", "limits", "backend"),
     )
     dt = fields.positive(root["dt"], "dt")
     duration = fields.positive(root["duration"], "duration")
@@ -144,6 +148,7 @@ def scenario_from_dict(data: object, base_dir: str | Path = ".") -> Scenario:
         goals=tuple(parse_goal(goal, f"goal[{i}]") for i, goal in enumerate(goals)),
         obstacles=tuple(parse_obstacle(obs, f"obstacles[{i}]") for i, obs in enumerate(obstacles)),
         limits=parse_limits(root["limits"], "limits") if "limits" in root else LimitsSpec(),
+        backend=fields.choice(root.get("backend", "vm"), "backend", BACKENDS),
     )
 
 
