@@ -57,6 +57,11 @@ def main(argv: list[str] | None = None) -> int:
     experiment.add_argument("--jobs", type=_at_least_one, help="worker processes (default: the number of CPUs)")
     experiment.add_argument("--record", action="store_true",
                             help="also write each run's recording to OUT/recordings/ (for dynfab check)")
+    export = commands.add_parser("export", help="write a scenario's fabric planner as self-contained C "
+                                                "(NAME.c, NAME.h, example.c, Makefile)")
+    export.add_argument("file", type=Path, help="scenario YAML file (static-fabric or dynamic-fabric)")
+    export.add_argument("--out", type=Path, required=True, help="output directory")
+    export.add_argument("--name", help="prefix of the C symbols (default: the file name, e.g. panda_spheres)")
     spheres = commands.add_parser("spheres", help="fit collision spheres to a URDF's collision geometry, "
                                                   "print their coverage, write them as scenario YAML")
     spheres.add_argument("urdf", help="URDF file, or package://NAME/... (see the README)")
@@ -74,6 +79,10 @@ def main(argv: list[str] | None = None) -> int:
         return spheres_command(args.urdf, args.out, args.plot, args.tolerance, args.package_dir, args.joints)
     if args.command == "experiment":
         return _experiment(args.name, args.runs, args.seed, args.out, args.jobs, args.record)
+    if args.command == "export":
+        from dynfab.export_command import export_command
+
+        return export_command(args.file, args.out, args.name)
     if args.command == "check":
         return _check(args.recording, args.file, args.json)
     if args.command == "run":
