@@ -17,7 +17,6 @@ from dynfab.fabric import c_backend
 from dynfab.fabric.fingerprint import canonical, inputs_digest
 from dynfab.fabric.planner import FabricPlanner, GoalConfig, PlannerConfig
 from dynfab.robots import load_robot
-from dynfab.robots.limits import FRANKA_JERK
 from dynfab.robots.robot import CollisionSphere
 
 PANDA = load_robot("panda")
@@ -44,7 +43,7 @@ CASES = {
     "dynamic": ("panda", PlannerConfig(goals=HAND_GOAL, obstacle_slots=2, dynamic=True)),
     "base": ("boxer-panda", PlannerConfig.for_robot(load_robot("boxer-panda"), HAND_GOAL, obstacle_slots=2)),
     "jerk-limited": ("panda", PlannerConfig(goals=HAND_GOAL, obstacle_slots=1,
-                                            limits=dataclasses.replace(PANDA.limits, jerk=np.array(FRANKA_JERK)))),
+                                            limits=dataclasses.replace(PANDA.limits, jerk=np.full(7, 50.0)))),
 }
 
 

@@ -21,6 +21,7 @@ conversion.
 
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import dataclass, field, replace
 
@@ -28,6 +29,7 @@ import casadi as ca
 import numpy as np
 
 from dynfab.fabric.backends import BACKENDS, planner_function
+from dynfab.fabric.batch import BatchEvaluator
 from dynfab.fabric.command_bounds import CommandBounds
 from dynfab.fabric.energy import WeightedGeometry
 from dynfab.fabric.leaves.barrier import OBSTACLE_MIN_CLEARANCE, Barrier
@@ -199,6 +201,7 @@ class FabricPlanner:
         self._previous_command = self._input[state_size + self._layout.size:]
         for i, goal in enumerate(config.goals):
             self.parameters.goal_weight[i] = goal.weight
+        self._batch = BatchEvaluator(self.function, self._n, self._nv, self._layout.size)
         self.fallback_count = 0
         self.build_time_s = time.perf_counter() - start
 
@@ -243,6 +246,35 @@ class FabricPlanner:
         if self._remembers_command:
             self._previous_command[:] = command
         return command
+
+    def compute_batch(self, Q: np.ndarray, Qdot: np.ndarray, P: np.ndarray | None = None,
+                      previous: np.ndarray | None = None, threads: int | None = None) -> np.ndarray:
+        """The commands of many environments in one call: row ``i`` is :meth:`compute` of
+        ``(Q[i], Qdot[i])`` with parameters ``P[i]``, always finite (the fallback per row).
+        Does not change the planner's state (not even the previous command).
+
+        Args:
+            Q: configurations (N, n).
+            Qdot: velocity coordinates (N, nv).
+            P: packed parameters (N, p) in the order of the planner's parameter buffer;
+                ``None``: the current :attr:`parameters` in every row.
+            previous: previous commands (N, nv) of a jerk-limited planner; ``None``: the
+                planner's current one in every row.
+            threads: threads to spread the rows on (default: the CPUs).
+
+        Returns:
+            Commands (N, nv).
+
+        Raises:
+            ValueError: for a wrong shape or a non-finite input (naming the row).
+        """
+        z = self._batch.pack(self._input, Q, Qdot, P, previous)
+        commands = self._batch(z, threads if threads is not None else os.cpu_count() or 1)
+        failed = ~np.isfinite(commands).all(axis=1)
+        if failed.any():
+            self.fallback_count += int(failed.sum())
+            commands[failed] = self._fallback(z[failed, self._n:self._n + self._nv])
+        return commands
 
     def _fallback(self, qdot: np.ndarray) -> np.ndarray:
         """The safe action ``q̈ = −k q̇``, within the acceleration limits when the command
