@@ -14,11 +14,15 @@ import math
 import sys
 from importlib.resources import files
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from dynfab.fabric.backends import BACKENDS
 from dynfab.scenario.recording import RecordingError, load_recording, run_recording, save_recording
 from dynfab.scenario.runner import RunResult, link_path, run_scenario
 from dynfab.scenario.schema import PLANNERS, Scenario, ScenarioError, load_scenario
+
+if TYPE_CHECKING:
+    from dynfab.experiments.cluster import Cluster
 
 #: ``dynfab demo NAME``: the bundled scenario, and whether the demo also runs the static
 #: baseline on it for comparison.
@@ -55,6 +59,10 @@ def main(argv: list[str] | None = None) -> int:
     experiment.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
     experiment.add_argument("--out", type=Path, help="output directory (default dynfab-experiments/NAME)")
     experiment.add_argument("--jobs", type=_at_least_one, help="worker processes (default: the number of CPUs)")
+    experiment.add_argument("--workers", type=_at_least_one,
+                            help="run on Dask: an embedded LocalCluster of this many worker processes")
+    experiment.add_argument("--scheduler", metavar="tcp://HOST:8786",
+                            help="run on the existing Dask cluster of this scheduler (implies Dask)")
     experiment.add_argument("--record", action="store_true",
                             help="also write each run's recording to OUT/recordings/ (for dynfab check)")
     export = commands.add_parser("export", help="write a scenario's fabric planner as self-contained C "
@@ -78,7 +86,12 @@ def main(argv: list[str] | None = None) -> int:
 
         return spheres_command(args.urdf, args.out, args.plot, args.tolerance, args.package_dir, args.joints)
     if args.command == "experiment":
-        return _experiment(args.name, args.runs, args.seed, args.out, args.jobs, args.record)
+        cluster = None
+        if args.workers is not None or args.scheduler is not None:
+            from dynfab.experiments.cluster import Cluster
+
+            cluster = Cluster(workers=args.workers or 1, scheduler=args.scheduler)
+        return _experiment(args.name, args.runs, args.seed, args.out, args.jobs, args.record, cluster)
     if args.command == "export":
         from dynfab.export_command import export_command
 
@@ -131,10 +144,13 @@ def _positive_number(text: str) -> float:
     return value
 
 
-def _experiment(name: str, runs: int, seed: int, out: Path | None, jobs: int | None, record: bool) -> int:
-    """``dynfab experiment``: run the series, print its summary; 2 for an unknown name or an
-    output directory of another series, 1 if a run failed, 130 on Ctrl-C (resumable)."""
+def _experiment(name: str, runs: int, seed: int, out: Path | None, jobs: int | None, record: bool,
+                cluster: Cluster | None) -> int:
+    """``dynfab experiment``: run the series (on local processes or a Dask cluster), print
+    its summary; 2 for an unknown name, an output directory of another series or an
+    unusable cluster, 1 if a run failed, 130 on Ctrl-C (resumable)."""
     from dynfab.experiments.registry import EXPERIMENTS
+    from dynfab.experiments.cluster import ClusterError
     from dynfab.experiments.series import RunError, SeriesError, run_series
 
     if name not in EXPERIMENTS:
@@ -143,8 +159,9 @@ def _experiment(name: str, runs: int, seed: int, out: Path | None, jobs: int | N
         return 2
     out = Path("dynfab-experiments") / name if out is None else out
     try:
-        result = run_series(EXPERIMENTS[name], runs, seed, out, jobs, progress=sys.stderr, record=record)
-    except SeriesError as error:
+        result = run_series(EXPERIMENTS[name], runs, seed, out, jobs, progress=sys.stderr, record=record,
+                            cluster=cluster)
+    except (SeriesError, ClusterError) as error:
         print(f"dynfab: error: {error}", file=sys.stderr)
         return 2
     except RunError as error:
