@@ -231,6 +231,7 @@ def _example(name: str, nv: int) -> str:
     return f"""/* example.c: fill the planner's input by name, compute a command, time the call.
  * Build and run: make && ./example */
 #include <stdio.h>
+#include <stdlib.h>
 #include <time.h>
 #include "{name}.h"
 
@@ -239,21 +240,23 @@ static double seconds(void) {{
     clock_gettime(CLOCK_MONOTONIC, &t);
     return t.tv_sec + 1e-9 * t.tv_nsec;
 }}
+static int by_value(const void* a, const void* b) {{ return (*(double*)a > *(double*)b) - (*(double*)a < *(double*)b); }}
 
 int main(void) {{
     {name}_input input;
-    double qddot[{name.upper()}_NV];
-    const int calls = 20000;
-    double start;
-    int i, status;
+    double qddot[{name.upper()}_NV], block_us[31], start;
+    int i, k, status;
     {name}_defaults(&input);  /* the exported start state, goals and obstacles */
     input.qdot[0] += 0.1;     /* e.g. a measured velocity */
     status = {name}_compute(&input, qddot);
     printf("status %d\\nqddot", status);
     for (i = 0; i < {name.upper()}_NV; ++i) printf(" %.17g", qddot[i]);
-    start = seconds();
-    for (i = 0; i < calls; ++i) {name}_compute(&input, qddot);
-    printf("\\nstep_us %.3f\\n", 1e6 * (seconds() - start) / calls);
+    for (k = 0; k < 31; ++k) {{  /* the median of 31 blocks of 500 calls */
+        for (start = seconds(), i = 0; i < 500; ++i) {name}_compute(&input, qddot);
+        block_us[k] = 1e6 * (seconds() - start) / 500;
+    }}
+    qsort(block_us, 31, sizeof block_us[0], by_value);
+    printf("\\nstep_us %.3f\\n", block_us[15]);
     return status < 0;
 }}
 """
@@ -262,6 +265,8 @@ int main(void) {{
 def _makefile(name: str) -> str:
     flags = " ".join(flag for flag in COMPILE_FLAGS if flag not in ("-shared", "-fPIC"))
     return f"""# Builds the example; link {name}.c into your controller the same way.
+# -ffp-contract=off keeps the results equal to dynfab's in Python; adding -march=native made
+# the Panda planner about 15 % faster on the machine it was measured on.
 CC ?= cc
 CFLAGS ?= {flags} -Wall
 
