@@ -94,3 +94,8 @@ def test_bounds_refuse_bad_values() -> None:
         CommandBounds(LIMITS, LOWER, UPPER, 0.0)
     with pytest.raises(ValueError, match="lower must be 3 numbers"):
         CommandBounds(LIMITS, LOWER[:2], UPPER)
+
+
+def test_a_joint_resting_at_its_limit_and_pushed_into_it_does_not_freeze_the_others() -> None:
+    command = evaluate(bounded_function(), [-1.0, 0.0, 0.25], [0.0, 0.0, 0.0], [-5.0, 2.0, 1.0])
+    np.testing.assert_allclose(command, [0.0, 2.0, 1.0], atol=1e-12)

@@ -26,18 +26,22 @@ fabric's behaviour as the bounds allow:
 1. **Brake along the path**: ``a₁ = a + γ u`` with the smallest braking ``γ ∈ [−1/Δt, 0]``
    [1/s] that keeps each coordinate's velocity and position bound. Adding a multiple of
    ``u`` changes the speed along the current path, not its direction, so a joint at its
-   velocity limit slows the whole motion instead of bending it.
-2. **Scale uniformly**: ``a₂ = s a₁`` with the largest ``s ∈ [0, 1]`` that puts ``a₂`` in
-   ``B`` (on the coordinates where ``B`` contains 0). This keeps the command's direction,
-   so the fabric's geometry (the path it would trace at a lower speed) is kept; only its
-   magnitude shrinks. What is lost is the time-optimality of the leaves: a barrier that
-   wanted to stop the robot faster than ``A`` allows stops it as fast as ``A`` allows, so
-   the fabric's avoidance guarantees hold only as far as the hard limits let them (the
+   velocity limit, or running into a position limit, slows the whole motion instead of
+   bending it.
+2. **Scale uniformly** into the acceleration limits: ``a₂ = s a₁`` with
+   ``s = min(1, min_i A_i / |a₁,i|)``. This keeps the command's direction, so the fabric's
+   geometry (the path it would trace at a lower speed) is kept; only its magnitude
+   shrinks. What is lost is the time-optimality of the leaves: a barrier that wanted to
+   stop the robot faster than ``A`` allows stops it as fast as ``A`` allows, so the
+   fabric's avoidance guarantees hold only as far as the hard limits let them (the
    position bound above is the hard one for joint limits).
-3. **Clip per coordinate** into ``B`` (the last resort, which changes the direction): acts
-   only on coordinates that are already beyond what can be held (faster than their
-   limit, or too fast to stop before a position limit), and brakes them as hard as ``A``
-   allows.
+3. **Clip per coordinate** into ``B`` (the only step that changes the direction): it
+   acts on a coordinate whose velocity or position bound step 1 could not meet within
+   its braking cap, on a joint resting at a position limit that the fabric pushes into
+   (that joint stays, the others move on: scaling the whole command to zero would freeze
+   the robot), on a coordinate already beyond what can be held (faster than its limit,
+   or too fast to stop before a position limit: it brakes as hard as ``A`` allows), and
+   on the jerk bound.
 
 A non-finite fabric command stays non-finite here, so that the planner's fallback
 catches it.
@@ -124,10 +128,8 @@ class CommandBounds:
         braking = ca.fmax(braking, -1.0 / dt)
         braked = [acceleration[i] + braking * velocity[i] for i in range(limits.size)]
         scale = ca.SX(1)
-        for a, low, high in zip(braked, lows, highs):
-            holds_rest = ca.logic_and(low <= 0, high >= 0)
-            ratio = ca.if_else(a > high, high / a, ca.if_else(a < low, low / a, 1))
-            scale = ca.if_else(holds_rest, ca.fmin(scale, ratio), scale)
+        for a, peak in zip(braked, limits.acceleration):
+            scale = ca.if_else(ca.fabs(a) > peak, ca.fmin(scale, float(peak) / ca.fabs(a)), scale)
         return ca.vertcat(*[_clamp(scale * a, low, high) for a, low, high in zip(braked, lows, highs)])
 
 

@@ -43,12 +43,53 @@ class Lagrangian:
     def __add__(self, other: Lagrangian) -> Lagrangian:
         return Lagrangian(self.L + other.L, self.x, self.xdot)
 
-    def dynamic_pull(self, x: ca.SX, xdot: ca.SX, reference: Reference) -> Lagrangian:
-        """A dynamic Lagrangian ``L_d(x_rel, ẋ_rel)`` written in the fixed coordinates:
-        ``L_d(x − x̃, ẋ − ẋ̃)`` (``x̃``, ``ẋ̃`` enter as parameters, not as system variables)."""
-        (pulled,) = ca.substitute([self.L], [self.x, self.xdot],
-                                  [x - reference.position, xdot - reference.velocity])
-        return Lagrangian(pulled, x, xdot)
+    def dynamic_pull(self, x: ca.SX, xdot: ca.SX, reference: Reference) -> DynamicLagrangian:
+        """This Lagrangian, written in relative coordinates ``x_rel = x − x̃(t)``, seen from
+        the fixed coordinates ``x`` (see :class:`DynamicLagrangian`)."""
+        return DynamicLagrangian(self, x, xdot, reference)
+
+
+@dataclass(frozen=True)
+class DynamicLagrangian:
+    """A Lagrangian ``L_d(x_rel, ẋ_rel)`` of relative coordinates ``x_rel = x − x̃(t)``,
+    seen from the fixed coordinates ``x``.
+
+    Its spec is NOT the Euler-Lagrange equation of ``L_d(x − x̃, ẋ − ẋ̃)`` with ``x̃``, ``ẋ̃``
+    frozen (that misses the reference's acceleration): :meth:`spec` is the relative spec
+    pulled dynamically, ``(M, f − M ẍ̃)``, which equals the Euler-Lagrange equation with
+    the explicit time dependence of ``x̃(t)`` (paper, "Euler-Lagrange commutes with the
+    dynamic pullback"). There is deliberately no ``Lagrangian`` view with frozen
+    parameters to call ``spec()`` on.
+
+    Attributes:
+        relative: ``L_d`` in its own (relative) symbols.
+        x: fixed-frame position symbols.
+        xdot: fixed-frame velocity symbols.
+        reference: ``x̃``, ``ẋ̃``, ``ẍ̃`` (parameters).
+    """
+
+    relative: Lagrangian
+    x: ca.SX
+    xdot: ca.SX
+    reference: Reference
+
+    @property
+    def L(self) -> ca.SX:
+        """The value ``L_d(x − x̃, ẋ − ẋ̃)`` in the fixed symbols."""
+        return self._in_fixed_frame(self.relative.L)
+
+    def energy(self) -> ca.SX:
+        """The relative energy ``H_d(x − x̃, ẋ − ẋ̃)``, conserved by dynamic energization."""
+        return self._in_fixed_frame(self.relative.energy())
+
+    def spec(self) -> Spec:
+        """``(M, f − M ẍ̃)`` of the relative spec, in the fixed symbols."""
+        return self.relative.spec().dynamic_pull(self.x, self.xdot, self.reference)
+
+    def _in_fixed_frame(self, expression: ca.SX) -> ca.SX:
+        (value,) = ca.substitute([expression], [self.relative.x, self.relative.xdot],
+                                 [self.x - self.reference.position, self.xdot - self.reference.velocity])
+        return value
 
 
 def finsler_energy(finsler_structure: ca.SX, x: ca.SX, xdot: ca.SX) -> Lagrangian:

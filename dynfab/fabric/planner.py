@@ -32,14 +32,14 @@ from dynfab.fabric.backends import BACKENDS, planner_function
 from dynfab.fabric.batch import BatchEvaluator
 from dynfab.fabric.command_bounds import CommandBounds
 from dynfab.fabric.energy import WeightedGeometry
-from dynfab.fabric.leaves.barrier import OBSTACLE_MIN_CLEARANCE, Barrier
+from dynfab.fabric.leaves.barrier import Barrier
 from dynfab.fabric.leaves.goal import GoalAttractor
 from dynfab.fabric.leaves.limits import JointLimitAvoidance
 from dynfab.fabric.leaves.obstacle import SphereObstacleAvoidance
 from dynfab.fabric.leaves.orientation import OrientationGoalConfig, direction_map
 from dynfab.fabric.leaves.self_collision import SelfCollisionAvoidance
 from dynfab.fabric.leaves.shape_obstacle import ShapeObstacleAvoidance
-from dynfab.fabric.linalg import cholesky_solve
+from dynfab.fabric.joint_reference import joint_reference
 from dynfab.fabric.maps import DifferentialMap, Reference, linear_map, selected
 from dynfab.fabric.nonholonomic import Steering, least_squares_acceleration, velocity_map, velocity_map_derivative
 from dynfab.fabric.parameters import ParameterLayout, ParameterSymbols, RuntimeParameters, ShapeSlots
@@ -100,8 +100,9 @@ class PlannerConfig:
         dynamic: build dynamic fabrics: goals and obstacles take velocities and
             accelerations as runtime parameters (paper section IV). ``False`` builds the
             static fabric, which is the dynamic one with all of them zero.
-        reference_damping: ``λ`` of the damped pseudo-inverse ``J⁺ = Jᵀ (J Jᵀ + λ² I)⁻¹``
-            that pulls the primary goal's reference velocity to joint space [m].
+        reference_damping: ``λ₀`` of the pseudo-inverse ``J⁺ = Jᵀ (J Jᵀ + λ² I)⁻¹`` that
+            brings the primary goal's reference to joint space, damped only near
+            singularities (:mod:`dynfab.fabric.joint_reference`) [m].
         steering: for a differential-drive base, the look-ahead term of the
             non-holonomic solve (:class:`dynfab.fabric.nonholonomic.Steering`); ``None`` for the
             paper's plain least squares.
@@ -144,7 +145,7 @@ class PlannerConfig:
         collision)."""
         if robot.base is None:
             return cls(goals=goals, obstacle_slots=obstacle_slots, dynamic=dynamic, shape_slots=shape_slots)
-        barrier = Barrier(geometry_gain=5.0, energy_gain=0.5, horizon=0.5, min_clearance=OBSTACLE_MIN_CLEARANCE)
+        barrier = Barrier(geometry_gain=5.0, energy_gain=0.5, horizon=0.5)
         return cls(goals=goals, obstacle_slots=obstacle_slots, dynamic=dynamic, shape_slots=shape_slots,
                    obstacle_avoidance=SphereObstacleAvoidance(barrier), shape_avoidance=ShapeObstacleAvoidance(barrier),
                    steering=Steering(lookahead=0.5, weight=1.0))
@@ -328,8 +329,8 @@ class FabricPlanner:
         if self.config.joint_limits is not None:
             kin = self.robot.kinematics
             geometry = geometry + self.config.joint_limits.on_joints(q, qdot, kin.lower, kin.upper)
-        forcing, goal_distance, reference_velocity = self._forcing(q, qdot, params)
-        motion = EnvironmentMotion(reference_velocity, obstacle_momentum) if self.config.dynamic else None
+        forcing, goal_distance, joint = self._forcing(q, qdot, params)
+        motion = EnvironmentMotion(*joint, obstacle_momentum) if joint is not None else None
         qddot = self.config.speed_control.acceleration(geometry, forcing, goal_distance, motion)
         if self.robot.base is None:
             velocity = qdot
@@ -420,9 +421,11 @@ class FabricPlanner:
         return [avoidance.on_pair(sphere_maps[a], sphere_maps[b], spheres[a].radius, spheres[b].radius)
                 for a, b in self.robot.self_collision_pairs]
 
-    def _forcing(self, q: ca.SX, qdot: ca.SX, params: ParameterSymbols) -> tuple[Spec, ca.SX, ca.SX | None]:
+    def _forcing(self, q: ca.SX, qdot: ca.SX,
+                 params: ParameterSymbols) -> tuple[Spec, ca.SX, tuple[ca.SX, ca.SX] | None]:
         """Summed goal forcing, the primary goal's error norm, and (dynamic planners) the
-        primary goal reference's velocity pulled to joint space."""
+        primary goal reference's velocity and acceleration in joint space
+        (:mod:`dynfab.fabric.joint_reference`)."""
         goals = self.config.goals
         primary_index = next((i for i, goal in enumerate(goals) if isinstance(goal, GoalConfig)), 0)
         total: Spec | None = None
@@ -433,8 +436,9 @@ class FabricPlanner:
             total = spec if total is None else total + spec
             if i == primary_index:
                 distance = ca.norm_2(task.phi - reference.position)
-                velocity = self._pulled_reference_velocity(task, reference) if self.config.dynamic else None
-        return total, distance, velocity
+                joint = (joint_reference(task, reference, self.config.reference_damping)
+                         if self.config.dynamic else None)
+        return total, distance, joint
 
     def _goal_task(self, goal: GoalConfig | OrientationGoalConfig, q: ca.SX, qdot: ca.SX) -> DifferentialMap:
         """The task map of a goal: directions of link axes, a point on a link (on the
@@ -450,15 +454,6 @@ class FabricPlanner:
         selector = np.zeros((len(joints), self._n))
         selector[range(len(joints)), joints] = 1.0
         return linear_map(selector, ca.SX(len(joints), 1), q, qdot)
-
-    def _pulled_reference_velocity(self, task: DifferentialMap, reference: Reference) -> ca.SX:
-        """``q̇̃ = Jᵀ (J Jᵀ + λ² I)⁻¹ ẋ̃``: the least-norm joint velocity that moves the task
-        with the reference, damped near singularities so it stays finite."""
-        jacobian = task.jacobian
-        m = jacobian.shape[0]
-        gram = ca.mtimes(jacobian, jacobian.T) + self.config.reference_damping**2 * ca.SX.eye(m)
-        return ca.mtimes(jacobian.T, cholesky_solve(gram, reference.velocity))
-
 
 def _first_axes(reference: Reference, dims: int) -> Reference:
     """The first ``dims`` coordinates of a 3-D reference (planar robots use x, y)."""

@@ -78,10 +78,14 @@ class SpeedControl:
             motion: how the goal reference and the obstacles move (dynamic fabrics);
                 ``None``: a static world.
 
-        With ``motion``, energization and speed control act on the velocity relative to
-        the goal reference, ``q̇ − q̇̃`` (paper Lemma "Dynamically energized fabrics":
-        damping ``B ẋ_r``), and damping pulls ``q̇`` toward the metric-weighted velocity
-        of the environment,
+        With ``motion``, the base energy is pulled dynamically with the goal reference,
+        ``½ c ‖q̇ − q̇̃‖²``, whose spec is ``(c I, −c q̈̃)``: the base then asks for the
+        reference's own acceleration instead of rest, so that on the reference the whole
+        fabric asks for exactly ``q̈̃`` and follows it without bias
+        (:mod:`dynfab.fabric.joint_reference`). Energization and speed control act on the
+        velocity relative to the goal reference, ``q̇ − q̇̃`` (paper Lemma "Dynamically
+        energized fabrics": damping ``B ẋ_r``), and damping pulls ``q̇`` toward the
+        metric-weighted velocity of the environment,
 
             v_env = (M + M_ψ)⁻¹ (c q̇̃ + M_ψ q̇̃ + Σ J_pᵀ M_o ċ_o),
 
@@ -90,6 +94,10 @@ class SpeedControl:
         obstacle's metric dominates (so a robot pushed by an obstacle is not damped into
         it), and rest where the base metric dominates. In a static world ``v_env = 0``.
         """
+        if motion is not None:
+            base_inertia = -self.base_metric * motion.reference_acceleration
+            geometry = WeightedGeometry(geometry.M, geometry.f_geometry + base_inertia,
+                                        geometry.f_energy + base_inertia, geometry.x, geometry.xdot)
         qdot = geometry.xdot if motion is None else geometry.xdot - motion.reference_velocity
         eps = self.regularization
         speed_squared = ca.dot(qdot, qdot)
@@ -115,11 +123,19 @@ class SpeedControl:
 class EnvironmentMotion:
     """How the goal reference and the obstacles move, seen from joint space.
 
+    One goal reference serves the whole root: energization, speed control and the base
+    energy measure motion relative to the primary goal's reference (the robot's task).
+    Moving obstacles need no reference of their own here: each obstacle leaf is already
+    pulled dynamically with its obstacle's motion, and the damping's target velocity
+    weights each obstacle's velocity by its leaf metric (``obstacle_momentum``).
+
     Attributes:
-        reference_velocity: ``q̇̃ = J⁺ ẋ̃`` of the primary goal (n, 1) [rad/s].
+        reference_velocity: ``q̇̃`` of the primary goal (n, 1) [rad/s].
+        reference_acceleration: ``q̈̃`` of the primary goal (n, 1) [rad/s²].
         obstacle_momentum: ``Σ J_pᵀ M_o ċ_o`` over robot spheres ``p`` and moving
             obstacles ``o`` (n, 1): each obstacle's velocity weighted by its leaf metric.
     """
 
     reference_velocity: ca.SX
+    reference_acceleration: ca.SX
     obstacle_momentum: ca.SX

@@ -223,9 +223,10 @@ class PolynomialTrajectory(Trajectory):
             position[i, : len(row)] = row
         k = np.arange(order)
         velocity = np.zeros_like(position)
-        velocity[:, :-1] = position[:, 1:] * k[1:]
         acceleration = np.zeros_like(position)
-        acceleration[:, :-1] = velocity[:, 1:] * k[1:]
+        with np.errstate(over="ignore"):  # an overflowing derivative is refused by the run's check
+            velocity[:, :-1] = position[:, 1:] * k[1:]
+            acceleration[:, :-1] = velocity[:, 1:] * k[1:]
         object.__setattr__(self, "_powers", k.astype(float))
         object.__setattr__(self, "_matrices", np.stack([position.T, velocity.T, acceleration.T]))
 
@@ -367,6 +368,11 @@ class SplineTrajectory(Trajectory):
     @property
     def dimension(self) -> int:
         return len(self.waypoints[0])
+
+    @property
+    def knot_times(self) -> np.ndarray:
+        """The times ``tᵢ`` at which the waypoints are reached [s] (segment ends)."""
+        return np.array(self._spline.x)
 
     def _sample(self, times: np.ndarray) -> Samples:
         clamped = np.clip(times, 0.0, self.duration)

@@ -18,6 +18,7 @@ import numpy as np
 from dynfab.geometry.shapes import quaternion_matrix
 from dynfab.motion.directions import RotatingDirections
 from dynfab.motion.global_planning import GlobalPlanningError, plan_path
+from dynfab.motion.reference_checks import first_non_finite
 from dynfab.motion.references import References
 from dynfab.motion.trajectories import (
     SplineTrajectory,
@@ -63,7 +64,23 @@ def scenario_references(scenario: Scenario, robot: Robot) -> References:
                                 f"coordinates, got {trajectory.dimension}")
         obstacles.append(trajectory)
     orientations = tuple(_orientation_reference(goal) for goal in scenario.goals)
+    named = [(f"goal[{i}].trajectory", t) for i, t in enumerate(goals)]
+    named += [(f"obstacles[{k}].trajectory", t) for k, t in enumerate(obstacles)]
+    named += [(f"goal[{i}].angular_velocity", t) for i, t in enumerate(orientations) if t is not None]
+    for field, trajectory in named:
+        _check_finite_over_run(trajectory, field, scenario)
     return References(goals, tuple(obstacles), orientations)
+
+
+def _check_finite_over_run(trajectory: Trajectory, field: str, scenario: Scenario) -> None:
+    """Refuse a reference that turns NaN or infinite during the run (motion/reference_checks.py)."""
+    if isinstance(trajectory, StaticPoint):
+        return
+    failure = first_non_finite(trajectory, scenario.duration, scenario.dt)
+    if failure is not None:
+        time, quantity = failure
+        raise ScenarioError(field, f"the reference's {quantity} is not finite at t = {time:g} s "
+                            f"(checked over the run, 0..{scenario.duration:g} s)")
 
 
 def _orientation_reference(goal: GoalSpec) -> Trajectory | None:

@@ -24,11 +24,6 @@ import casadi as ca
 
 from dynfab.fabric.energy import Lagrangian, WeightedGeometry
 
-#: ``min_clearance`` of the obstacle leaves [m]: an obstacle inside a robot sphere, as noisy
-#: perception produces, asks for at most ``k ẋ² / 1 cm`` (and a metric of
-#: ``2λ (1/1 cm − 1/r)²``) instead of 10⁶-fold more at the general clamp of 1e-3.
-OBSTACLE_MIN_CLEARANCE = 0.01
-
 #: ``h(x, ẋ)`` of a geometry ``ẍ + h = 0`` on a 1-D clearance.
 GeometryFunction = Callable[[ca.SX, ca.SX], ca.SX]
 #: A Lagrangian ``L_e(x, ẋ)`` on a 1-D clearance.

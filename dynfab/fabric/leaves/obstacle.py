@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 
 from dynfab.fabric.energy import WeightedGeometry
-from dynfab.fabric.leaves.barrier import OBSTACLE_MIN_CLEARANCE, Barrier
+from dynfab.fabric.leaves.barrier import Barrier
 from dynfab.fabric.maps import Reference, sphere_distance_map
 
 
@@ -31,8 +31,7 @@ class SphereObstacleAvoidance:
             (Experiment 1: 60/60 reached without collision, mean clearance 0.24 m).
     """
 
-    barrier: Barrier = field(default_factory=lambda: Barrier(geometry_gain=5.0, energy_gain=0.5, horizon=0.2,
-                                                                     min_clearance=OBSTACLE_MIN_CLEARANCE))
+    barrier: Barrier = field(default_factory=lambda: Barrier(geometry_gain=5.0, energy_gain=0.5, horizon=0.2))
 
     def on_point(self, point: ca.SX, point_velocity: ca.SX, obstacle: Reference,
                  obstacle_radius: ca.SX, sphere_radius: float) -> WeightedGeometry:

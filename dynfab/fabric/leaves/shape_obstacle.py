@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 
 from dynfab.fabric.energy import WeightedGeometry
-from dynfab.fabric.leaves.barrier import OBSTACLE_MIN_CLEARANCE, Barrier
+from dynfab.fabric.leaves.barrier import Barrier
 from dynfab.fabric.maps import DifferentialMap, Reference
 from dynfab.fabric.parameters import ShapeSymbols
 from dynfab.geometry.smooth_distance import (
@@ -52,8 +52,7 @@ class ShapeObstacleAvoidance:
             under-estimated by at most ``(√3/2) ε`` (box) or ``(√2/2) ε`` (cylinder).
     """
 
-    barrier: Barrier = field(default_factory=lambda: Barrier(geometry_gain=5.0, energy_gain=0.5, horizon=0.2,
-                                                                     min_clearance=OBSTACLE_MIN_CLEARANCE))
+    barrier: Barrier = field(default_factory=lambda: Barrier(geometry_gain=5.0, energy_gain=0.5, horizon=0.2))
     smoothing: float = 0.01
 
     def __post_init__(self) -> None:
