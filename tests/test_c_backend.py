@@ -172,3 +172,21 @@ def test_run_with_backend_c_gives_the_vm_metrics(tmp_path: Path, capsys: pytest.
     from_key = json.loads(capsys.readouterr().out)
     from_key.pop("solver_time_ms")
     assert from_key == vm
+
+
+def test_failing_compiler_falls_back_to_the_vm_with_one_warning(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    broken = tmp_path / "broken-cc"
+    broken.write_text('#!/bin/sh\nif [ "$1" = --version ]; then echo "broken-cc 1.0"; exit 0; fi\n'
+                      'echo "broken-cc: internal error" >&2\nexit 1\n')
+    broken.chmod(0o755)
+    monkeypatch.setenv("CC", str(broken))
+    monkeypatch.setenv("DYNFAB_CACHE_DIR", str(tmp_path / "cache"))
+    c_backend.find_compiler.cache_clear()
+    try:
+        planner = FabricPlanner(PANDA, PlannerConfig(goals=HAND_GOAL, backend="c"))
+    finally:
+        c_backend.find_compiler.cache_clear()
+    warnings = [line for line in capsys.readouterr().err.splitlines() if "warning" in line]
+    assert len(warnings) == 1 and "broken-cc: internal error" in warnings[0] and "VM" in warnings[0]
+    assert planner.backend == "vm" and not list((tmp_path / "cache").glob("planner-*.so"))

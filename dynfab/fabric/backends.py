@@ -3,7 +3,8 @@
 ``"vm"`` builds the SX function and lets CasADi interpret it. ``"c"`` compiles it
 (:mod:`dynfab.fabric.c_backend`), and on a cache hit by the planner's inputs
 (:mod:`dynfab.fabric.fingerprint`) skips building the expression altogether. Without a C
-compiler, ``"c"`` falls back to the VM with one warning line on stderr.
+compiler, or if it fails on the code, ``"c"`` falls back to the VM with one warning line
+on stderr.
 """
 
 from __future__ import annotations
@@ -66,6 +67,11 @@ def planner_function(backend: str, build: Callable[[], ca.Function], inputs: tup
         cached = c_backend.load_by_inputs(inputs_key, compiler)
         if cached is not None:
             return PlannerFunction(cached.function, "c", cached.n_instructions, 0.0, True)
-    compiled = c_backend.compile_planner(build(), compiler, inputs_key)
+    function = build()
+    try:
+        compiled = c_backend.compile_planner(function, compiler, inputs_key)
+    except RuntimeError as error:
+        print(f"dynfab: warning: {error}; using the CasADi VM", file=sys.stderr)
+        return PlannerFunction(function, "vm", function.n_instructions())
     return PlannerFunction(compiled.function, "c", compiled.n_instructions, compiled.compile_s,
                            compiled.compile_s == 0.0)
