@@ -166,7 +166,8 @@ void {name}_defaults({name}_input* input);
 /* Commanded acceleration qddot [rad/s^2 or m/s^2] of the state and parameters in input.
  * Returns 0: the fabric's command; 1: the fabric's output was not finite and qddot is the
  * fallback -{planner.config.fallback_braking:g} * qdot (within the acceleration limits);
- * -1: an input is NaN or infinite (qddot untouched). Thread-safe, no allocation. */
+ * -1: an input is NaN or infinite (qddot untouched); -2: the generated code needs more work
+ * memory than reserved (never seen; please report). Thread-safe, no allocation. */
 int {name}_compute(const {name}_input* input, double qddot[{nv}]);
 
 #endif
@@ -184,6 +185,7 @@ def _source(planner: FabricPlanner, fields: tuple[InputField, ...], name: str, v
     defaults = "\n".join(_default_values(field, values) for field in fields)
     packing = "\n".join(f"    memcpy(z + {field.offset}, input->{field.name}, sizeof input->{field.name});"
                         for field in fields)
+    sizes = [max(size, 1) for size in (function.sz_arg(), function.sz_res(), function.sz_iw(), function.sz_w())]
     peaks = ", ".join("HUGE_VAL" if not np.isfinite(a) else repr(float(a)) for a in limits)
     return generator.dump() + f"""
 /* ---- dynfab: named-argument interface ---- */
@@ -197,16 +199,16 @@ void {name}_defaults({name}_input* input) {{
 int {name}_compute(const {name}_input* input, double qddot[{nv}]) {{
     static const double peak[{nv}] = {{{peaks}}};
     double z[{total}], out[{nv}];
-    const casadi_real* arg[{max(function.sz_arg(), 1)}];
-    casadi_real* res[{max(function.sz_res(), 1)}];
-    casadi_int iw[{max(function.sz_iw(), 1)}];
-    casadi_real w[{max(function.sz_w(), 1)}];
+    const casadi_real* arg[{sizes[0]}];
+    casadi_real* res[{sizes[1]}];
+    casadi_int iw[{sizes[2]}];
+    casadi_real w[{sizes[3]}];  /* the VM's work sizes, at least those of the generated code */
     casadi_int sz_arg, sz_res, sz_iw, sz_w;
     int i, finite = 1;
 {packing}
     for (i = 0; i < {total}; ++i) if (!isfinite(z[i])) return -1;
     {evaluator}_work(&sz_arg, &sz_res, &sz_iw, &sz_w);
-    if (sz_arg > {max(function.sz_arg(), 1)} || sz_res > {max(function.sz_res(), 1)} || sz_iw > {max(function.sz_iw(), 1)} || sz_w > {max(function.sz_w(), 1)}) return -1;
+    if (sz_arg > {sizes[0]} || sz_res > {sizes[1]} || sz_iw > {sizes[2]} || sz_w > {sizes[3]}) return -2;
     arg[0] = z;
     res[0] = out;
     {evaluator}(arg, res, iw, w, 0);
