@@ -156,6 +156,27 @@ def test_inputs_digest_follows_robot_and_config() -> None:
 
 
 @needs_compiler
+def test_planner_with_a_python_callable_compiles_and_is_found_by_its_code(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+    from dynfab.fabric.fingerprint import UnknownValueError
+    from dynfab.fabric.leaves.barrier import Barrier
+    from dynfab.fabric.leaves.obstacle import SphereObstacleAvoidance
+
+    monkeypatch.setenv("DYNFAB_CACHE_DIR", str(tmp_path))
+    custom = SphereObstacleAvoidance(Barrier(geometry=lambda x, xd: -2 / x * xd**2))
+    config = PlannerConfig(goals=HAND_GOAL, obstacle_slots=1, obstacle_avoidance=custom, backend="c")
+    with pytest.raises(UnknownValueError):
+        canonical(config)
+    first = FabricPlanner(PANDA, config)
+    assert "compiled in" in capsys.readouterr().err
+    second = FabricPlanner(PANDA, config)  # built symbolically, library found by the code's hash
+    assert capsys.readouterr().err == "" and second.backend == "c"
+    assert not list(tmp_path.glob("planner-inputs-*.json"))
+    q, qdot = PANDA.default_q, np.full(7, 0.2)
+    np.testing.assert_array_equal(second.compute(q, qdot), first.compute(q, qdot))
+
+
+@needs_compiler
 def test_run_with_backend_c_gives_the_vm_metrics(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from test_cli import VALID, write_scenario
 
