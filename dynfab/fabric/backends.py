@@ -3,8 +3,8 @@
 ``"vm"`` builds the SX function and lets CasADi interpret it. ``"c"`` compiles it
 (:mod:`dynfab.fabric.c_backend`), and on a cache hit by the planner's inputs
 (:mod:`dynfab.fabric.fingerprint`) skips building the expression altogether. Without a C
-compiler, or if it fails on the code, ``"c"`` falls back to the VM with one warning line
-on stderr.
+compiler, if it fails on the code, or if the cache folder cannot be written, ``"c"`` falls
+back to the VM with one warning line on stderr.
 """
 
 from __future__ import annotations
@@ -70,7 +70,7 @@ def planner_function(backend: str, build: Callable[[], ca.Function], inputs: tup
     function = build()
     try:
         compiled = c_backend.compile_planner(function, compiler, inputs_key)
-    except RuntimeError as error:
+    except (RuntimeError, OSError) as error:  # the compiler failed, or the cache is not writable
         print(f"dynfab: warning: {error}; using the CasADi VM", file=sys.stderr)
         return PlannerFunction(function, "vm", function.n_instructions())
     return PlannerFunction(compiled.function, "c", compiled.n_instructions, compiled.compile_s,

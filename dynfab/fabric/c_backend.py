@@ -49,10 +49,6 @@ _FORMAT = 1
 _FUNCTION_NAME = "fabric"
 
 
-class CompilerNotFoundError(RuntimeError):
-    """No C compiler on this machine."""
-
-
 @dataclass(frozen=True)
 class Compiler:
     """A C compiler.
@@ -127,6 +123,7 @@ def compile_planner(function: ca.Function, compiler: Compiler, inputs_key: str |
 
     Raises:
         RuntimeError: if the compiler fails (its last output line is in the message).
+        OSError: if the cache folder cannot be written.
     """
     folder = cache_dir() if cache is None else cache
     code = generated_code(function)
