@@ -23,6 +23,7 @@ from dynfab.scenario.schema import PLANNERS, Scenario, ScenarioError, load_scena
 
 if TYPE_CHECKING:
     from dynfab.experiments.cluster import Cluster
+    from dynfab.viz.mujoco_video import VideoRecorder
 
 #: ``dynfab demo NAME``: the bundled scenario, and whether the demo also runs the static
 #: baseline on it for comparison.
@@ -40,6 +41,9 @@ def main(argv: list[str] | None = None) -> int:
     run = commands.add_parser("run", help="run a scenario file in the embedded simulator")
     run.add_argument("file", type=Path, help="scenario YAML file")
     run.add_argument("--planner", choices=PLANNERS, help="override the scenario's planner")
+    run.add_argument("--simulator", help="override the scenario's simulator: kinematic or mujoco")
+    run.add_argument("--control", help="under mujoco, the joints' control interface: torque, velocity or position")
+    run.add_argument("--video", type=Path, metavar="RUN.mp4", help="under mujoco, render the run to an MP4 video")
     _output_options(run)
     check = commands.add_parser("check", help="check a recorded run on the robot's collision meshes: collisions, "
                                               "self-collisions, joint limits (exit 3 if any)")
@@ -65,6 +69,11 @@ def main(argv: list[str] | None = None) -> int:
                             help="run on the existing Dask cluster of this scheduler (implies Dask)")
     experiment.add_argument("--record", action="store_true",
                             help="also write each run's recording to OUT/recordings/ (for dynfab check)")
+    experiment.add_argument("--simulator", default="kinematic", help="kinematic (default) or mujoco")
+    experiment.add_argument("--control", default="torque", help="under mujoco: torque (default), velocity or position")
+    experiment.add_argument("--delay", type=float, default=0.0, help="under mujoco: observation delay [s]")
+    experiment.add_argument("--noise", type=float, default=0.0,
+                            help="under mujoco: std of the observation noise [rad or m, and per s]")
     export = commands.add_parser("export", help="write a scenario's fabric planner as self-contained C "
                                                 "(NAME.c, NAME.h, example.c, Makefile)")
     export.add_argument("file", type=Path, help="scenario YAML file (static-fabric or dynamic-fabric)")
@@ -86,18 +95,14 @@ def main(argv: list[str] | None = None) -> int:
 
         return spheres_command(args.urdf, args.out, args.plot, args.tolerance, args.package_dir, args.joints)
     if args.command == "experiment":
-        cluster = None
-        if args.workers is not None or args.scheduler is not None:
-            from dynfab.experiments.cluster import Cluster
-
-            cluster = Cluster(workers=args.workers or 1, scheduler=args.scheduler)
-        return _experiment(args.name, args.runs, args.seed, args.out, args.jobs, args.record, cluster)
+        return _experiment(args)
     if args.command == "export":
         from dynfab.export_command import export_command
 
         return export_command(args.file, args.out, args.name)
     if args.command == "check":
         return _check(args.recording, args.file, args.json)
+    video = None
     if args.command == "run":
         path, planners = args.file, [args.planner]
     else:
@@ -108,11 +113,19 @@ def main(argv: list[str] | None = None) -> int:
         scenario = load_scenario(path)
         if args.backend is not None:
             scenario = dataclasses.replace(scenario, backend=args.backend)
-        results = [_run(path, scenario if planner is None else dataclasses.replace(scenario, planner=planner))
+        if args.command == "run":
+            scenario = _with_simulation(scenario, args.simulator, args.control)
+            video = _video_recorder(scenario, args.video)
+        results = [_run(path, scenario if planner is None else dataclasses.replace(scenario, planner=planner), video)
                    for planner in planners]
     except ScenarioError as error:
         print(f"dynfab: error: {error}", file=sys.stderr)
         return 2
+    if results[0].stop_reason is not None:
+        print(f"dynfab: run stopped early: {results[0].stop_reason}; metrics cover the run so far", file=sys.stderr)
+    if video is not None:
+        video.close()
+        print(f"dynfab: video written to {video.path} ({len(video.frames)} frames)", file=sys.stderr)
     _report(results, args.json)
     if args.record is not None:
         try:
@@ -144,23 +157,37 @@ def _positive_number(text: str) -> float:
     return value
 
 
-def _experiment(name: str, runs: int, seed: int, out: Path | None, jobs: int | None, record: bool,
-                cluster: Cluster | None) -> int:
-    """``dynfab experiment``: run the series (on local processes or a Dask cluster), print
-    its summary; 2 for an unknown name, an output directory of another series or an
-    unusable cluster, 1 if a run failed, 130 on Ctrl-C (resumable)."""
-    from dynfab.experiments.registry import EXPERIMENTS
+def _experiment(args: argparse.Namespace) -> int:
+    """``dynfab experiment``: run the series (local processes, or Dask with ``--workers`` /
+    ``--scheduler``), print its summary; 2 for an unknown name, a bad simulation setting, an
+    output directory of another series or an unusable cluster, 1 if a run failed, 130 on
+    Ctrl-C (resumable)."""
     from dynfab.experiments.cluster import ClusterError
+    from dynfab.experiments.physics import setting_name, under_simulation
+    from dynfab.experiments.registry import EXPERIMENTS
     from dynfab.experiments.series import RunError, SeriesError, run_series
+    from dynfab.scenario.simulation_schema import Simulation
 
+    name, runs, seed, out, jobs, record = args.name, args.runs, args.seed, args.out, args.jobs, args.record
     if name not in EXPERIMENTS:
         print(f"dynfab: error: unknown experiment {name!r} (expected one of {', '.join(EXPERIMENTS)})",
               file=sys.stderr)
         return 2
-    out = Path("dynfab-experiments") / name if out is None else out
     try:
-        result = run_series(EXPERIMENTS[name], runs, seed, out, jobs, progress=sys.stderr, record=record,
-                            cluster=cluster)
+        simulation = Simulation(args.simulator, args.control, args.delay, args.noise)
+    except ScenarioError as error:
+        print(f"dynfab: error: --{error.field}: {error.problem}", file=sys.stderr)
+        return 2
+    if simulation.simulator == "kinematic" and simulation != Simulation():
+        print("dynfab: error: --control, --delay and --noise need --simulator mujoco", file=sys.stderr)
+        return 2
+    experiment = under_simulation(EXPERIMENTS[name], simulation)
+    if out is None:
+        suffix = "" if simulation == Simulation() else "-" + setting_name(simulation)
+        out = Path("dynfab-experiments") / (name + suffix)
+    try:
+        result = run_series(experiment, runs, seed, out, jobs, progress=sys.stderr, record=record,
+                            cluster=_cluster(args.workers, args.scheduler))
     except (SeriesError, ClusterError) as error:
         print(f"dynfab: error: {error}", file=sys.stderr)
         return 2
@@ -175,6 +202,15 @@ def _experiment(name: str, runs: int, seed: int, out: Path | None, jobs: int | N
     print(f"dynfab: {result.executed} runs executed; wrote {out}/runs.jsonl, runs.csv, summary.md, summary.json, "
           f"scenarios/ and plots/", file=sys.stderr)
     return 0
+
+
+def _cluster(workers: int | None, scheduler: str | None) -> Cluster | None:
+    """The Dask cluster ``--workers`` / ``--scheduler`` ask for, or ``None`` (local processes)."""
+    if workers is None and scheduler is None:
+        return None
+    from dynfab.experiments.cluster import Cluster
+
+    return Cluster(workers=workers or 1, scheduler=scheduler)
 
 
 def _record(result: RunResult, path: Path) -> None:
@@ -209,10 +245,42 @@ def _check(recording_path: Path, scenario_path: Path, as_json: bool) -> int:
     return 0 if report.ok else 3
 
 
-def _run(path: Path, scenario: Scenario) -> RunResult:
+def _run(path: Path, scenario: Scenario, video: VideoRecorder | None = None) -> RunResult:
+    simulation = scenario.simulation
+    under = (f", mujoco with {simulation.control} control" if simulation.simulator == "mujoco" else "")
     header = (f"dynfab: {path.name}: robot {scenario.robot if isinstance(scenario.robot, str) else 'urdf'}, "
-              f"planner {scenario.planner}, {scenario.duration:g} s at dt {scenario.dt:g} s")
-    return run_scenario(scenario, progress=_ProgressBar(header))
+              f"planner {scenario.planner}, {scenario.duration:g} s at dt {scenario.dt:g} s{under}")
+    return run_scenario(scenario, progress=_ProgressBar(header), observer=video)
+
+
+def _with_simulation(scenario: Scenario, simulator: str | None, control: str | None) -> Scenario:
+    """``scenario`` with the command line's ``--simulator`` and ``--control``.
+
+    Raises:
+        ScenarioError: An unknown value, or ``--control`` for the kinematic simulator.
+    """
+    simulation = scenario.simulation
+    if simulator is not None:
+        simulation = dataclasses.replace(simulation, simulator=simulator)
+    if control is not None:
+        simulation = dataclasses.replace(simulation, control=control)
+        if simulation.simulator != "mujoco":
+            raise ScenarioError("--control", "applies to --simulator mujoco only")
+    return dataclasses.replace(scenario, simulation=simulation)
+
+
+def _video_recorder(scenario: Scenario, path: Path | None) -> VideoRecorder | None:
+    """The recorder of ``--video``, or None without it."""
+    if path is None:
+        return None
+    if scenario.simulation.simulator != "mujoco":
+        raise ScenarioError("--video", "renders MuJoCo runs: add --simulator mujoco")
+    if path.parent != Path() and not path.parent.is_dir():
+        raise ScenarioError("--video", f"folder {path.parent} does not exist")
+    from dynfab.viz.mujoco_video import VideoRecorder, prepare_headless_rendering
+
+    prepare_headless_rendering()
+    return VideoRecorder(path)
 
 
 def _output_options(parser: argparse.ArgumentParser, default_plot: Path | None = None) -> None:

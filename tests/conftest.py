@@ -7,6 +7,10 @@ from collections.abc import Iterator
 
 import pytest
 
+# Offscreen rendering for MuJoCo videos: MuJoCo picks its OpenGL platform when it is first
+# imported, which test collection does before any CLI call could choose it.
+os.environ.setdefault("MUJOCO_GL", "egl")
+
 
 @pytest.fixture(autouse=True, scope="session")
 def collision_model_cache(request: pytest.FixtureRequest) -> Iterator[None]:

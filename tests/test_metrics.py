@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import json
 
 import numpy as np
@@ -14,13 +16,14 @@ from dynfab.scenario.metrics import (
     compute_metrics,
     path_length,
     summed_error,
+    with_contacts,
 )
 from dynfab.sim import Record
 
 JSON_KEYS = [
     "success", "goal_reached", "collision", "time_to_goal", "clearance",
     "path_length", "summed_error", "solver_time_ms", "steps", "orientation_error", "sphere_clearance",
-    "self_collision", "min_self_distance", "max_velocity_ratio", "max_acceleration_ratio",
+    "self_collision", "min_self_distance", "max_velocity_ratio", "max_acceleration_ratio", "contacts",
 ]
 
 
@@ -200,3 +203,11 @@ def test_mismatched_samples_raise() -> None:
                         *_no_obstacles(4))
     with pytest.raises(ValueError, match="expected centres"):
         clearance_over_time(PATH[:, None, :], [0.1], np.zeros((3, 1, 3)), [0.1])
+
+
+def test_mujoco_contacts_are_collisions() -> None:
+    clean = Metrics(success=True, goal_reached=True, collision=False, time_to_goal=1.0, clearance=0.1,
+                    path_length=1.0, summed_error=None, solver_time_ms=0.05, steps=100)
+    assert with_contacts(clean, ()) == dataclasses.replace(clean, contacts=0)
+    touched = with_contacts(clean, ("a", "b"))
+    assert touched.contacts == 2 and touched.collision and not touched.success

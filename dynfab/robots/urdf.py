@@ -27,12 +27,13 @@ import yourdfpy
 from dynfab.geometry.shapes import Box, Cylinder, ShapeError, Sphere
 
 from .mesh_paths import resolve_uri
-from .urdf_model import (ACTUATED_JOINT_TYPES, CollisionGeometry, Joint, JointLimit, Link, MeshFile,
-                         Mimic, Origin, UrdfError, UrdfModel, Vector3)
+from .urdf_model import (ACTUATED_JOINT_TYPES, CollisionGeometry, Inertial, Joint, JointLimit, Link,
+                         MeshFile, Mimic, Origin, UrdfError, UrdfModel, Vector3)
 
 __all__ = [
     "ACTUATED_JOINT_TYPES",
     "CollisionGeometry",
+    "Inertial",
     "Joint",
     "JointLimit",
     "Link",
@@ -186,7 +187,27 @@ def _link(link: yourdfpy.Link, base_dir: str | os.PathLike[str] | None,
         except (ShapeError, TypeError, ValueError) as exc:
             raise UrdfError(f"{where} <collision>: {exc}") from None
         collisions.append(CollisionGeometry(origin=origin, shape=shape))
-    return Link(name=link.name, collisions=tuple(collisions))
+    return Link(name=link.name, collisions=tuple(collisions), inertial=_inertial(link.inertial, where))
+
+
+def _inertial(inertial: yourdfpy.Inertial | None, where: str) -> Inertial | None:
+    """The ``<inertial>`` values (URDF defaults: mass 0, zero inertia, identity origin);
+    refuses a negative or non-finite mass and a non-finite or asymmetric inertia."""
+    if inertial is None:
+        return None
+    where = f"{where} <inertial>"
+    mass = _finite(inertial.mass, 0.0)
+    if not (math.isfinite(mass) and mass >= 0.0):
+        raise UrdfError(f"{where}: mass must be a non-negative number, got {inertial.mass}")
+    tensor = np.zeros((3, 3)) if inertial.inertia is None else np.asarray(inertial.inertia, dtype=float)
+    if tensor.shape != (3, 3) or not np.isfinite(tensor).all() or not np.allclose(tensor, tensor.T):
+        raise UrdfError(f"{where}: inertia must be six finite numbers, got {tensor.tolist()}")
+    try:
+        origin = Origin.from_matrix(inertial.origin)
+    except UrdfError as exc:
+        raise UrdfError(f"{where}: {exc}") from None
+    rows = tuple(tuple(float(x) for x in row) for row in tensor)
+    return Inertial(mass=mass, origin=origin, inertia=rows)  # type: ignore[arg-type]
 
 
 def _mesh(mesh: yourdfpy.Mesh, base_dir: str | os.PathLike[str] | None,

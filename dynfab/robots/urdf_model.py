@@ -12,7 +12,7 @@ import numpy as np
 
 from dynfab.geometry.shapes import Box, Cylinder, Sphere
 
-__all__ = ["ACTUATED_JOINT_TYPES", "CollisionGeometry", "Joint", "JointLimit", "Link", "MeshFile",
+__all__ = ["ACTUATED_JOINT_TYPES", "CollisionGeometry", "Inertial", "Joint", "JointLimit", "Link", "MeshFile",
            "Mimic", "Origin", "UrdfError", "UrdfModel"]
 
 Vector3 = tuple[float, float, float]
@@ -122,16 +122,40 @@ class CollisionGeometry:
 
 
 @dataclass(frozen=True)
+class Inertial:
+    """A link's ``<inertial>``: its mass and its inertia about its centre of mass.
+
+    Attributes:
+        mass: Mass m [kg], >= 0.
+        origin: Centre of mass (``xyz``) and the axes of ``inertia`` (``rpy``) in the link
+            frame.
+        inertia: Symmetric inertia tensor about the centre of mass in the ``origin`` axes,
+            rows ``(ixx, ixy, ixz), (ixy, iyy, iyz), (ixz, iyz, izz)`` [kg m^2].
+    """
+
+    mass: float
+    origin: Origin
+    inertia: Matrix3
+
+    def link_frame_inertia(self) -> np.ndarray:
+        """The inertia about the centre of mass in link axes, ``R I Rᵀ`` [kg m^2], (3, 3)."""
+        rotation = np.array(self.origin.rotation)
+        return rotation @ np.array(self.inertia) @ rotation.T
+
+
+@dataclass(frozen=True)
 class Link:
     """A rigid body of the robot.
 
     Attributes:
         name: Link name.
         collisions: Its ``<collision>`` geometries (empty if it has none).
+        inertial: Its ``<inertial>``, or ``None`` if the URDF gives none.
     """
 
     name: str
     collisions: tuple[CollisionGeometry, ...] = ()
+    inertial: Inertial | None = None
 
 
 @dataclass(frozen=True)

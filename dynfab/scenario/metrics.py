@@ -8,7 +8,7 @@ robots distances are measured in the xy-plane: only the first two coordinates co
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -47,6 +47,9 @@ class Metrics:
         max_velocity_ratio: ``max_t,i |u_i(t)| / u_max,i`` over the run's velocity
             coordinates (``robot.limits``); ≤ 1 when the limits held.
         max_acceleration_ratio: ``max_t,i |u̇_i(t)| / a_max,i`` of the commands.
+        contacts: Under MuJoCo, how many contacts began (robot with an obstacle or two
+            non-adjacent robot bodies); any counts as a collision. None for the kinematic
+            simulator.
     """
 
     success: bool
@@ -64,10 +67,18 @@ class Metrics:
     min_self_distance: float | None = None
     max_velocity_ratio: float | None = None
     max_acceleration_ratio: float | None = None
+    contacts: int | None = None
 
     def to_dict(self) -> dict[str, bool | int | float | None]:
         """The metrics as a JSON-ready dict with the keys of DESIGN.md section 5."""
         return asdict(self)
+
+
+def with_contacts(metrics: Metrics, contacts: Sequence[object]) -> Metrics:
+    """``metrics`` of a MuJoCo run: its ``contacts`` count, and a collision if there was any."""
+    collision = metrics.collision or bool(contacts)
+    return replace(metrics, contacts=len(contacts), collision=collision,
+                   success=metrics.success and not collision)
 
 
 def compute_metrics(

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import casadi as ca
 import numpy as np
@@ -15,7 +16,8 @@ from dynfab.robots.mesh_sweep import MeshSweep, sweep_meshes
 from dynfab.scenario.controllers import Controller, make_controller
 from dynfab.scenario.exact_metrics import mesh_model_for, obstacle_shapes, with_mesh_metrics
 from dynfab.scenario.references import goal_axes, scenario_references
-from dynfab.scenario.metrics import Metrics, clearance_over_time, compute_metrics, shape_clearance_over_time
+from dynfab.scenario.metrics import (Metrics, clearance_over_time, compute_metrics, shape_clearance_over_time,
+                                     with_contacts)
 from dynfab.scenario.start_state import check_joint_limits, check_start_collisions
 from dynfab.robots import load_robot, robot_from_urdf
 from dynfab.geometry.sphere_fitting import SphereFitParameters
@@ -26,6 +28,9 @@ from dynfab.robots.link_meshes import LinkMeshError
 from dynfab.robots.robot import CollisionSphere, Robot
 from dynfab.scenario.schema import Scenario, ScenarioError, UrdfRobotSpec, validate_for_robot
 from dynfab.sim import DifferentialDrive, DoubleIntegrator, Record, simulate
+
+if TYPE_CHECKING:
+    from dynfab.sim.mujoco_sim import Contact, StepObserver
 
 #: integration sub-steps per control period for a differential-drive base (arcs)
 BASE_SUBSTEPS = 10
@@ -50,6 +55,10 @@ class RunResult:
         controller: the controller that ran (its planner, fallback count, ...).
         mesh_sweep: the collision-mesh distances of the run (contacts, minima); None for
             robots measured by spheres (see scenario/exact_metrics.py).
+        contacts: under MuJoCo, every contact that began (robot with an obstacle or with
+            itself); empty for the kinematic simulator.
+        stop_reason: under MuJoCo, why the run ended early (the state diverged, the
+            planner returned a non-finite command), in one line; None otherwise.
     """
 
     scenario: Scenario
@@ -62,6 +71,8 @@ class RunResult:
     clearance: np.ndarray
     controller: Controller
     mesh_sweep: MeshSweep | None = None
+    contacts: tuple[Contact, ...] = ()
+    stop_reason: str | None = None
 
 
 def robot_for(scenario: Scenario) -> Robot:
@@ -114,9 +125,13 @@ def _collision_model(spec: UrdfRobotSpec) -> tuple[tuple[CollisionSphere, ...], 
     return model.spheres, pairs  # type: ignore[return-value]
 
 
-def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None = None) -> RunResult:
+def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None = None,
+                 observer: StepObserver | None = None) -> RunResult:
     """Build the robot and controller, check the start state, simulate
-    ``scenario.duration`` and compute metrics.
+    ``scenario.duration`` (kinematic, or MuJoCo: scenario/mujoco_runner.py) and compute
+    metrics; MuJoCo's contacts count as collisions (metric ``contacts``: how many began).
+
+    ``observer`` (MuJoCo only) is called with ``(t, data)`` after each control period.
 
     Raises:
         ScenarioError: if the scenario does not fit the robot or the planner, or the start
@@ -131,10 +146,19 @@ def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None
     start_centres = obstacle_centres(references, np.zeros(1))
     check_start_collisions(state.q, robot, mesh_model, obstacle_shapes(scenario.obstacles, start_centres))
     controller = make_controller(scenario, robot, references)
-    model = DoubleIntegrator() if robot.base is None else DifferentialDrive()
-    substeps = 1 if robot.base is None else BASE_SUBSTEPS
-    record = simulate(controller, state.q, state.qdot, scenario.dt, scenario.duration, substeps=substeps,
-                      model=model, progress=progress)
+    contacts: tuple[Contact, ...] = ()
+    stop_reason = None
+    if scenario.simulation.simulator == "mujoco":
+        from dynfab.scenario.mujoco_runner import run_mujoco
+
+        run = run_mujoco(scenario, robot, controller, lambda times: obstacle_centres(references, times),
+                         mesh_model, progress, observer)
+        record, contacts, stop_reason = run.record, run.contacts, run.stop_reason
+    else:
+        model = DoubleIntegrator() if robot.base is None else DifferentialDrive()
+        substeps = 1 if robot.base is None else BASE_SUBSTEPS
+        record = simulate(controller, state.q, state.qdot, scenario.dt, scenario.duration, substeps=substeps,
+                          model=model, progress=progress)
     goal = scenario.goals[0]
     goal_positions = _goal_coordinates(robot, scenario, record.q)
     goal_reference = goal_positions if goal.type == "axis" else references.goals[0].sample(record.t)[0]
@@ -162,10 +186,12 @@ def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None
     if mesh_model is not None:
         mesh_sweep = sweep_meshes(mesh_model, record.q, obstacle_shapes(scenario.obstacles, obstacle_centers))
         metrics = with_mesh_metrics(metrics, mesh_sweep)
+    if scenario.simulation.simulator == "mujoco":
+        metrics = with_contacts(metrics, contacts)
     clearance = np.minimum(clearance_over_time(centres, radii, sphere_centres, sphere_radii, planar=robot.planar),
                            shape_clearance)
     return RunResult(scenario, robot, record, metrics, goal_positions, goal_reference, obstacle_centers, clearance,
-                     controller, mesh_sweep)
+                     controller, mesh_sweep, contacts, stop_reason)
 
 
 def obstacle_centres(references: References, times: np.ndarray) -> np.ndarray:

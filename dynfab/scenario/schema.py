@@ -27,13 +27,14 @@ from dynfab.scenario.limits_schema import LimitsSpec, parse_limits
 from dynfab.scenario.goal_schema import DEFAULT_ANGLE_TOLERANCE, GoalSpec, GoalType, parse_goal
 from dynfab.scenario.obstacle_schema import OBSTACLE_TYPES, ObstacleSpec, ObstacleType, parse_obstacle
 from dynfab.scenario.robot_schema import BUILTIN_ROBOTS, CollisionSphereSpec, UrdfRobotSpec, parse_robot
+from dynfab.scenario.simulation_schema import SIMULATION_KEYS, Simulation, parse_simulation
 
 if TYPE_CHECKING:
     from dynfab.robots.robot import Robot
 
 __all__ = ["BUILTIN_ROBOTS", "DEFAULT_ANGLE_TOLERANCE", "OBSTACLE_TYPES", "PLANNERS", "TRAJECTORY_TYPES",
            "CollisionSphereSpec", "GoalSpec", "GoalType", "InitialState", "ObstacleSpec", "ObstacleType",
-           "Scenario", "ScenarioError", "UrdfRobotSpec", "load_scenario", "scenario_from_dict",
+           "Scenario", "ScenarioError", "Simulation", "UrdfRobotSpec", "load_scenario", "scenario_from_dict",
            "validate_for_robot"]
 
 
@@ -70,6 +71,8 @@ class Scenario:
         obstacles: Obstacles: spheres, boxes, cylinders, capsules, planes (possibly none).
         path: The file the scenario was loaded from; None if built from a mapping.
         limits: Overrides of the robot's velocity, acceleration and jerk limits.
+        simulation: The simulator (kinematic or MuJoCo) and, under MuJoCo, the control
+            mode, observation delay and noise.
         backend: How a fabric planner is evaluated: ``"vm"`` (CasADi's virtual machine)
             or ``"c"`` (compiled C, cached; :mod:`dynfab.fabric.backends`).
     """
@@ -83,6 +86,7 @@ class Scenario:
     obstacles: tuple[ObstacleSpec, ...]
     path: Path | None = None
     limits: LimitsSpec = LimitsSpec()
+    simulation: Simulation = Simulation()
     backend: str = "vm"
 
 
@@ -129,7 +133,7 @@ def scenario_from_dict(data: object, base_dir: str | Path = ".") -> Scenario:
         root,
         "",
         required=("robot", "planner", "dt", "duration", "initial_state", "goal"),
-        optional=("obstacles", "limits", "backend"),
+        optional=("obstacles", "limits", "backend") + SIMULATION_KEYS,
     )
     dt = fields.positive(root["dt"], "dt")
     duration = fields.positive(root["duration"], "duration")
@@ -148,6 +152,7 @@ def scenario_from_dict(data: object, base_dir: str | Path = ".") -> Scenario:
         goals=tuple(parse_goal(goal, f"goal[{i}]") for i, goal in enumerate(goals)),
         obstacles=tuple(parse_obstacle(obs, f"obstacles[{i}]") for i, obs in enumerate(obstacles)),
         limits=parse_limits(root["limits"], "limits") if "limits" in root else LimitsSpec(),
+        simulation=parse_simulation(root),
         backend=fields.choice(root.get("backend", "vm"), "backend", BACKENDS),
     )
 

@@ -1,0 +1,395 @@
+"""A MuJoCo model (MJCF) of a robot and its obstacles.
+
+The robot's kinematic tree becomes nested bodies, one per URDF link, each placed by its
+parent joint's origin; active joints become hinges or slides (limits as ranges
+:data:`LIMIT_MARGIN` beyond the URDF's, :data:`ARMATURE` on hinges), locked joints are folded into their body's pose, a mimic
+joint of an active leader is a joint tied to it by an equality ``q = m q_leader + c``
+(of a locked leader: folded at its value). Each body carries its URDF ``<inertial>``.
+A moving body whose mass, with everything below it, is zero makes the model
+invalid: :class:`MujocoModelError` names the link (no default mass is invented); a
+massless moving link that carries massive ones (a virtual link between two joints) gets
+0.1 g and 1e-8 kg m^2.
+
+Collision geometry: a URDF robot's collision meshes (convex hulls, STL files from
+:mod:`dynfab.sim.mujoco_meshes`), a robot without meshes (the built-ins) its collision
+spheres. Obstacles are static geoms or, when they move, mocap bodies whose pose the
+simulation sets every physics step; for a planar robot a sphere becomes a vertical
+cylinder (the disc the planner sees). Contacts (bit masks, MuJoCo's ``contype`` /
+``conaffinity``): robot geoms touch obstacles; robot geoms touch each other only in the
+robot's self-collision pairs (explicit ``<pair>``\\ s); obstacles never touch each other.
+
+A differential-drive base (``robot.base``): the body below ``base_yaw`` floats (a free
+joint) on a floor plane at z = 0, carried by two drive wheels (hinges with velocity
+actuators, radius and track from :class:`~dynfab.robots.robot.DifferentialDriveBase`,
+friction 1; their contact shape is a sphere of the wheel's radius, which rolls on one
+point: MuJoCo's cylinder-plane contacts made the base hop) and frictionless casters (the URDF links named ``caster*``, spheres down to
+the floor). The floor touches only wheels and casters.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from dynfab.geometry.shapes import Box, Capsule, Cylinder, Plane, Shape, Sphere
+from dynfab.robots.robot import BASE_JOINTS, DifferentialDriveBase, Robot
+from dynfab.robots.urdf import Joint, UrdfModel
+from dynfab.sim.mujoco_meshes import link_mesh_file
+
+__all__ = ["ARMATURE", "PHYSICS_TIMESTEP", "MujocoModelError", "MujocoScene", "SceneObstacle", "build_scene"]
+
+#: Physics step [s] (1 kHz).
+PHYSICS_TIMESTEP = 0.001
+#: Reflected rotor inertia added to every hinge [kg m^2] (order of a Franka / UR drive).
+ARMATURE = 0.1
+#: How far MuJoCo's hard joint stops lie beyond the URDF's position limits [rad or m]:
+#: the planner and the set-points keep within the URDF's limits, the stops catch what
+#: overshoots (MuJoCo's soft stop at the limit itself let joints sink 0.2 mrad into it,
+#: where the planner's limit handling chattered).
+LIMIT_MARGIN = 0.01
+#: Mass [kg] and principal inertia [kg m^2] of a massless URDF link that a joint moves and
+#: that carries massive links (x then y of a planar robot); MuJoCo needs some.
+_VIRTUAL_MASS, _VIRTUAL_INERTIA = 1e-4, 1e-8
+#: Contact bits: robot geoms, obstacles, the floor with wheels and casters.
+_ROBOT, _OBSTACLE, _GROUND = 1, 1, 2
+#: Velocity gain of a wheel drive [N m s/rad] and its torque limit [N m].
+WHEEL_GAIN, WHEEL_TORQUE = 40.0, 40.0
+#: Mass of a drive wheel the URDF does not describe (no ``wheel_left_link``) [kg].
+_DEFAULT_WHEEL_MASS = 1.0
+_ROBOT_RGBA = "0.95 0.55 0.1 1"
+_OBSTACLE_RGBA = "0.2 0.4 0.9 0.8"
+
+
+class MujocoModelError(ValueError):
+    """The robot cannot be simulated by MuJoCo; the one-line message names the link."""
+
+
+@dataclass(frozen=True)
+class SceneObstacle:
+    """An obstacle as MuJoCo sees it.
+
+    Attributes:
+        shape: Its geometry in its own frame (a plane: the solid half-space z <= 0).
+        position: Centre (a plane: its point) at t = 0 [m].
+        orientation: Unit quaternion (w, x, y, z) of its frame.
+        moving: True if its centre follows a trajectory (a mocap body).
+    """
+
+    shape: Shape
+    position: tuple[float, float, float]
+    orientation: tuple[float, float, float, float]
+    moving: bool
+
+
+@dataclass(frozen=True, eq=False)
+class MujocoScene:
+    """A compiled model and where the robot's coordinates live in it.
+
+    Attributes:
+        model: The compiled MuJoCo model.
+        joint_qpos: qpos address of each joint coordinate (the arm part of ``q``; all of
+            it without a base), shape (n_joints,).
+        joint_dof: qvel address of each of them, shape (n_joints,).
+        joint_actuators: The motor (torque) actuator of each of them.
+        effort: Effort limit of each of them [N m or N] (``robot.limits.effort``; ``inf``
+            if unknown).
+        lower: Lower position limit of each of them [rad or m] (the URDF's; ``-inf``: none).
+        upper: Upper position limit of each of them [rad or m].
+        base_qpos: qpos address of the base's free joint, or None without a base.
+        base_dof: qvel address of the base's free joint, or None.
+        wheel_actuators: Velocity actuators of the (left, right) drive wheels, or None.
+        base: The differential-drive base (wheel radius, track), or None.
+        mocap: Mocap index of each obstacle (None for a static one).
+        robot_bodies: Body ids of the robot.
+        obstacle_of_geom: Obstacle index of each obstacle geom id.
+    """
+
+    model: mujoco.MjModel
+    joint_qpos: np.ndarray
+    joint_dof: np.ndarray
+    joint_actuators: np.ndarray
+    effort: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    base_qpos: int | None
+    base_dof: int | None
+    wheel_actuators: tuple[int, int] | None
+    base: DifferentialDriveBase | None
+    mocap: tuple[int | None, ...]
+    robot_bodies: frozenset[int]
+    obstacle_of_geom: dict[int, int]
+
+
+def build_scene(robot: Robot, obstacles: Sequence[SceneObstacle] = (),
+                self_collision_links: Sequence[tuple[str, str]] = ()) -> MujocoScene:
+    """Compile ``robot`` among ``obstacles`` into a MuJoCo model (module doc).
+
+    Args:
+        robot: The robot (its URDF model, active joints and collision spheres).
+        obstacles: The obstacles, in scenario order.
+        self_collision_links: Link pairs whose meshes may touch (robots with meshes);
+            a robot without meshes uses its ``self_collision_pairs`` of spheres.
+
+    Raises:
+        MujocoModelError: A moving link without mass; a collision mesh that is missing.
+    """
+    xml = _Builder(robot).xml(obstacles, self_collision_links)
+    try:
+        model = mujoco.MjModel.from_xml_string(xml)
+    except ValueError as error:
+        raise MujocoModelError(f"MuJoCo refused the model: {str(error).splitlines()[0]}") from None
+    return _scene(model, robot, obstacles)
+
+
+def _scene(model: mujoco.MjModel, robot: Robot, obstacles: Sequence[SceneObstacle]) -> MujocoScene:
+    """Look up the addresses of the compiled model."""
+    kin = robot.kinematics
+    names = kin.joint_names[3:] if robot.base is not None else kin.joint_names
+    joints = [model.joint(name) for name in names]
+    limits = robot.limits.effort
+    effort = np.full(len(names), math.inf) if limits is None else limits[len(limits) - len(names):]
+    base = model.joint("base_free") if robot.base is not None else None
+    wheels = None
+    if robot.base is not None:
+        wheels = (model.actuator("wheel_left_drive").id, model.actuator("wheel_right_drive").id)
+    mocap = tuple(int(model.body(f"obstacle{k}").mocapid[0]) if o.moving else None
+                  for k, o in enumerate(obstacles))
+    robot_bodies = frozenset(b for b in range(1, model.nbody) if not model.body(b).name.startswith("obstacle"))
+    geoms = {model.geom(f"obstacle{k}").id: k for k in range(len(obstacles))}
+    return MujocoScene(model=model, joint_qpos=np.array([int(j.qposadr[0]) for j in joints], dtype=int),
+                       joint_dof=np.array([int(j.dofadr[0]) for j in joints], dtype=int),
+                       joint_actuators=np.array([model.actuator(f"{n}_motor").id for n in names], dtype=int),
+                       effort=np.array(effort, dtype=float), lower=kin.lower[kin.dof - len(names):],
+                       upper=kin.upper[kin.dof - len(names):],
+                       base_qpos=None if base is None else int(base.qposadr[0]),
+                       base_dof=None if base is None else int(base.dofadr[0]),
+                       wheel_actuators=wheels, base=robot.base, mocap=mocap, robot_bodies=robot_bodies, obstacle_of_geom=geoms)
+
+
+class _Builder:
+    """Writes the MJCF document of one robot."""
+
+    def __init__(self, robot: Robot) -> None:
+        self.robot = robot
+        self.kin = robot.kinematics
+        self.model: UrdfModel = robot.kinematics.model
+        self.links = {link.name: link for link in self.model.links}
+        self.meshes = any(link.collisions for link in self.model.links)
+        self.root = ET.Element("mujoco", model=robot.name)
+        ET.SubElement(self.root, "compiler", angle="radian", inertiafromgeom="false", autolimits="true")
+        ET.SubElement(self.root, "option", timestep=str(PHYSICS_TIMESTEP), integrator="implicitfast",
+                      cone="elliptic", impratio="10", noslip_iterations="5")
+        visual = ET.SubElement(self.root, "visual")
+        ET.SubElement(visual, "global", offwidth="1280", offheight="720")
+        self.asset = ET.SubElement(self.root, "asset")
+        self.world = ET.SubElement(self.root, "worldbody")
+        ET.SubElement(self.world, "light", pos="0 0 4", dir="0 0 -1", directional="true")
+        self.actuator = ET.SubElement(self.root, "actuator")
+        self.contact = ET.SubElement(self.root, "contact")
+        self.equality = ET.SubElement(self.root, "equality")
+
+    def xml(self, obstacles: Sequence[SceneObstacle], self_collision_links: Sequence[tuple[str, str]]) -> str:
+        if self.robot.base is None and self.kin.root_link == "world":  # MuJoCo's name for the world body
+            self._geoms(self.world, "world")
+            for joint in self.model.child_joints("world"):
+                self._child(self.world, joint)
+        elif self.robot.base is None:
+            self._subtree(self.world, self.kin.root_link, {})
+        else:
+            self._base()
+        for k, obstacle in enumerate(obstacles):
+            self._obstacle(k, obstacle)
+        self._self_pairs(self_collision_links)
+        return ET.tostring(self.root, encoding="unicode")
+
+    # ---------------------------------------------------------------- robot tree
+    def _subtree(self, parent: ET.Element, link: str, attributes: dict[str, str]) -> None:
+        """Body of ``link`` under ``parent``, with its children."""
+        body = ET.SubElement(parent, "body", name=link, **attributes)
+        self._inertial(body, link)
+        self._geoms(body, link)
+        for joint in self.model.child_joints(link):
+            if self.robot.base is not None and joint.child in ("wheel_left_link", "wheel_right_link"):
+                continue
+            self._child(body, joint)
+
+    def _child(self, body: ET.Element, joint: Joint) -> None:
+        """The body of ``joint``'s child, its pose and its joint."""
+        value = self._folded_value(joint)
+        transform = _origin_matrix(joint)
+        if value is not None:
+            transform = transform @ _motion(joint, value)
+        child_attributes = _pose_attributes(transform)
+        self._subtree(body, joint.child, child_attributes)
+        child = body.find(f"body[@name='{joint.child}']")
+        if value is None:
+            self._check_mass(joint.child)
+            self._joint(child, joint)
+            if child.find("inertial") is None:
+                ET.SubElement(child, "inertial", pos="0 0 0", mass=repr(_VIRTUAL_MASS),
+                              diaginertia=_numbers((_VIRTUAL_INERTIA,) * 3))
+
+    def _folded_value(self, joint: Joint) -> float | None:
+        """The constant value of a fixed, locked or led-by-a-locked joint; None if it moves."""
+        if joint.type == "fixed":
+            return 0.0
+        if joint.name in self.kin.locked:
+            return self.kin.locked[joint.name]
+        if joint.mimic is not None and joint.mimic.joint in self.kin.locked:
+            return joint.mimic.multiplier * self.kin.locked[joint.mimic.joint] + joint.mimic.offset
+        return None
+
+    def _joint(self, body: ET.Element, joint: Joint) -> None:
+        kind = "slide" if joint.type == "prismatic" else "hinge"
+        attributes = {"name": joint.name, "type": kind, "axis": _numbers(joint.axis)}
+        if joint.limit is not None and math.isfinite(joint.limit.lower) and joint.type != "continuous":
+            attributes["range"] = _numbers((joint.limit.lower - LIMIT_MARGIN, joint.limit.upper + LIMIT_MARGIN))
+        if kind == "hinge":
+            attributes["armature"] = str(ARMATURE)
+        element = ET.Element("joint", **attributes)
+        body.insert(0, element)
+        if joint.mimic is not None:
+            mimic = joint.mimic
+            ET.SubElement(self.equality, "joint", joint1=joint.name, joint2=mimic.joint,
+                          polycoef=_numbers((mimic.offset, mimic.multiplier, 0.0, 0.0, 0.0)))
+            return
+        ET.SubElement(self.actuator, "motor", name=f"{joint.name}_motor", joint=joint.name, gear="1")
+
+    def _check_mass(self, link: str) -> None:
+        """Raise unless the body of a moving joint, with what it carries, has mass."""
+        if _subtree_mass(self.model, link) <= 0.0:
+            raise MujocoModelError(f"link '{link}' moves but has no <inertial> mass (nor does any link below it); "
+                                   "MuJoCo needs one: add an <inertial> to the URDF")
+
+    def _inertial(self, body: ET.Element, link: str) -> None:
+        inertial = self.links[link].inertial
+        if inertial is None or inertial.mass <= 0.0:
+            return
+        tensor = inertial.link_frame_inertia()
+        full = (tensor[0, 0], tensor[1, 1], tensor[2, 2], tensor[0, 1], tensor[0, 2], tensor[1, 2])
+        ET.SubElement(body, "inertial", pos=_numbers(inertial.origin.xyz), mass=repr(inertial.mass),
+                      fullinertia=_numbers(full))
+
+    def _geoms(self, body: ET.Element, link: str) -> None:
+        contact = {"contype": str(_ROBOT), "conaffinity": "0", "rgba": _ROBOT_RGBA}
+        if self.meshes:
+            path = link_mesh_file(self.model, link)
+            if path is not None:
+                ET.SubElement(self.asset, "mesh", name=f"{link}_mesh", file=str(path))
+                ET.SubElement(body, "geom", name=f"{link}_collision", type="mesh", mesh=f"{link}_mesh", **contact)
+            return
+        for i, sphere in enumerate(self.robot.collision_spheres):
+            if sphere.link == link:
+                ET.SubElement(body, "geom", name=f"sphere{i}", type="sphere", size=repr(sphere.radius),
+                              pos=_numbers(sphere.center), **contact)
+
+    def _self_pairs(self, self_collision_links: Sequence[tuple[str, str]]) -> None:
+        if self.meshes:
+            pairs = [(f"{a}_collision", f"{b}_collision") for a, b in self_collision_links]
+        else:
+            pairs = [(f"sphere{a}", f"sphere{b}") for a, b in self.robot.self_collision_pairs]
+        for a, b in pairs:
+            ET.SubElement(self.contact, "pair", geom1=a, geom2=b)
+
+    # ---------------------------------------------------------------- base
+    def _base(self) -> None:
+        """Floor, free-floating body below ``base_yaw``, drive wheels and casters."""
+        base = self.robot.base
+        joints = {joint.name: joint for joint in self.model.joints}
+        ET.SubElement(self.world, "geom", name="floor", type="plane", size="0 0 0.05", rgba="0.85 0.85 0.8 1",
+                      contype=str(_GROUND), conaffinity=str(_GROUND))
+        yaw_child = joints[BASE_JOINTS[2]].child
+        self._subtree(self.world, yaw_child, {"pos": "0 0 0.001"})
+        body = self.world.find(f"body[@name='{yaw_child}']")
+        body.insert(0, ET.Element("freejoint", name="base_free"))
+        for side, sign in (("left", 1.0), ("right", -1.0)):
+            link = f"wheel_{side}_link"
+            wheel = ET.SubElement(body, "body", name=link, pos=_numbers((0.0, sign * base.wheel_separation / 2,
+                                                                          base.wheel_radius)))
+            inertial = self.links[link].inertial if link in self.links else None
+            mass = inertial.mass if inertial is not None and inertial.mass > 0 else _DEFAULT_WHEEL_MASS
+            axial, radial = 0.5 * mass * base.wheel_radius ** 2, 0.25 * mass * base.wheel_radius ** 2
+            ET.SubElement(wheel, "inertial", pos="0 0 0", mass=repr(mass), diaginertia=_numbers((radial, axial, radial)))
+            ET.SubElement(wheel, "joint", name=f"wheel_{side}", type="hinge", axis="0 1 0")
+            ET.SubElement(wheel, "geom", name=f"wheel_{side}", type="sphere", size=repr(base.wheel_radius),
+                          friction="1 0.005 0.0001",
+                          contype=str(_GROUND), conaffinity=str(_GROUND), rgba="0.1 0.1 0.1 1")
+            ET.SubElement(self.actuator, "velocity", name=f"wheel_{side}_drive", joint=f"wheel_{side}",
+                          kv=str(WHEEL_GAIN), forcerange=f"{-WHEEL_TORQUE} {WHEEL_TORQUE}")
+        q = np.zeros(self.kin.dof)
+        for element in body.iter("body"):
+            name = element.get("name", "")
+            if name.startswith("caster") and name in self.links:
+                height = float(np.asarray(self.kin.position(q, name)).reshape(-1)[2])
+                ET.SubElement(element, "geom", name=f"{name}_wheel", type="sphere", size=repr(height),
+                              friction="0 0 0", condim="1", priority="1", contype=str(_GROUND),
+                              conaffinity=str(_GROUND),
+                              rgba="0.1 0.1 0.1 1")
+
+    # ---------------------------------------------------------------- obstacles
+    def _obstacle(self, k: int, obstacle: SceneObstacle) -> None:
+        shape = obstacle.shape
+        attributes = {"name": f"obstacle{k}", "contype": "0", "conaffinity": str(_OBSTACLE), "rgba": _OBSTACLE_RGBA}
+        if isinstance(shape, Sphere) and self.robot.planar:
+            attributes.update(type="cylinder", size=f"{shape.radius} 1")
+        elif isinstance(shape, Sphere):
+            attributes.update(type="sphere", size=repr(shape.radius))
+        elif isinstance(shape, Box):
+            attributes.update(type="box", size=_numbers(np.array(shape.size) / 2))
+        elif isinstance(shape, Cylinder):
+            attributes.update(type="cylinder", size=f"{shape.radius} {shape.length / 2}")
+        elif isinstance(shape, Capsule):
+            attributes.update(type="capsule", size=f"{shape.radius} {shape.length / 2}")
+        elif isinstance(shape, Plane):
+            attributes.update(type="box", size="5 5 5", pos="0 0 -5")  # the solid half-space, 10 m wide
+        else:
+            raise MujocoModelError(f"obstacle {k}: unsupported shape {type(shape).__name__}")
+        pose = {"pos": _numbers(obstacle.position), "quat": _numbers(obstacle.orientation)}
+        if obstacle.moving:
+            body = ET.SubElement(self.world, "body", name=f"obstacle{k}", mocap="true", **pose)
+            ET.SubElement(body, "geom", **attributes)
+            return
+        body = ET.SubElement(self.world, "body", name=f"obstacle{k}", **pose)
+        ET.SubElement(body, "geom", **attributes)
+
+
+def _subtree_mass(model: UrdfModel, link: str) -> float:
+    """Mass of ``link`` and of every link below it [kg]."""
+    links = {entry.name: entry for entry in model.links}
+    inertial = links[link].inertial
+    mass = 0.0 if inertial is None else inertial.mass
+    return mass + sum(_subtree_mass(model, j.child) for j in model.child_joints(link))
+
+
+def _origin_matrix(joint: Joint) -> np.ndarray:
+    transform = np.eye(4)
+    transform[:3, :3] = np.array(joint.origin.rotation)
+    transform[:3, 3] = joint.origin.xyz
+    return transform
+
+
+def _motion(joint: Joint, value: float) -> np.ndarray:
+    """The joint's motion ``M(value)``: rotation about or translation along its axis."""
+    motion = np.eye(4)
+    axis = np.array(joint.axis)
+    if joint.type == "prismatic":
+        motion[:3, 3] = value * axis
+    elif joint.type in ("revolute", "continuous"):
+        cross = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+        motion[:3, :3] = np.eye(3) + math.sin(value) * cross + (1 - math.cos(value)) * cross @ cross
+    return motion
+
+
+def _pose_attributes(transform: np.ndarray) -> dict[str, str]:
+    quaternion = np.zeros(4)
+    mujoco.mju_mat2Quat(quaternion, np.ascontiguousarray(transform[:3, :3]).reshape(-1))
+    return {"pos": _numbers(transform[:3, 3]), "quat": _numbers(quaternion)}
+
+
+def _numbers(values: Sequence[float] | np.ndarray) -> str:
+    return " ".join(repr(float(v)) for v in values)
