@@ -62,7 +62,11 @@ def scheduler() -> Iterator[str]:
         for process in reversed(processes):
             process.terminate()
         for process in processes:
-            process.wait(timeout=30)
+            try:
+                process.wait(timeout=10)
+            except subprocess.TimeoutExpired:  # a worker still trying to say goodbye
+                process.kill()
+                process.wait()
 
 
 def _metrics(result: SeriesResult) -> list[tuple[int, str, dict]]:
