@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 
 import yaml
 
+from dynfab.fabric.backends import BACKENDS
 from dynfab.scenario import fields
 from dynfab.scenario.fields import TRAJECTORY_TYPES, ScenarioError
 from dynfab.scenario.limits_schema import LimitsSpec, parse_limits
@@ -74,6 +75,8 @@ class Scenario:
             mode, observation delay and noise.
         recovery: Recover from stalls by following a global path
             (scenario/stall_recovery.py); ``recovery: false`` turns it off.
+        backend: How a fabric planner is evaluated: ``"vm"`` (CasADi's virtual machine)
+            or ``"c"`` (compiled C, cached; :mod:`dynfab.fabric.backends`).
     """
 
     robot: str | UrdfRobotSpec
@@ -87,6 +90,7 @@ class Scenario:
     limits: LimitsSpec = LimitsSpec()
     simulation: Simulation = Simulation()
     recovery: bool = True
+    backend: str = "vm"
 
 
 def load_scenario(path: str | Path) -> Scenario:
@@ -132,7 +136,7 @@ def scenario_from_dict(data: object, base_dir: str | Path = ".") -> Scenario:
         root,
         "",
         required=("robot", "planner", "dt", "duration", "initial_state", "goal"),
-        optional=("obstacles", "limits", "recovery") + SIMULATION_KEYS,
+        optional=("obstacles", "limits", "recovery", "backend") + SIMULATION_KEYS,
     )
     dt = fields.positive(root["dt"], "dt")
     duration = fields.positive(root["duration"], "duration")
@@ -153,6 +157,7 @@ def scenario_from_dict(data: object, base_dir: str | Path = ".") -> Scenario:
         limits=parse_limits(root["limits"], "limits") if "limits" in root else LimitsSpec(),
         simulation=parse_simulation(root),
         recovery=_flag(root.get("recovery", True), "recovery"),
+        backend=fields.choice(root.get("backend", "vm"), "backend", BACKENDS),
     )
 
 
