@@ -67,3 +67,43 @@ def test_spline_segment_ends_and_every_control_step_are_checked() -> None:
 def test_a_finite_reference_passes() -> None:
     trajectory = trajectory_from_mapping({"type": "expression", "x": ["0.5", "0.1*sin(t)", "0.5"]}, "x")
     assert first_non_finite(trajectory, 100.0, 0.01) is None
+
+
+def test_a_reference_that_turns_non_finite_mid_run_ends_the_run_with_the_metrics_so_far(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The scenario check samples the run; a controller that still meets a non-finite
+    reference (here: a trajectory made finite-looking for the check) stops the run."""
+    import dataclasses
+    import json
+
+    import numpy as np
+
+    from dynfab.motion.trajectories import LinearTrajectory
+    from dynfab.scenario import controllers
+
+    class Fails(LinearTrajectory):   # finite for the pre-run check, NaN for the controller after 1 s
+        def evaluate(self, t: float):  # type: ignore[override]
+            point = super().evaluate(t)
+            return dataclasses.replace(point, position=point.position * np.nan) if t >= 1.0 else point
+
+    original = controllers.FabricController.__init__
+
+    def patched(self, planner, references, *args, **kwargs):  # noqa: ANN001
+        goals = (Fails(start=tuple(references.goals[0].evaluate(0.0).position), velocity=(0.0, 0.0, 0.0)),)
+        original(self, planner, dataclasses.replace(references, goals=goals + references.goals[1:]), *args, **kwargs)
+
+    monkeypatch = pytest.MonkeyPatch()
+    monkeypatch.setattr(controllers.FabricController, "__init__", patched)
+    try:
+        data = copy.deepcopy(BASE)
+        path = tmp_path / "scenario.yaml"
+        path.write_text(yaml.safe_dump(data), encoding="utf-8")
+        code = main(["run", str(path), "--json"])
+    finally:
+        monkeypatch.undo()
+    captured = capsys.readouterr()
+    metrics = json.loads(captured.out)
+    assert metrics["steps"] == 100   # 1 s at dt = 0.01
+    assert "run stopped early: the reference of planner goal 0 turned non-finite at t = 1.000 s" in captured.err
+    assert "Traceback" not in captured.err
+    assert code == 0   # the metrics of the run so far are the output; the reason is on stderr

@@ -28,6 +28,7 @@ from dynfab.motion.references import References
 from dynfab.mpc.config import MpcConfig
 from dynfab.mpc.problem import MpcProblem
 from dynfab.mpc.values import Plan
+from dynfab.sim.simulator import RunStopped
 
 #: tolerance on "a solve period has elapsed", for times accumulated in floating point [s]
 _TIME_TOLERANCE = 1e-9
@@ -92,10 +93,14 @@ class MpcController:
         h, horizon = self.config.stage_length, self.config.stages
         times = t + h * np.arange(1, horizon + 1)
         dims = 2 if self.problem.robot.planar else 3
-        goals = [reference.sample(times)[0] for reference in self.references.goals]
-        centres = np.zeros((self.problem.obstacles, horizon, dims))
-        for o, reference in enumerate(self.references.obstacles):
-            centres[o] = reference.sample(times)[0][:, :dims]
+        with np.errstate(all="ignore"):
+            goals = [reference.sample(times)[0] for reference in self.references.goals]
+            centres = np.zeros((self.problem.obstacles, horizon, dims))
+            for o, reference in enumerate(self.references.obstacles):
+                centres[o] = reference.sample(times)[0][:, :dims]
+        if not (all(np.isfinite(goal).all() for goal in goals) and np.isfinite(centres).all()):
+            raise RunStopped(f"a goal or obstacle reference over the MPC horizon {times[0]:.3f}..{times[-1]:.3f} s "
+                             "turned non-finite")
         guess = None
         if self._plan is not None:
             guess = self._plan.shifted(round((t - self._plan_time) / h), h, self.problem.model.simulator)

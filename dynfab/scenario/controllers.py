@@ -27,9 +27,10 @@ from dynfab.fabric.leaves.orientation import FRAME_AXES, OrientationGoalConfig
 from dynfab.fabric.parameters import RuntimeParameters, ShapeSlots
 from dynfab.fabric.planner import FabricPlanner, GoalConfig, PlannerConfig
 from dynfab.motion.references import References
-from dynfab.motion.trajectories import StaticPoint, Trajectory
+from dynfab.motion.trajectories import StaticPoint, Trajectory, TrajectoryPoint
 from dynfab.mpc import GoalTerm, MpcConfig, MpcController, MpcProblem
 from dynfab.robots.robot import Robot
+from dynfab.sim.simulator import RunStopped
 from dynfab.scenario.references import goal_axes
 from dynfab.scenario.schema import GoalSpec, ObstacleSpec, Scenario, ScenarioError
 
@@ -88,19 +89,28 @@ class FabricController:
         params = self.planner.parameters
         dynamic = params.goal_velocity is not None
         for i in goals:
-            point = self.references.goals[i].evaluate(t)
+            point = _finite_point(self.references.goals[i], t, f"the reference of planner goal {i}")
             params.goal_position[i][:] = point.position
             if dynamic:
                 params.goal_velocity[i][:] = point.velocity
                 params.goal_acceleration[i][:] = point.acceleration
         for k in obstacles:
-            point = self.references.obstacles[k].evaluate(t)
+            point = _finite_point(self.references.obstacles[k], t, f"the trajectory of obstacles[{k}]")
             slot = self._slots[k]
             d = len(point.position)  # planar scenarios may give x, y only
             slot.position[slot.row, :d] = point.position
             if dynamic:
                 slot.velocity[slot.row, :d] = point.velocity
                 slot.acceleration[slot.row, :d] = point.acceleration
+
+
+def _finite_point(trajectory: Trajectory, t: float, what: str) -> TrajectoryPoint:
+    """The reference at ``t``; ends the run (:class:`RunStopped`) if it is not finite."""
+    with np.errstate(all="ignore"):
+        point = trajectory.evaluate(t)
+    if not all(np.isfinite(v).all() for v in (point.position, point.velocity, point.acceleration)):
+        raise RunStopped(f"{what} turned non-finite at t = {t:.3f} s")
+    return point
 
 
 def make_controller(scenario: Scenario, robot: Robot, references: References) -> Controller:

@@ -58,7 +58,7 @@ class RunResult:
             robots measured by spheres (see scenario/exact_metrics.py).
         contacts: under MuJoCo, every contact that began (robot with an obstacle or with
             itself); empty for the kinematic simulator.
-        stop_reason: under MuJoCo, why the run ended early (the state diverged, the
+        stop_reason: why the run ended early (the state diverged, the
             planner returned a non-finite command), in one line; None otherwise.
     """
 
@@ -162,6 +162,7 @@ def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None
         substeps = 1 if robot.base is None else BASE_SUBSTEPS
         record = simulate(controller, state.q, state.qdot, scenario.dt, scenario.duration, substeps=substeps,
                           model=model, progress=progress)
+        stop_reason = record.stop_reason
     goal = scenario.goals[0]
     goal_positions = _goal_coordinates(robot, scenario, record.q)
     goal_reference = goal_positions if goal.type == "axis" else references.goals[0].sample(record.t)[0]

@@ -35,7 +35,7 @@ from dynfab.sim.control_interfaces import Setpoint, SetpointIntegrator, interfac
 from dynfab.sim.mujoco_drives import JointDrive, MujocoInverseDynamics
 from dynfab.sim.mujoco_model import MujocoScene
 from dynfab.sim.mujoco_state import RobotState
-from dynfab.sim.simulator import Controller, ProgressCallback, Record, StopPredicate, n_steps_for
+from dynfab.sim.simulator import Controller, ProgressCallback, Record, RunStopped, StopPredicate, n_steps_for
 
 __all__ = ["CONTROL_MODES", "DIVERGED_SPEED", "RESYNC_ERROR", "Contact", "MujocoRun", "simulate_mujoco"]
 
@@ -183,7 +183,11 @@ class _Loop:
             t = k * dt
             seen_q, seen_u = self._observation()
             start = time.perf_counter()
-            command = np.asarray(controller(t, seen_q, seen_u), dtype=float).reshape(-1)
+            try:
+                command = np.asarray(controller(t, seen_q, seen_u), dtype=float).reshape(-1)
+            except RunStopped as stop:
+                reason = str(stop)
+                break
             elapsed = time.perf_counter() - start
             if command.shape != u.shape or not np.all(np.isfinite(command)):
                 reason = (f"the planner returned {'a non-finite' if command.shape == u.shape else 'a wrongly sized'} "

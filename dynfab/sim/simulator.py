@@ -38,6 +38,11 @@ class ControllerError(RuntimeError):
     """The controller returned an acceleration of the wrong shape or a non-finite one."""
 
 
+class RunStopped(RuntimeError):
+    """Raised by a controller to end the run early (e.g. a reference that turned
+    non-finite); the simulator keeps the steps so far and the message as the reason."""
+
+
 @dataclass(frozen=True)
 class Record:
     """A simulated run; state k holds at t[k], command k acts on [t[k], t[k] + dt).
@@ -51,6 +56,7 @@ class Record:
             ``(v, ω, arm rates)`` for a differential-drive base (m = n − 1).
         qddot: Commanded accelerations of the velocity coordinates, shape (N, m).
         solver_time: Wall time of each controller call, shape (N,) [s].
+        stop_reason: Why the controller ended the run early (:class:`RunStopped`), or None.
     """
 
     t: NDArray[np.float64]
@@ -58,6 +64,7 @@ class Record:
     qdot: NDArray[np.float64]
     qddot: NDArray[np.float64]
     solver_time: NDArray[np.float64]
+    stop_reason: str | None = None
 
     @property
     def steps(self) -> int:
@@ -118,10 +125,15 @@ def simulate(
     qs[0], qdots[0] = q, qdot
     h = dt / substeps
     steps_done = n_steps
+    stop_reason = None
     for k in range(n_steps):
         t = k * dt
         start = time.perf_counter()
-        command = controller(t, q.copy(), qdot.copy())
+        try:
+            command = controller(t, q.copy(), qdot.copy())
+        except RunStopped as stop:
+            steps_done, stop_reason = k, str(stop)
+            break
         solver_time[k] = time.perf_counter() - start
         qddot = _checked_command(command, n, t, k)
         for _ in range(substeps):
@@ -132,7 +144,7 @@ def simulate(
         if stop_when is not None and stop_when((k + 1) * dt, q.copy(), qdot.copy()):
             steps_done = k + 1
             break
-    return _record(dt, qs, qdots, qddots, solver_time, steps_done)
+    return _record(dt, qs, qdots, qddots, solver_time, steps_done, stop_reason)
 
 
 def _check_arguments(
@@ -178,6 +190,7 @@ def _record(
     qddots: NDArray[np.float64],
     solver_time: NDArray[np.float64],
     steps: int,
+    stop_reason: str | None = None,
 ) -> Record:
     """Freeze the first ``steps`` steps of the run into a read-only Record."""
     arrays = (
@@ -189,4 +202,4 @@ def _record(
     )
     for array in arrays:
         array.setflags(write=False)
-    return Record(*arrays)
+    return Record(*arrays, stop_reason=stop_reason)
