@@ -45,8 +45,9 @@ ARM_Q0 = [1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0]
 
 
 def run(data: dict[str, Any]) -> RunResult:
-    """Run a scenario mapping; the runner must have built a fabric controller."""
-    result = run_scenario(scenario_from_dict(data))
+    """Run a scenario mapping as the paper would (no stall recovery); the runner must have
+    built a fabric controller."""
+    result = run_scenario(scenario_from_dict({**data, "recovery": False}))
     assert isinstance(result.controller, FabricController)
     return result
 
