@@ -7,27 +7,29 @@ A union member is tagged ``<name>``; pydantic puts the tag into an error's locat
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Annotated, Any, Union
 
 from pydantic import Discriminator, Tag, ValidationError
+from pydantic_core import PydanticCustomError
 
 from dynfab.describe import describe
 from dynfab.scenario.fields import ScenarioError, join
 
-__all__ = ["scenario_error", "tagged_union"]
+__all__ = ["checked", "scenario_error", "tagged_union"]
 
 _DISPATCH = "dispatch"
 
 
-def tagged_union(members: Mapping[str, Any], key: str | None, expected: str = "a mapping") -> Any:
-    """The union of ``members`` chosen by the text at ``key`` of a mapping.
+def tagged_union(members: Mapping[str, Any], key: str | None, expected: str = "a mapping",
+                 kind_of: Callable[[Any], str | None] | None = None) -> Any:
+    """The union of ``members`` chosen by the text at ``key`` of a mapping, or by ``kind_of``.
 
     Args:
-        members: Model per tag value, e.g. ``{"sphere": SphereObstacle, ...}``.
-        key: The mapping key that holds the tag; None: a text value is the member tagged
-            ``name`` and a mapping the member tagged ``mapping`` (the ``robot:`` key).
+        members: Type per tag value, e.g. ``{"sphere": SphereMapping, ...}``.
+        key: The mapping key that holds the tag; None: ``kind_of`` chooses.
         expected: What the file should hold, for ``expected ..., got ...``.
+        kind_of: Without ``key``: the member for a raw value, or None if none fits.
 
     Returns:
         An ``Annotated`` union type for a model field.
@@ -35,16 +37,23 @@ def tagged_union(members: Mapping[str, Any], key: str | None, expected: str = "a
 
     def tag_of(value: Any) -> str | None:
         if key is None:
-            kind = "name" if isinstance(value, str) else "mapping" if isinstance(value, Mapping) else None
+            kind = kind_of(value) if kind_of is not None else None
         else:
             kind = value.get(key) if isinstance(value, Mapping) else None
         return f"<{kind}>" if isinstance(kind, str) and kind in members else None
 
     tagged = tuple(Annotated[model, Tag(f"<{name}>")] for name, model in members.items())
-    context = {"key": key or "", "choices": ", ".join(members), "expected": expected}
+    context = _Context(key=key or "", choices=", ".join(members), expected=expected)
     return Annotated[Union[tagged], Discriminator(  # noqa: UP007 - a runtime tuple of members
         tag_of, custom_error_type=_DISPATCH, custom_error_message=f"expected {expected}",
         custom_error_context=context)]
+
+
+class _Context(dict[str, str]):
+    """An error context that can be hashed, as ``X | None`` of an annotated union needs."""
+
+    def __hash__(self) -> int:  # type: ignore[override]
+        return hash(tuple(sorted(self.items())))
 
 
 def scenario_error(error: ValidationError) -> ScenarioError:
@@ -62,6 +71,14 @@ def scenario_error(error: ValidationError) -> ScenarioError:
     else:
         problem = " ".join(str(first["msg"]).split())
     return ScenarioError(field or "scenario", problem)
+
+
+def checked(check: Callable[[Any], Any], value: Any, field: str) -> Any:
+    """``check(value)`` (e.g. ``Range(...).check``) with its problem as a ScenarioError on ``field``."""
+    try:
+        return check(value)
+    except PydanticCustomError as error:
+        raise ScenarioError(field, str((error.context or {})["problem"])) from None
 
 
 def _dispatch_problem(field: str, value: Any, context: Mapping[str, Any]) -> tuple[str, str]:

@@ -155,12 +155,15 @@ class Text(_Validated):
 
 @dataclass(frozen=True)
 class Choice(_Validated):
-    """One of ``options`` (text)."""
+    """One of ``options`` (text); ``problem`` replaces ``expected one of ...`` in the message."""
 
     options: tuple[str, ...]
+    problem: str = ""
 
     def check(self, value: Any) -> str:
         if not isinstance(value, str) or value not in self.options:
+            if self.problem:
+                raise fail(f"{self.problem}, got {describe(value)}")
             raise fail(f"expected one of {', '.join(self.options)}; got {describe(value)}")
         return value
 
