@@ -97,7 +97,7 @@ class PositionGoalMapping(ScenarioModel):
     """``{type: position, position: P [m], link, parent_link, axes, tolerance [m], weight, offset [m]}``."""
 
     type: Literal["position"]
-    position: Annotated[tuple[Coordinate, ...], Items(max_items=3)]
+    position: Annotated[tuple[Coordinate, ...], Items()]
     link: Link | None = None
     parent_link: Link | None = None
     axes: Axes | None = None

@@ -11,6 +11,7 @@ the first error into a :class:`~dynfab.scenario.fields.ScenarioError`.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -55,7 +56,12 @@ class ScenarioModel(BaseModel):
         for name, info in cls.model_fields.items():
             if info.is_required() and name not in data:
                 raise fail("missing required key", name)
+        cls.check_keys(data)
         return data
+
+    @classmethod
+    def check_keys(cls, data: Mapping[str, Any]) -> None:
+        """Further checks of which keys are present, before any value is read."""
 
 
 @dataclass(frozen=True)
@@ -225,12 +231,9 @@ class Items:
 
 
 def _spells_float(spelled: str) -> bool:
-    """True if ``spelled`` spells a float (e.g. ``1e-3``, which YAML 1.1 keeps as text)."""
-    try:
-        float(spelled)
-    except ValueError:
-        return False
-    return True
+    """True if ``spelled`` spells a float in exponent notation without a dot (``1e-3``,
+    which YAML 1.1 keeps as text)."""
+    return re.fullmatch(r"[-+]?[0-9]+[eE][-+]?[0-9]+", spelled.strip()) is not None
 
 
 def _short(value: int) -> str:

@@ -84,12 +84,11 @@ Quaternion = Annotated[tuple[Annotated[float, Range(-1e3, 1e3)], ...], Items((4,
 class _Placed(ScenarioModel):
     """Exactly one of ``position`` (static, [m]) or ``trajectory`` (moving centre)."""
 
-    @model_validator(mode="after")
-    def _static_or_moving(self) -> _Placed:
-        placement = "point" if "point" in type(self).model_fields else "position"
-        if (getattr(self, placement) is None) == (self.trajectory is None):
+    @classmethod
+    def check_keys(cls, data: Mapping[str, Any]) -> None:
+        placement = "point" if "point" in cls.model_fields else "position"
+        if (placement in data) == ("trajectory" in data):
             raise fail(f"expected exactly one of '{placement}' (static) or 'trajectory' (moving)")
-        return self
 
 
 class SphereMapping(_Placed):

@@ -24,7 +24,7 @@ CONTROLS: tuple[str, ...] = ("torque", "velocity", "position")
 #: The values of each key, as in the scenario file.
 SIMULATOR = Choice(SIMULATORS)
 CONTROL = Choice(CONTROLS)
-DELAY = Range(0.0, MAX_DELAY, unit=" s")
+DELAY = Range(0.0, MAX_DELAY)
 NOISE = Range(0.0, MAX_NOISE)
 
 
