@@ -107,11 +107,14 @@ class _Budget:
         self.anchors: dict[str, tuple[int, int]] = {}
         self.resolver = yaml.resolver.Resolver()
 
-    def field(self) -> str:
-        """Path of the current position, its first components only."""
+    def field(self, key: str | None = None) -> str:
+        """Path of the current position (its first components only), or of ``key`` here."""
         path = ""
         for frame in self.frames[1:_SHOWN_COMPONENTS + 1]:
             path = path + frame.name if frame.name.startswith("[") else join(path, frame.name)
+        if key is not None:
+            return join(path, key)
+        path = "scenario" + path if not path or path.startswith("[") else path
         return path + ("..." if len(self.frames) > _SHOWN_COMPONENTS + 1 else "")
 
     def child_name(self, event: yaml.NodeEvent) -> str | None:
@@ -131,10 +134,10 @@ class _Budget:
         """Count a node of ``size`` expanded values with ``height`` levels of collections."""
         self.nodes += size
         if self.nodes > MAX_NODES:
-            raise ScenarioError(self.field() or "scenario", f"the document expands to more than {MAX_NODES} "
+            raise ScenarioError(self.field(), f"the document expands to more than {MAX_NODES} "
                                 f"values (YAML aliases?) at line {mark.line + 1}")
         if len(self.frames) + height > MAX_DEPTH:
-            raise ScenarioError(self.field() or "scenario", f"lists and mappings nest deeper than {MAX_DEPTH} "
+            raise ScenarioError(self.field(), f"lists and mappings nest deeper than {MAX_DEPTH} "
                                 f"levels at line {mark.line + 1}")
         if self.frames:
             self.frames[-1].height = max(self.frames[-1].height, height)
@@ -145,7 +148,7 @@ class _Budget:
         if isinstance(event, yaml.ScalarEvent):
             tag = event.tag or self.resolver.resolve(yaml.ScalarNode, event.value, event.implicit)
             if tag != _MERGE_TAG and (tag, event.value) in frame.keys:
-                raise ScenarioError(join(self.field(), event.value), f"duplicate key (line {event.start_mark.line + 1}; "
+                raise ScenarioError(self.field(event.value), f"duplicate key (line {event.start_mark.line + 1}; "
                                     "YAML requires unique keys)")
             frame.keys.add((tag, event.value))
             frame.key = event.value
