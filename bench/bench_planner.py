@@ -1,12 +1,15 @@
 """Benchmark: build time, SX instructions and per-step time of the Panda static-fabric
 planner with 1, 5 and 10 sphere obstacles plus self-collision and joint limits, side by
 side with the reference package ``fabrics`` 0.10.0 in the same run when it is installed
-in ``.venv-reference`` (``bash bench/setup_reference.sh``).
+in ``.venv-reference`` (``bash bench/setup_reference.sh``); then the backends of issue 12
+(bench/bench_speed.py): VM, C, exported C, batched, cold starts, against the reference.
 
-    .venv/bin/python bench/bench_planner.py [--spheres 1 5 10] [--steps 2000]
+    .venv/bin/python bench/bench_planner.py [--spheres 1 5 10] [--steps 2000] [--json]
 
-Each build is a cold start in a fresh process (nothing cached). Times are wall-clock
-medians of ``FabricPlanner.compute`` from Python, including input checks.
+Each build is a cold start in a fresh process (the VM builds cache nothing; the C
+measurements use a fresh cache folder, first cold, then warm). Times are wall-clock
+medians of ``FabricPlanner.compute`` from Python, including input checks. The machine's
+load average is printed with the numbers: they belong to this machine at this moment.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ import numpy as np
 BENCH_DIR = Path(__file__).resolve().parent
 sys.path.insert(0, str(BENCH_DIR))
 
+from bench_speed import speed_measurements  # noqa: E402
 from reference import REFERENCE_MISSING_MESSAGE, run_reference  # noqa: E402
 
 PANDA_URDF = BENCH_DIR.parent / "dynfab" / "robots" / "data" / "panda.urdf"
@@ -84,7 +88,11 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--spheres", type=int, nargs="+", default=[1, 5, 10])
     parser.add_argument("--steps", type=int, default=2000)
+    parser.add_argument("--json", action="store_true", help="print one JSON object with every measurement")
     args = parser.parse_args(argv)
+    if args.json:
+        print(json.dumps(_all_measurements(args.spheres, args.steps)))
+        return 0
     header = f"{'spheres':>7} | {'build [s]':>17} | {'step median [ms]':>21} | {'SX instructions':>19} | step ratio ref/ours"
     print(header)
     print("-" * len(header))
@@ -114,9 +122,51 @@ def main(argv: list[str] | None = None) -> int:
     print(f"  step median {scene['step_ms_median']:.4f} vs {plain['step_ms_median']:.4f} ms "
           f"({scene['step_ms_median'] / plain['step_ms_median']:.2f}x) | {scene['n_instructions']} vs "
           f"{plain['n_instructions']} SX instructions | build {scene['build_s']:.2f} vs {plain['build_s']:.2f} s")
+    print()
+    _print_speed(speed_measurements(args.steps), run_reference(5, min(args.steps, 1000), PANDA_URDF))
     if missing:
         print(REFERENCE_MISSING_MESSAGE)
     return 0
+
+
+def _all_measurements(spheres: list[int], steps: int) -> dict:
+    """Every number of the printed report, for machines."""
+    sweep = []
+    for n in spheres:
+        sweep.append({"spheres": n, "ours": _ours_in_fresh_process(n, steps),
+                      "reference": run_reference(n, min(steps, 1000), PANDA_URDF)})
+    return {"sweep": sweep, "speed": speed_measurements(steps),
+            "reference_5_spheres": run_reference(5, min(steps, 1000), PANDA_URDF)}
+
+
+def _print_speed(speed: dict, reference: dict | None) -> None:
+    """The issue-12 report: backends side by side, with the targets."""
+    ref_us = None if reference is None else 1e3 * reference["step_ms_median"]
+    c_us = speed["c"]["step_us_median"]
+    print(f"backends (issue 12), Panda, 5 spheres, self-collision, joint limits, static unless said; "
+          f"{speed['cpus']} CPUs, load average {speed['load_before'][0]:.2f} before, "
+          f"{speed['load_after'][0]:.2f} after:")
+    rows = [("VM step from Python", speed["vm"]["step_us_median"], None),
+            ("C step from Python", c_us, "<= 10 us"),
+            ("exported C step", speed["exported"]["step_us"], "<= 5 us"),
+            ("C dynamic step", speed["c_dynamic"]["step_us_median"], "<= 1.3x static"),
+            ("C Boxer+Panda 8 spheres", speed["c_boxer_panda_8"]["step_us_median"], "<= 20 us"),
+            ("batch, 1 thread, per env-step", speed["batch_1000_1"]["us_per_env_step"], None),
+            (f"batch, {speed['batch_1000_cpus']['threads']} threads, per env-step",
+             speed["batch_1000_cpus"]["us_per_env_step"], ">= 100000 env-steps/s")]
+    if ref_us is not None:
+        rows.append(("reference step (fabrics 0.10.0)", ref_us, None))
+    for label, value, target in rows:
+        ratio = "" if ref_us is None else f"  reference / this = {ref_us / value:6.1f}x"
+        print(f"  {label:<36} {value:9.2f} us{ratio}{'  target ' + target if target else ''}")
+    print(f"  C dynamic / static = {speed['c_dynamic']['step_us_median'] / c_us:.2f}; "
+          f"batch {speed['batch_1000_cpus']['env_steps_per_s']:.0f} env-steps/s "
+          f"({speed['batch_1000_1']['env_steps_per_s']:.0f} on 1 thread)")
+    cold, warm = speed["c_cold_cache"], speed["c"]
+    print(f"  build: VM {speed['vm']['build_s']:.2f} s; C with a cold cache {cold['build_s']:.2f} s "
+          f"(symbolic build + compile, target < 60 s); C cold start with a warm cache (new process, build to "
+          f"first action) {warm['first_action_s']:.3f} s (target < 0.3 s), after importing dynfab in "
+          f"{warm['import_s']:.2f} s")
 
 
 if __name__ == "__main__":

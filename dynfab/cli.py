@@ -17,11 +17,13 @@ from importlib.resources import files
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from dynfab.fabric.backends import BACKENDS
 from dynfab.scenario.recording import RecordingError, load_recording, run_recording, save_recording
 from dynfab.scenario.runner import RunResult, link_path, run_scenario
 from dynfab.scenario.schema import PLANNERS, Scenario, ScenarioError, load_scenario
 
 if TYPE_CHECKING:
+    from dynfab.experiments.cluster import Cluster
     from dynfab.viz.mujoco_video import VideoRecorder
 
 #: ``dynfab demo NAME``: the bundled scenario, and whether the demo also runs the static
@@ -62,6 +64,10 @@ def main(argv: list[str] | None = None) -> int:
     experiment.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
     experiment.add_argument("--out", type=Path, help="output directory (default dynfab-experiments/NAME)")
     experiment.add_argument("--jobs", type=_at_least_one, help="worker processes (default: the number of CPUs)")
+    experiment.add_argument("--workers", type=_at_least_one,
+                            help="run on Dask: an embedded LocalCluster of this many worker processes")
+    experiment.add_argument("--scheduler", metavar="tcp://HOST:8786",
+                            help="run on the existing Dask cluster of this scheduler (implies Dask)")
     experiment.add_argument("--record", action="store_true",
                             help="also write each run's recording to OUT/recordings/ (for dynfab check)")
     experiment.add_argument("--simulator", default="kinematic", help="kinematic (default) or mujoco")
@@ -69,6 +75,13 @@ def main(argv: list[str] | None = None) -> int:
     experiment.add_argument("--delay", type=float, default=0.0, help="under mujoco: observation delay [s]")
     experiment.add_argument("--noise", type=float, default=0.0,
                             help="under mujoco: std of the observation noise [rad or m, and per s]")
+    experiment.add_argument("--recovery", action="store_true",
+                            help="recover from stalls by following a global path (off in the paper's runs)")
+    export = commands.add_parser("export", help="write a scenario's fabric planner as self-contained C "
+                                                "(NAME.c, NAME.h, example.c, Makefile)")
+    export.add_argument("file", type=Path, help="scenario YAML file (static-fabric or dynamic-fabric)")
+    export.add_argument("--out", type=Path, required=True, help="output directory")
+    export.add_argument("--name", help="prefix of the C symbols (default: the file name, e.g. panda_spheres)")
     spheres = commands.add_parser("spheres", help="fit collision spheres to a URDF's collision geometry, "
                                                   "print their coverage, write them as scenario YAML")
     spheres.add_argument("urdf", help="URDF file, or package://NAME/... (see the README)")
@@ -93,6 +106,10 @@ def main(argv: list[str] | None = None) -> int:
         return spheres_command(args.urdf, args.out, args.plot, args.tolerance, args.package_dir, args.joints)
     if args.command == "experiment":
         return _experiment(args)
+    if args.command == "export":
+        from dynfab.export_command import export_command
+
+        return export_command(args.file, args.out, args.name)
     if args.command == "check":
         return _check(args.recording, args.file, args.json)
     video = None
@@ -104,6 +121,8 @@ def main(argv: list[str] | None = None) -> int:
         planners = [None, "static-fabric"] if compare else [None]
     try:
         scenario = load_scenario(path)
+        if args.backend is not None:
+            scenario = dataclasses.replace(scenario, backend=args.backend)
         if args.command == "run":
             scenario = _with_simulation(scenario, args.simulator, args.control)
             video = _video_recorder(scenario, args.video)
@@ -149,10 +168,12 @@ def _positive_number(text: str) -> float:
 
 
 def _experiment(args: argparse.Namespace) -> int:
-    """``dynfab experiment``: run the series, print its summary; 2 for an unknown name, a bad
-    simulation setting or an output directory of another series, 1 if a run failed, 130 on
+    """``dynfab experiment``: run the series (local processes, or Dask with ``--workers`` /
+    ``--scheduler``), print its summary; 2 for an unknown name, a bad simulation setting, an
+    output directory of another series or an unusable cluster, 1 if a run failed, 130 on
     Ctrl-C (resumable)."""
-    from dynfab.experiments.physics import setting_name, under_simulation
+    from dynfab.experiments.cluster import ClusterError
+    from dynfab.experiments.settings import setting_name, with_setting
     from dynfab.experiments.registry import EXPERIMENTS
     from dynfab.experiments.series import RunError, SeriesError, run_series
     from dynfab.scenario.simulation_schema import Simulation
@@ -170,13 +191,14 @@ def _experiment(args: argparse.Namespace) -> int:
     if simulation.simulator == "kinematic" and simulation != Simulation():
         print("dynfab: error: --control, --delay and --noise need --simulator mujoco", file=sys.stderr)
         return 2
-    experiment = under_simulation(EXPERIMENTS[name], simulation)
+    experiment = with_setting(EXPERIMENTS[name], simulation, args.recovery)
     if out is None:
-        suffix = "" if simulation == Simulation() else "-" + setting_name(simulation)
+        suffix = "" if simulation == Simulation() and not args.recovery else "-" + setting_name(simulation, args.recovery)
         out = Path("dynfab-experiments") / (name + suffix)
     try:
-        result = run_series(experiment, runs, seed, out, jobs, progress=sys.stderr, record=record)
-    except SeriesError as error:
+        result = run_series(experiment, runs, seed, out, jobs, progress=sys.stderr, record=record,
+                            cluster=_cluster(args.workers, args.scheduler))
+    except (SeriesError, ClusterError) as error:
         print(f"dynfab: error: {error}", file=sys.stderr)
         return 2
     except RunError as error:
@@ -190,6 +212,15 @@ def _experiment(args: argparse.Namespace) -> int:
     print(f"dynfab: {result.executed} runs executed; wrote {out}/runs.jsonl, runs.csv, summary.md, summary.json, "
           f"scenarios/ and plots/", file=sys.stderr)
     return 0
+
+
+def _cluster(workers: int | None, scheduler: str | None) -> Cluster | None:
+    """The Dask cluster ``--workers`` / ``--scheduler`` ask for, or ``None`` (local processes)."""
+    if workers is None and scheduler is None:
+        return None
+    from dynfab.experiments.cluster import Cluster
+
+    return Cluster(workers=workers or 1, scheduler=scheduler)
 
 
 def _record(result: RunResult, path: Path) -> None:
@@ -264,6 +295,8 @@ def _video_recorder(scenario: Scenario, path: Path | None) -> VideoRecorder | No
 
 def _output_options(parser: argparse.ArgumentParser, default_plot: Path | None = None) -> None:
     parser.add_argument("--json", action="store_true", help="print the metrics as one JSON object on stdout")
+    parser.add_argument("--backend", choices=BACKENDS,
+                        help="override the scenario's backend: vm (CasADi VM) or c (compiled C, cached)")
     parser.add_argument("--plot", type=Path, default=default_plot, help="write a PNG of the run")
     parser.add_argument("--record", type=Path, metavar="OUT.npz",
                         help="write t, q, qdot, qddot (one row per control step) and joint_names of the (first) run")

@@ -103,6 +103,7 @@ BAD_SCENARIOS: dict[str, tuple[dict[str, Any], str]] = {
     "goal position of 4 numbers": (changed(("goal", 0, "position"), [0.5, -0.3, 0.4, 1.0]), "goal[0].position"),
     "unknown link": (changed(("goal", 0, "link"), "panda_link99"), "goal[0].link"),
     "unknown robot": (changed(("robot",), "ur5"), "robot"),
+    "unknown backend": (changed(("backend",), "gpu"), "backend"),
     "negative radius": (changed(("obstacles", 0, "radius"), -0.1), "obstacles[0].radius"),
     "NaN": (changed(("dt",), float("nan")), "dt"),
     "infinity": (changed(("goal", 0, "position"), [0.5, float("inf"), 0.4]), "goal[0].position[1]"),

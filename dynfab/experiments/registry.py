@@ -5,7 +5,8 @@ and the figures the paper reports (``shared/EXPERIMENTS.md``), for the series ru
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from functools import partial
 from typing import Any, Literal
 
 from dynfab.experiments import arms, exp1, exp2, exp3, exp4, exp5, exp6
@@ -85,7 +86,17 @@ class Experiment:
         return next((f for f in self.figures if f.quantity == quantity and f.planner == planner), None)
 
 
-EXPERIMENTS: dict[str, Experiment] = {e.name: e for e in (
+def with_keys(sampler: Sampler, keys: tuple[tuple[str, Any], ...], seed: int, planner: str) -> dict[str, Any]:
+    """``sampler``'s scenario with ``keys`` set (used through ``functools.partial``, which
+    pickles, so that series can send samplers to worker processes)."""
+    return {**sampler(seed, planner), **dict(keys)}
+
+
+#: The setting of the paper's runs: no stall recovery (``dynfab experiment NAME --recovery``).
+PAPER_SETTING: tuple[tuple[str, Any], ...] = (("recovery", False),)
+
+
+EXPERIMENTS: dict[str, Experiment] = {e.name: replace(e, sampler=partial(with_keys, e.sampler, PAPER_SETTING)) for e in (
     Experiment(
         name="exp1",
         description="Panda reaches a random goal among 1-5 static spheres: static fabrics vs MPC",

@@ -26,11 +26,10 @@ import csv
 import dataclasses
 import fcntl
 import json
-import multiprocessing
 import os
 import time
 from collections.abc import Iterator, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, Future, wait
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,13 +37,14 @@ from typing import IO
 
 import yaml
 
+from dynfab.experiments.cluster import Cluster, series_executor
 from dynfab.experiments.registry import Experiment
 from dynfab.experiments.series_plots import write_plots
 from dynfab.experiments.series_summary import (METRIC_KEYS, MetricValue, RunRecord, SeriesSummary, render_summary,
                                                summarize, summary_dict)
-from dynfab.scenario.recording import run_recording, save_recording
+from dynfab.scenario.recording import Recording, run_recording, save_recording
 from dynfab.scenario.runner import run_scenario
-from dynfab.scenario.schema import load_scenario
+from dynfab.scenario.schema import scenario_from_dict
 
 
 Pair = tuple[int, str]
@@ -84,7 +84,7 @@ def scenario_file(out_dir: Path, experiment: str, seed: int, planner: str) -> Pa
 
 
 def run_series(experiment: Experiment, runs: int, seed: int, out_dir: str | Path, jobs: int | None = None,
-               progress: IO[str] | None = None, record: bool = False) -> SeriesResult:
+               progress: IO[str] | None = None, record: bool = False, cluster: Cluster | None = None) -> SeriesResult:
     """Run ``experiment`` on seeds ``seed .. seed + runs - 1`` with each of its planners.
 
     Writes the scenario files, runs the missing (seed, planner) pairs over ``jobs``
@@ -100,6 +100,8 @@ def run_series(experiment: Experiment, runs: int, seed: int, out_dir: str | Path
         progress: stream for a progress bar (done/total, rate, ETA); None is silent.
         record: also write each run's recording to
             ``out_dir/recordings/<exp>_<seed>_<planner>.npz`` (``dynfab check`` reads them).
+        cluster: run on Dask instead of ``jobs`` local processes
+            (:mod:`dynfab.experiments.cluster`); the results are the same.
 
     Raises:
         ValueError: ``runs`` or ``jobs`` < 1.
@@ -107,6 +109,7 @@ def run_series(experiment: Experiment, runs: int, seed: int, out_dir: str | Path
             scenario file no longer matches what its seed draws, or another series is
             running in it.
         RunError: a run raised (the finished ones stay recorded).
+        ClusterError: the Dask cluster cannot be used.
     """
     jobs = (os.cpu_count() or 1) if jobs is None else jobs
     if runs < 1 or jobs < 1:
@@ -123,7 +126,8 @@ def run_series(experiment: Experiment, runs: int, seed: int, out_dir: str | Path
         recordings = out / "recordings" if record else None
         if recordings is not None:
             recordings.mkdir(exist_ok=True)
-        for entry in _execute(experiment.name, pending, files, jobs, log, bar, recordings):
+        for entry in _execute(experiment.name, pending, files, min(jobs, max(len(pending), 1)), cluster, log, bar,
+                              recordings):
             done[(entry.seed, entry.planner)] = entry
         records = tuple(done[pair] for pair in files)
         summary = summarize(experiment, records)
@@ -204,18 +208,20 @@ def _write_scenarios(experiment: Experiment, seeds: Sequence[int], out: Path,
     return files
 
 
-def _execute(experiment: str, pending: list[Pair], files: dict[Pair, Path], jobs: int, log: Path,
-             bar: _Progress | None, recordings: Path | None) -> Iterator[RunRecord]:
-    """Run the pending pairs over ``jobs`` processes; append and yield each as it finishes
-    (writing its recording into ``recordings`` if given)."""
+def _execute(experiment: str, pending: list[Pair], files: dict[Pair, Path], jobs: int, cluster: Cluster | None,
+             log: Path, bar: _Progress | None, recordings: Path | None) -> Iterator[RunRecord]:
+    """Run the pending pairs over ``jobs`` processes or the cluster; append and yield each
+    as it finishes (writing its recording into ``recordings`` if given)."""
     if not pending:
+        if bar is not None:
+            bar.start()
         return
-    executor = ProcessPoolExecutor(max_workers=min(jobs, len(pending)),
-                                   mp_context=multiprocessing.get_context("spawn"))
-    try:
-        futures: dict[Future[tuple[dict[str, MetricValue], float]], Pair] = {
-            executor.submit(_run_file, str(files[pair]),
-                            None if recordings is None else str(recordings / (files[pair].stem + ".npz"))): pair
+    with series_executor(jobs, cluster) as executor:
+        if bar is not None:
+            bar.start()
+        futures: dict[Future[RunOutcome], Pair] = {
+            executor.submit(run_scenario_text, files[pair].read_text(encoding="utf-8"), str(files[pair].parent),
+                            recordings is not None): pair
             for pair in pending}
         remaining = set(futures)
         with log.open("a", encoding="utf-8") as file:
@@ -224,9 +230,11 @@ def _execute(experiment: str, pending: list[Pair], files: dict[Pair, Path], jobs
                 for future in sorted(finished, key=lambda f: pending.index(futures[f])):
                     seed, planner = futures[future]
                     try:
-                        metrics, wall_time = future.result()
+                        metrics, wall_time, recording = future.result()
                     except Exception as error:
                         raise RunError(f"{files[(seed, planner)]}: {type(error).__name__}: {error}") from error
+                    if recordings is not None and recording is not None:
+                        save_recording(recordings / (files[(seed, planner)].stem + ".npz"), recording)
                     record = RunRecord(seed, planner, metrics, wall_time)
                     file.write(json.dumps({"experiment": experiment, **dataclasses.asdict(record)}) + "\n")
                     file.flush()
@@ -234,18 +242,18 @@ def _execute(experiment: str, pending: list[Pair], files: dict[Pair, Path], jobs
                     if bar is not None:
                         bar.advance()
                     yield record
-    finally:
-        executor.shutdown(wait=True, cancel_futures=True)
 
 
-def _run_file(path: str, recording: str | None) -> tuple[dict[str, MetricValue], float]:
-    """Worker: run one scenario file (recording it to ``recording`` if given); its metrics
-    and wall time [s]."""
+RunOutcome = tuple[dict[str, MetricValue], float, Recording | None]
+
+
+def run_scenario_text(text: str, base_dir: str, record: bool) -> RunOutcome:
+    """Worker: run one scenario given as YAML text (a relative URDF path resolves against
+    ``base_dir``); its metrics, wall time [s] and, if asked, its recording."""
     start = time.perf_counter()
-    result = run_scenario(load_scenario(path))
-    if recording is not None:
-        save_recording(recording, run_recording(result.robot, result.record, result.scenario.dt))
-    return result.metrics.to_dict(), time.perf_counter() - start
+    result = run_scenario(scenario_from_dict(yaml.safe_load(text), base_dir))
+    recording = run_recording(result.robot, result.record, result.scenario.dt) if record else None
+    return result.metrics.to_dict(), time.perf_counter() - start, recording
 
 
 class _Progress:
@@ -261,8 +269,13 @@ class _Progress:
         self._start = time.perf_counter()
         self._tty = stream.isatty()
         self._last_tenth = 10 * done // total
-        resumed = f" ({done} already done)" if done else ""
-        print(f"{label}: {total} runs{resumed}", file=stream, flush=True)
+
+    def start(self) -> None:
+        """Print the header (once the runs can start: a cluster that cannot be reached
+        prints only its error)."""
+        resumed = f" ({self._done} already done)" if self._done else ""
+        print(f"{self._label}: {self._total} runs{resumed}", file=self._stream, flush=True)
+        self._start = time.perf_counter()
 
     def advance(self) -> None:
         self._done += 1

@@ -21,12 +21,15 @@ conversion.
 
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import dataclass, field, replace
 
 import casadi as ca
 import numpy as np
 
+from dynfab.fabric.backends import BACKENDS, planner_function
+from dynfab.fabric.batch import BatchEvaluator
 from dynfab.fabric.command_bounds import CommandBounds
 from dynfab.fabric.energy import WeightedGeometry
 from dynfab.fabric.leaves.barrier import Barrier
@@ -110,6 +113,8 @@ class PlannerConfig:
             position bounds look one period ahead (:mod:`dynfab.fabric.command_bounds`).
         bound_command: make every command executable (:mod:`dynfab.fabric.command_bounds`);
             ``False`` returns the fabric's raw acceleration (for studying the theory).
+        backend: ``"vm"`` interprets the function in CasADi's virtual machine; ``"c"``
+            compiles it to C and caches the library (:mod:`dynfab.fabric.backends`).
     """
 
     goals: tuple[GoalConfig | OrientationGoalConfig, ...]
@@ -128,6 +133,7 @@ class PlannerConfig:
     limits: MotionLimits | None = None
     control_period: float = 0.01
     bound_command: bool = True
+    backend: str = "vm"
 
     @classmethod
     def for_robot(cls, robot: Robot, goals: tuple[GoalConfig | OrientationGoalConfig, ...], obstacle_slots: int = 0,
@@ -152,6 +158,8 @@ class PlannerConfig:
         if not (np.isfinite(self.control_period) and self.control_period > 0):
             raise ValueError(f"PlannerConfig.control_period must be a positive finite number, "
                              f"got {self.control_period}")
+        if self.backend not in BACKENDS:
+            raise ValueError(f"PlannerConfig.backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
 
 
 class FabricPlanner:
@@ -162,7 +170,8 @@ class FabricPlanner:
         robot: the robot.
         config: the configuration it was built with.
         parameters: writable views of the runtime parameters.
-        function: the compiled CasADi function ``z ↦ q̈``.
+        function: the CasADi function ``z ↦ q̈`` (SX, or the loaded C library).
+        backend: the backend in use, ``"vm"`` or ``"c"`` (``"vm"`` if no compiler was found).
         build_time_s: wall time of building and compiling [s].
         fallback_count: how many calls returned the fallback action.
     """
@@ -180,7 +189,8 @@ class FabricPlanner:
         goal_dimensions = tuple(self._goal_dimension(goal) for goal in config.goals)
         self._layout = ParameterLayout(goal_dimensions, config.obstacle_slots, config.dynamic, config.shape_slots)
         self._remembers_command = config.bound_command and config.limits.jerk is not None
-        self.function = self._build()
+        built = planner_function(config.backend, self._build, (robot, config))
+        self.function, self.backend, self._n_instructions = built.function, built.backend, built.n_instructions
         state_size = self._n + self._nv
         self._input = np.zeros(state_size + self._layout.size + (self._nv if self._remembers_command else 0))
         self._output = np.zeros(self._nv)
@@ -192,13 +202,14 @@ class FabricPlanner:
         self._previous_command = self._input[state_size + self._layout.size:]
         for i, goal in enumerate(config.goals):
             self.parameters.goal_weight[i] = goal.weight
+        self._batch = BatchEvaluator(self.function, self._n, self._nv, self._layout.size)
         self.fallback_count = 0
         self.build_time_s = time.perf_counter() - start
 
     @property
     def n_instructions(self) -> int:
         """SX instructions evaluated per call."""
-        return self.function.n_instructions()
+        return self._n_instructions
 
     def compute(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
         """The commanded acceleration for the state, with the current parameters. Always
@@ -236,6 +247,35 @@ class FabricPlanner:
         if self._remembers_command:
             self._previous_command[:] = command
         return command
+
+    def compute_batch(self, Q: np.ndarray, Qdot: np.ndarray, P: np.ndarray | None = None,
+                      previous: np.ndarray | None = None, threads: int | None = None) -> np.ndarray:
+        """The commands of many environments in one call: row ``i`` is :meth:`compute` of
+        ``(Q[i], Qdot[i])`` with parameters ``P[i]``, always finite (the fallback per row).
+        Does not change the planner's state (not even the previous command).
+
+        Args:
+            Q: configurations (N, n).
+            Qdot: velocity coordinates (N, nv).
+            P: packed parameters (N, p) in the order of the planner's parameter buffer;
+                ``None``: the current :attr:`parameters` in every row.
+            previous: previous commands (N, nv) of a jerk-limited planner; ``None``: the
+                planner's current one in every row.
+            threads: threads to spread the rows on (default: the CPUs).
+
+        Returns:
+            Commands (N, nv).
+
+        Raises:
+            ValueError: for a wrong shape or a non-finite input (naming the row).
+        """
+        z = self._batch.pack(self._input, Q, Qdot, P, previous)
+        commands = self._batch(z, threads if threads is not None else os.cpu_count() or 1)
+        failed = ~np.isfinite(commands).all(axis=1)
+        if failed.any():
+            self.fallback_count += int(failed.sum())
+            commands[failed] = self._fallback(z[failed, self._n:self._n + self._nv])
+        return commands
 
     def _fallback(self, qdot: np.ndarray) -> np.ndarray:
         """The safe action ``q̈ = −k q̇``, within the acceleration limits when the command

@@ -119,7 +119,7 @@ def make_controller(scenario: Scenario, robot: Robot, references: References) ->
                              capsule=kinds.count("capsule"), plane=kinds.count("plane"))
     goals = tuple(config for goal in scenario.goals for config in _goal_configs(goal))
     config = replace(PlannerConfig.for_robot(robot, goals, kinds.count("sphere"), _FABRIC_PLANNERS[scenario.planner],
-                                             shape_slots), control_period=scenario.dt)
+                                             shape_slots), control_period=scenario.dt, backend=scenario.backend)
     planner = FabricPlanner(robot, config)
     slots = _place_obstacles(scenario.obstacles, planner.parameters)
     references = planner_references(scenario, references)

@@ -13,7 +13,8 @@ import numpy as np
 from dynfab.geometry.orientation import direction_angle, rotation_angle
 from dynfab.motion.references import References
 from dynfab.robots.mesh_sweep import MeshSweep, sweep_meshes
-from dynfab.scenario.controllers import Controller, make_controller
+from dynfab.scenario.controllers import Controller, FabricController, make_controller
+from dynfab.scenario.recovering_controller import with_recovery
 from dynfab.scenario.exact_metrics import mesh_model_for, obstacle_shapes, with_mesh_metrics
 from dynfab.scenario.references import goal_axes, scenario_references
 from dynfab.scenario.metrics import (Metrics, clearance_over_time, compute_metrics, shape_clearance_over_time,
@@ -146,6 +147,8 @@ def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None
     start_centres = obstacle_centres(references, np.zeros(1))
     check_start_collisions(state.q, robot, mesh_model, obstacle_shapes(scenario.obstacles, start_centres))
     controller = make_controller(scenario, robot, references)
+    if isinstance(controller, FabricController):
+        controller = with_recovery(controller, scenario, robot, references)
     contacts: tuple[Contact, ...] = ()
     stop_reason = None
     if scenario.simulation.simulator == "mujoco":

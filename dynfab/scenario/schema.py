@@ -23,13 +23,14 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 from pydantic import ValidationError, model_validator
 
+from dynfab.fabric.backends import BACKENDS
 from dynfab.scenario import fields
 from dynfab.scenario.fields import TRAJECTORY_TYPES, ScenarioError
 from dynfab.scenario.goal_schema import DEFAULT_ANGLE_TOLERANCE, GoalMapping, GoalSpec, GoalType, goal_spec
 from dynfab.scenario.joint_limits import check_within_limits
 from dynfab.scenario.limits_schema import LimitsMapping, LimitsSpec
 from dynfab.scenario.model_errors import scenario_error
-from dynfab.scenario.model_types import Choice, Items, Range, ScenarioModel, fail
+from dynfab.scenario.model_types import Choice, Flag, Items, Range, ScenarioModel, fail
 from dynfab.scenario.obstacle_schema import OBSTACLE_TYPES, ObstacleMapping, ObstacleSpec, ObstacleType, obstacle_spec
 from dynfab.scenario.ranges import (
     MAX_DT,
@@ -88,6 +89,10 @@ class Scenario:
         limits: Overrides of the robot's velocity, acceleration and jerk limits.
         simulation: The simulator (kinematic or MuJoCo) and, under MuJoCo, the control
             mode, observation delay and noise.
+        recovery: Recover from stalls by following a global path
+            (scenario/stall_recovery.py); ``recovery: false`` turns it off.
+        backend: How a fabric planner is evaluated: ``"vm"`` (CasADi's virtual machine)
+            or ``"c"`` (compiled C, cached; :mod:`dynfab.fabric.backends`).
     """
 
     robot: str | UrdfRobotSpec
@@ -100,6 +105,8 @@ class Scenario:
     path: Path | None = None
     limits: LimitsSpec = LimitsSpec()
     simulation: Simulation = Simulation()
+    recovery: bool = True
+    backend: str = "vm"
 
 
 JointValues = Annotated[tuple[Annotated[float, Range(-MAX_JOINT_VALUE, MAX_JOINT_VALUE)], ...], Items(max_items=64)]
@@ -131,6 +138,8 @@ class ScenarioDocument(ScenarioModel):
     control: Annotated[str, CONTROL] = "torque"
     delay: Annotated[float, DELAY] = 0.0
     noise: Annotated[float, NOISE] = 0.0
+    recovery: Annotated[bool, Flag()] = True
+    backend: Annotated[str, Choice(BACKENDS)] = "vm"
 
     @model_validator(mode="after")
     def _consistent(self) -> ScenarioDocument:
@@ -164,6 +173,8 @@ class ScenarioDocument(ScenarioModel):
             obstacles=tuple(obstacle_spec(obstacle) for obstacle in self.obstacles),
             limits=self.limits.spec(),
             simulation=Simulation(self.simulator, self.control, self.delay, self.noise),
+            recovery=self.recovery,
+            backend=self.backend,
         )
 
 

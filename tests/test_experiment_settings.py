@@ -4,27 +4,34 @@ are one-line errors."""
 import pytest
 
 from dynfab.cli import main
-from dynfab.experiments.physics import setting_name, under_simulation
+from dynfab.experiments.settings import setting_name, with_setting
 from dynfab.experiments.registry import EXPERIMENTS
 from dynfab.scenario.simulation_schema import Simulation
 
 
 def test_every_drawn_scenario_carries_the_simulation_keys() -> None:
     simulation = Simulation("mujoco", "velocity", 0.01, 0.002)
-    experiment = under_simulation(EXPERIMENTS["exp1"], simulation)
+    experiment = with_setting(EXPERIMENTS["exp1"], simulation)
     for seed in range(3):
         for planner in experiment.planners:
             scenario = experiment.sampler(seed, planner)
             assert scenario == {**EXPERIMENTS["exp1"].sampler(seed, planner), "simulator": "mujoco",
                                 "control": "velocity", "delay": 0.01, "noise": 0.002}
+            assert scenario["recovery"] is False
     assert "mujoco-velocity-delay0.01-noise0.002" in experiment.description
-    assert under_simulation(EXPERIMENTS["exp1"], Simulation()) is EXPERIMENTS["exp1"]
+    assert with_setting(EXPERIMENTS["exp1"], Simulation()) is EXPERIMENTS["exp1"]
 
 
 def test_setting_names() -> None:
     assert setting_name(Simulation()) == "kinematic"
     assert setting_name(Simulation("mujoco")) == "mujoco-torque"
     assert setting_name(Simulation("mujoco", "position", 0.0, 0.001)) == "mujoco-position-noise0.001"
+    assert setting_name(Simulation(), recovery=True) == "kinematic-recovery"
+
+
+def test_the_paper_runs_have_no_recovery_and_the_setting_turns_it_on() -> None:
+    assert EXPERIMENTS["exp4"].sampler(0, "static-fabric")["recovery"] is False
+    assert with_setting(EXPERIMENTS["exp4"], Simulation(), recovery=True).sampler(0, "static-fabric")["recovery"]
 
 
 @pytest.mark.parametrize("arguments, message", [

@@ -1,0 +1,77 @@
+"""How a planner's function is evaluated: the CasADi virtual machine or compiled C.
+
+``"vm"`` builds the SX function and lets CasADi interpret it. ``"c"`` compiles it
+(:mod:`dynfab.fabric.c_backend`), and on a cache hit by the planner's inputs
+(:mod:`dynfab.fabric.fingerprint`) skips building the expression altogether. Without a C
+compiler, if it fails on the code, or if the cache folder cannot be written, ``"c"`` falls
+back to the VM with one warning line on stderr.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import casadi as ca
+
+from dynfab.fabric import c_backend
+from dynfab.fabric.fingerprint import UnknownValueError, inputs_digest
+
+#: the evaluation backends a planner can ask for
+BACKENDS: tuple[str, ...] = ("vm", "c")
+
+
+@dataclass(frozen=True)
+class PlannerFunction:
+    """The planner's function ``z ↦ q̈`` ready to evaluate.
+
+    Attributes:
+        function: the CasADi function (SX, or ``casadi.external`` of the compiled library).
+        backend: the backend in use: ``"vm"`` or ``"c"`` (``"vm"`` after a fallback).
+        n_instructions: SX instructions of the function.
+        compile_s: time spent in the C compiler [s] (0 for the VM or a cache hit).
+        from_cache: the compiled library came from the cache.
+    """
+
+    function: ca.Function
+    backend: str
+    n_instructions: int
+    compile_s: float = 0.0
+    from_cache: bool = False
+
+
+def planner_function(backend: str, build: Callable[[], ca.Function], inputs: tuple[object, ...]) -> PlannerFunction:
+    """The planner function on ``backend``.
+
+    Args:
+        backend: one of :data:`BACKENDS`.
+        build: builds the SX function (called unless the compiled one is cached).
+        inputs: what the function is built from (robot, configuration), for the cache
+            key by inputs.
+    """
+    if backend == "vm":
+        function = build()
+        return PlannerFunction(function, "vm", function.n_instructions())
+    compiler = c_backend.find_compiler()
+    if compiler is None:
+        print("dynfab: warning: backend 'c' needs a C compiler (none of $CC, gcc, cc, clang found); "
+              "using the CasADi VM", file=sys.stderr)
+        function = build()
+        return PlannerFunction(function, "vm", function.n_instructions())
+    try:
+        inputs_key = inputs_digest(*inputs, compiler, c_backend.COMPILE_FLAGS)
+    except UnknownValueError:
+        inputs_key = None
+    if inputs_key is not None:
+        cached = c_backend.load_by_inputs(inputs_key, compiler)
+        if cached is not None:
+            return PlannerFunction(cached.function, "c", cached.n_instructions, 0.0, True)
+    function = build()
+    try:
+        compiled = c_backend.compile_planner(function, compiler, inputs_key)
+    except (RuntimeError, OSError) as error:  # the compiler failed, or the cache is not writable
+        print(f"dynfab: warning: {error}; using the CasADi VM", file=sys.stderr)
+        return PlannerFunction(function, "vm", function.n_instructions())
+    return PlannerFunction(compiled.function, "c", compiled.n_instructions, compiled.compile_s,
+                           compiled.compile_s == 0.0)
