@@ -1,4 +1,5 @@
-"""The ``dynfab`` command: ``run`` a scenario file, ``check`` a recorded run, or a ``demo``.
+"""The ``dynfab`` command: ``run`` a scenario file, ``check`` a recorded run, a ``demo``, or
+print the scenario files' JSON ``schema``.
 
 Exit codes: 0 success (the run finished, whatever its metrics; a check found nothing),
 2 invalid input (one line on stderr naming the field), 3 ``check`` found a collision, a
@@ -91,7 +92,14 @@ def main(argv: list[str] | None = None) -> int:
     spheres.add_argument("--package-dir", type=Path, action="append", default=[],
                          help="folder where package:// URIs resolve (repeatable)")
     spheres.add_argument("--joints", nargs="+", help="active joints (default: every movable, non-mimic joint)")
+    commands.add_parser("schema", help="print the JSON Schema of scenario files (for editor completion, see the "
+                                       "README)")
     args = parser.parse_args(argv)
+    if args.command == "schema":
+        from dynfab.scenario.schema import ScenarioDocument
+
+        print(json.dumps(ScenarioDocument.model_json_schema(), indent=2))
+        return 0
     if args.command == "spheres":
         from dynfab.spheres_command import spheres_command
 

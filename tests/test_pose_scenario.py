@@ -73,7 +73,7 @@ def test_references_of_pose_and_axis_goals() -> None:
         (_with(POSE, rpy=[0, 0], orientation=None), "goal[0].rpy: expected 3 numbers, got 2"),
         (_with(POSE, position=[0.5, 0.3]), "goal[0].position: expected 3 numbers, got 2"),
         (_with(POSE, angle_tolerance=0), "goal[0].angle_tolerance: must be positive"),
-        (_with(POSE, angle_tolerance=4), "goal[0].angle_tolerance: expected at most pi rad"),
+        (_with(POSE, angle_tolerance=4), "goal[0].angle_tolerance: must be at most 3.14159 rad, got 4"),
         (_with(POSE, offset=[0, 0.1]), "goal[0].offset: expected 3 numbers, got 2"),
         (_with(POSE, axes="xy"), "goal[0].axes: unknown key"),
         (_with(AXIS, axis=[0, 0, 0]), "goal[0].axis: expected a non-zero direction"),

@@ -78,7 +78,9 @@ def _fake_robot(dof: int = 7, planar: bool = False, links: tuple[str, ...] = PAN
                 goal_link: str = "panda_hand") -> SimpleNamespace:
     """Stand-in exposing the Robot attributes validate_for_robot reads."""
     return SimpleNamespace(
-        kinematics=SimpleNamespace(dof=dof, link_names=links, joint_names=tuple(f"j{i + 1}" for i in range(dof))), planar=planar, goal_link=goal_link, base=None
+        kinematics=SimpleNamespace(dof=dof, link_names=links, joint_names=tuple(f"j{i + 1}" for i in range(dof)),
+                                   lower=(-3.0,) * dof, upper=(3.0,) * dof),
+        planar=planar, goal_link=goal_link, base=None
     )
 
 
@@ -286,7 +288,7 @@ def test_strings_are_never_evaluated(tmp_path: Path) -> None:
 
 def test_validate_for_robot_fills_goal_link() -> None:
     data = _base()
-    data["goal"].append({"type": "path", "trajectory": {"type": "linear"}})
+    data["goal"].append({"type": "path", "trajectory": {"type": "linear", "start": [0.5, 0.0, 0.5], "velocity": [0.0, 0.1, 0.0]}})
     del data["goal"][0]["link"]
     scenario = validate_for_robot(scenario_from_dict(data), _fake_robot())
     assert [goal.link for goal in scenario.goals] == ["panda_hand", "panda_hand"]

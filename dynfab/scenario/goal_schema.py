@@ -5,28 +5,28 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, Literal, cast
+from typing import Annotated, Any, Literal
 
+from pydantic import model_validator
 
 from dynfab.geometry.orientation import unit_vector
 from dynfab.geometry.shapes import ShapeError, quaternion_from_rpy, unit_quaternion
-from dynfab.scenario import fields
-from dynfab.scenario.fields import ScenarioError
+from dynfab.scenario.model_errors import tagged_union
+from dynfab.scenario.model_types import Choice, Items, Range, ScenarioModel, Text, fail
+from dynfab.scenario.ranges import (
+    MAX_JOINT_VALUE,
+    MAX_LENGTH,
+    AngularVelocity,
+    Coordinate,
+    Point3,
+    Tolerance,
+    Weight,
+)
+from dynfab.scenario.trajectory_schema import TrajectoryMapping, frozen_trajectory
 
+__all__ = ["DEFAULT_ANGLE_TOLERANCE", "GoalMapping", "GoalSpec", "GoalType", "goal_spec"]
 
 GoalType = Literal["position", "joint", "path", "pose", "axis"]
-
-
-_GOAL_TYPES: tuple[str, ...] = ("position", "joint", "path", "pose", "axis")
-
-
-_WORKSPACE_KEYS = ("link", "parent_link", "axes", "tolerance", "weight", "offset")
-
-
-_POSE_KEYS = ("link", "offset", "orientation", "rpy", "tolerance", "angle_tolerance", "weight")
-
-
-_AXIS_KEYS = ("link", "angle_tolerance", "weight", "angular_velocity")
 
 
 #: default ``angle_tolerance`` of pose and axis goals [rad]
@@ -83,128 +83,130 @@ class GoalSpec:
     angular_velocity: tuple[float, float, float] | None = None
 
 
-def parse_goal(value: object, field: str) -> GoalSpec:
-    """Parse one entry of ``goal``; the allowed keys depend on its ``type``."""
-    data = fields.mapping(value, field)
-    if "type" not in data:
-        raise ScenarioError(f"{field}.type", "missing required key")
-    goal_type = cast(GoalType, fields.choice(data["type"], f"{field}.type", _GOAL_TYPES))
-    if goal_type == "joint":
-        fields.check_keys(data, field, ("type", "position"), ("tolerance", "weight"))
-    elif goal_type == "pose":
-        return _pose_goal(data, field)
-    elif goal_type == "axis":
-        return _axis_goal(data, field)
-    else:
-        target = "position" if goal_type == "position" else "trajectory"
-        fields.check_keys(data, field, ("type", target), _WORKSPACE_KEYS)
-    axes = _axes(data["axes"], f"{field}.axes") if "axes" in data else None
-    position: tuple[float, ...] | None = None
-    trajectory: Mapping[str, Any] | None = None
-    if goal_type == "joint":
-        position = fields.vector(data["position"], f"{field}.position")
-    elif goal_type == "position":
-        position = _goal_position(data["position"], f"{field}.position", axes)
-    else:
-        trajectory = fields.trajectory_mapping(data["trajectory"], f"{field}.trajectory")
+
+Link = Annotated[str, Text()]
+Axes = Annotated[str, Choice(("x", "y", "z", "xy", "xz", "yz", "xyz"),
+                             "expected distinct axes among x, y, z in that order (e.g. 'xy')")]
+#: A point on the goal link, in the link frame [m].
+Offset = Annotated[tuple[Annotated[float, Range(-MAX_LENGTH, MAX_LENGTH, unit=" m")], ...], Items((3,))]
+AngleTolerance = Annotated[float, Range(0.0, math.pi, open_lower=True, unit=" rad")]
+Angles = Annotated[float, Range(-1e3, 1e3)]
+
+
+class PositionGoalMapping(ScenarioModel):
+    """``{type: position, position: P [m], link, parent_link, axes, tolerance [m], weight, offset [m]}``."""
+
+    type: Literal["position"]
+    position: Annotated[tuple[Coordinate, ...], Items()]
+    link: Link | None = None
+    parent_link: Link | None = None
+    axes: Axes | None = None
+    tolerance: Tolerance = 0.05
+    weight: Weight = 1.0
+    offset: Offset = (0.0, 0.0, 0.0)
+
+    @model_validator(mode="after")
+    def _one_number_per_axis(self) -> PositionGoalMapping:
+        if self.axes is None and len(self.position) not in (2, 3):
+            raise fail(f"expected 2 or 3 numbers, got {len(self.position)}", "position")
+        if self.axes is not None and len(self.position) != len(self.axes):
+            raise fail(f"expected {len(self.axes)} numbers (one per axis of {self.axes!r}), "
+                       f"got {len(self.position)}", "position")
+        return self
+
+
+class JointGoalMapping(ScenarioModel):
+    """``{type: joint, position: q [rad or m], tolerance [rad or m], weight}``."""
+
+    type: Literal["joint"]
+    position: Annotated[tuple[Annotated[float, Range(-MAX_JOINT_VALUE, MAX_JOINT_VALUE)], ...], Items(max_items=64)]
+    tolerance: Tolerance = 0.05
+    weight: Weight = 1.0
+
+
+class PathGoalMapping(ScenarioModel):
+    """``{type: path, trajectory: {...}, link, parent_link, axes, tolerance [m], weight, offset [m]}``."""
+
+    type: Literal["path"]
+    trajectory: TrajectoryMapping
+    link: Link | None = None
+    parent_link: Link | None = None
+    axes: Axes | None = None
+    tolerance: Tolerance = 0.05
+    weight: Weight = 1.0
+    offset: Offset = (0.0, 0.0, 0.0)
+
+
+class PoseGoalMapping(ScenarioModel):
+    """``{type: pose, position: P [m], orientation: [w, x, y, z] | rpy: [r, p, y] [rad], link,
+    offset, tolerance [m], angle_tolerance [rad], weight}``."""
+
+    type: Literal["pose"]
+    position: Point3
+    link: Link | None = None
+    offset: Offset = (0.0, 0.0, 0.0)
+    orientation: Annotated[tuple[Angles, ...], Items((4,))] | None = None
+    rpy: Annotated[tuple[Angles, ...], Items((3,))] | None = None
+    tolerance: Tolerance = 0.05
+    angle_tolerance: AngleTolerance = DEFAULT_ANGLE_TOLERANCE
+    weight: Weight = 1.0
+
+    @model_validator(mode="after")
+    def _one_rotation(self) -> PoseGoalMapping:
+        if (self.orientation is None) == (self.rpy is None):
+            raise fail("expected exactly one of 'orientation' [w, x, y, z] or 'rpy' [roll, pitch, yaw]")
+        try:
+            self.quaternion()
+        except ShapeError as error:
+            raise fail(str(error), "orientation" if self.orientation is not None else "rpy") from None
+        return self
+
+    def quaternion(self) -> tuple[float, float, float, float]:
+        """The target rotation as a unit quaternion (w, x, y, z)."""
+        if self.orientation is not None:
+            return unit_quaternion(self.orientation)
+        return quaternion_from_rpy(self.rpy)
+
+
+class AxisGoalMapping(ScenarioModel):
+    """``{type: axis, axis: a, direction: d, link, angle_tolerance [rad], weight,
+    angular_velocity: ω [rad/s]}``."""
+
+    type: Literal["axis"]
+    axis: Point3
+    direction: Point3
+    link: Link | None = None
+    angle_tolerance: AngleTolerance = DEFAULT_ANGLE_TOLERANCE
+    weight: Weight = 1.0
+    angular_velocity: Annotated[tuple[AngularVelocity, ...], Items((3,))] | None = None
+
+    @model_validator(mode="after")
+    def _directions_not_zero(self) -> AxisGoalMapping:
+        for key in ("axis", "direction"):
+            if math.hypot(*getattr(self, key)) < 1e-9:
+                raise fail("expected a non-zero direction, got [0, 0, 0]", key)
+        return self
+
+
+GoalMapping = tagged_union({"position": PositionGoalMapping, "joint": JointGoalMapping, "path": PathGoalMapping,
+                            "pose": PoseGoalMapping, "axis": AxisGoalMapping}, "type")
+
+
+def goal_spec(goal: ScenarioModel) -> GoalSpec:
+    """The goal value of a validated ``goal:`` entry."""
+    if isinstance(goal, JointGoalMapping):
+        return GoalSpec(type="joint", position=goal.position, tolerance=goal.tolerance, weight=goal.weight)
+    if isinstance(goal, PoseGoalMapping):
+        return GoalSpec(type="pose", link=goal.link, position=goal.position, tolerance=goal.tolerance,
+                        weight=goal.weight, offset=goal.offset, orientation=goal.quaternion(),
+                        angle_tolerance=goal.angle_tolerance)
+    if isinstance(goal, AxisGoalMapping):
+        return GoalSpec(type="axis", link=goal.link, weight=goal.weight, axis=unit_vector(goal.axis),
+                        direction=unit_vector(goal.direction), angle_tolerance=goal.angle_tolerance,
+                        angular_velocity=goal.angular_velocity)
+    assert isinstance(goal, PositionGoalMapping | PathGoalMapping)
     return GoalSpec(
-        type=goal_type,
-        link=fields.optional_text(data, "link", field),
-        position=position,
-        tolerance=fields.positive(data.get("tolerance", 0.05), f"{field}.tolerance"),
-        weight=fields.positive(data.get("weight", 1.0), f"{field}.weight"),
-        parent_link=fields.optional_text(data, "parent_link", field),
-        axes=axes,
-        trajectory=trajectory,
-        offset=_offset(data, field),
-    )
-
-
-def _pose_goal(data: Mapping[str, Any], field: str) -> GoalSpec:
-    """Parse a ``pose`` goal: a point on the link and a rotation (quaternion or rpy)."""
-    fields.check_keys(data, field, ("type", "position"), _POSE_KEYS)
-    if ("orientation" in data) == ("rpy" in data):
-        raise ScenarioError(field, "expected exactly one of 'orientation' [w, x, y, z] or 'rpy' [roll, pitch, yaw]")
-    try:
-        if "orientation" in data:
-            orientation = unit_quaternion(fields.vector(data["orientation"], f"{field}.orientation", (4,)))
-        else:
-            orientation = quaternion_from_rpy(fields.vector(data["rpy"], f"{field}.rpy", (3,)))
-    except ShapeError as error:
-        key = "orientation" if "orientation" in data else "rpy"
-        raise ScenarioError(f"{field}.{key}", str(error)) from None
-    return GoalSpec(
-        type="pose",
-        link=fields.optional_text(data, "link", field),
-        position=fields.vector(data["position"], f"{field}.position", (3,)),
-        tolerance=fields.positive(data.get("tolerance", 0.05), f"{field}.tolerance"),
-        weight=fields.positive(data.get("weight", 1.0), f"{field}.weight"),
-        offset=_offset(data, field),
-        orientation=orientation,
-        angle_tolerance=_angle_tolerance(data, field),
-    )
-
-
-def _axis_goal(data: Mapping[str, Any], field: str) -> GoalSpec:
-    """Parse an ``axis`` goal: a link axis that should point along a world direction."""
-    fields.check_keys(data, field, ("type", "axis", "direction"), _AXIS_KEYS)
-    angular_velocity = None
-    if "angular_velocity" in data:
-        x, y, z = fields.vector(data["angular_velocity"], f"{field}.angular_velocity", (3,))
-        angular_velocity = (x, y, z)
-    return GoalSpec(
-        type="axis",
-        link=fields.optional_text(data, "link", field),
-        weight=fields.positive(data.get("weight", 1.0), f"{field}.weight"),
-        axis=_unit(data["axis"], f"{field}.axis"),
-        direction=_unit(data["direction"], f"{field}.direction"),
-        angle_tolerance=_angle_tolerance(data, field),
-        angular_velocity=angular_velocity,
-    )
-
-
-def _offset(data: Mapping[str, Any], field: str) -> tuple[float, float, float]:
-    """``offset``: a point in the link frame [m], the origin if absent."""
-    if "offset" not in data:
-        return (0.0, 0.0, 0.0)
-    x, y, z = fields.vector(data["offset"], f"{field}.offset", (3,))
-    return (x, y, z)
-
-
-def _unit(value: object, field: str) -> tuple[float, float, float]:
-    """A non-zero 3-vector, normalised."""
-    vector = fields.vector(value, field, (3,))
-    try:
-        return unit_vector(vector)
-    except ValueError:
-        raise ScenarioError(field, "expected a non-zero direction, got [0, 0, 0]") from None
-
-
-def _angle_tolerance(data: Mapping[str, Any], field: str) -> float:
-    """``angle_tolerance`` in (0, π] [rad]."""
-    tolerance = fields.positive(data.get("angle_tolerance", DEFAULT_ANGLE_TOLERANCE), f"{field}.angle_tolerance")
-    if tolerance > math.pi:
-        raise ScenarioError(f"{field}.angle_tolerance", f"expected at most pi rad, got {tolerance:g}")
-    return tolerance
-
-
-def _goal_position(value: object, field: str, axes: str | None) -> tuple[float, ...]:
-    """Parse a goal point: one number per axis of ``axes``, else 2 or 3 numbers."""
-    if axes is None:
-        return fields.vector(value, field, (2, 3))
-    position = fields.vector(value, field)
-    if len(position) != len(axes):
-        raise ScenarioError(
-            field, f"expected {len(axes)} numbers (one per axis of {axes!r}), got {len(position)}"
-        )
-    return position
-
-
-def _axes(value: object, field: str) -> str:
-    """Parse ``axes``: distinct letters of ``xyz`` in that order, e.g. ``xy``."""
-    axes = fields.text(value, field)
-    if axes not in ("x", "y", "z", "xy", "xz", "yz", "xyz"):
-        raise ScenarioError(
-            field, f"expected distinct axes among x, y, z in that order (e.g. 'xy'), got {axes!r}"
-        )
-    return axes
+        type=goal.type, link=goal.link, position=goal.position if isinstance(goal, PositionGoalMapping) else None,
+        tolerance=goal.tolerance, weight=goal.weight, parent_link=goal.parent_link, axes=goal.axes,
+        trajectory=frozen_trajectory(goal.trajectory) if isinstance(goal, PathGoalMapping) else None,
+        offset=goal.offset)

@@ -10,12 +10,10 @@ the order: joints, or ``v``, ``omega``, arm joints on a differential-drive base)
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Annotated
 
-from dynfab.scenario import fields
-from dynfab.scenario.fields import ScenarioError
-
-LIMIT_KINDS: tuple[str, ...] = ("velocity", "acceleration", "jerk")
-
+from dynfab.scenario.model_types import Items, Range, ScenarioModel
+from dynfab.scenario.ranges import MAX_ACCELERATION, MAX_JERK, MAX_SPEED
 
 @dataclass(frozen=True)
 class LimitsSpec:
@@ -32,16 +30,17 @@ class LimitsSpec:
     jerk: tuple[float, ...] | None = None
 
 
-def parse_limits(value: object, field: str) -> LimitsSpec:
-    """Validate a ``limits:`` mapping: every value a list of positive finite numbers."""
-    block = fields.mapping(value, field)
-    fields.check_keys(block, field, required=(), optional=LIMIT_KINDS)
-    parsed = {}
-    for kind in LIMIT_KINDS:
-        if kind not in block:
-            continue
-        items = fields.sequence(block[kind], f"{field}.{kind}")
-        if not items:
-            raise ScenarioError(f"{field}.{kind}", "expected numbers, got an empty list")
-        parsed[kind] = tuple(fields.positive(item, f"{field}.{kind}[{i}]") for i, item in enumerate(items))
-    return LimitsSpec(**parsed)
+class LimitsMapping(ScenarioModel):
+    """``limits: {velocity: [...], acceleration: [...], jerk: [...]}``, each a list of
+    positive numbers, one per velocity coordinate."""
+
+    velocity: Annotated[tuple[Annotated[float, Range(0.0, MAX_SPEED, open_lower=True)], ...],
+                        Items(max_items=64)] | None = None
+    acceleration: Annotated[tuple[Annotated[float, Range(0.0, MAX_ACCELERATION, open_lower=True)], ...],
+                            Items(max_items=64)] | None = None
+    jerk: Annotated[tuple[Annotated[float, Range(0.0, MAX_JERK, open_lower=True)], ...],
+                    Items(max_items=64)] | None = None
+
+    def spec(self) -> LimitsSpec:
+        """The limits value."""
+        return LimitsSpec(self.velocity, self.acceleration, self.jerk)

@@ -6,7 +6,9 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, Literal, cast
+from typing import Annotated, Any, Literal
+
+from pydantic import model_validator
 
 from dynfab.geometry.shapes import (
     IDENTITY_QUATERNION,
@@ -20,25 +22,16 @@ from dynfab.geometry.shapes import (
     quaternion_from_normal,
     unit_quaternion,
 )
-from dynfab.scenario import fields
-from dynfab.scenario.fields import ScenarioError
+from dynfab.scenario.model_errors import tagged_union
+from dynfab.scenario.model_types import Items, Range, ScenarioModel, fail
+from dynfab.scenario.ranges import Coordinate, Length, Point3
+from dynfab.scenario.trajectory_schema import TrajectoryMapping, frozen_trajectory
 
 
 OBSTACLE_TYPES: tuple[str, ...] = ("sphere", "box", "cylinder", "capsule", "plane")
 
 
 ObstacleType = Literal["sphere", "box", "cylinder", "capsule", "plane"]
-
-
-#: Keys of each obstacle type besides ``type``: (required, optional); every type also
-#: takes exactly one of its placement key (``position``, a plane's ``point``) or ``trajectory``.
-_OBSTACLE_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
-    "sphere": (("radius",), ()),
-    "box": (("size",), ("orientation",)),
-    "cylinder": (("radius", "length"), ("orientation",)),
-    "capsule": (("radius", "length"), ("orientation",)),
-    "plane": (("normal",), ()),
-}
 
 
 @dataclass(frozen=True)
@@ -84,56 +77,112 @@ class ObstacleSpec:
         return Plane()
 
 
-def parse_obstacle(value: object, field: str) -> ObstacleSpec:
-    """Parse one entry of ``obstacles``; the allowed keys depend on its ``type``."""
-    data = fields.mapping(value, field)
-    if "type" not in data:
-        raise ScenarioError(f"{field}.type", "missing required key")
-    kind = cast(ObstacleType, fields.choice(data["type"], f"{field}.type", OBSTACLE_TYPES))
-    placement = "point" if kind == "plane" else "position"
-    required, optional = _OBSTACLE_KEYS[kind]
-    fields.check_keys(data, field, ("type",) + required, optional + (placement, "trajectory"))
-    if (placement in data) == ("trajectory" in data):
-        raise ScenarioError(
-            field, f"expected exactly one of '{placement}' (static) or 'trajectory' (moving)"
-        )
-    moving = "trajectory" in data
-    normal = _normal(data["normal"], f"{field}.normal") if kind == "plane" else None
-    orientation = _orientation(data["orientation"], f"{field}.orientation") if "orientation" in data \
-        else IDENTITY_QUATERNION
+Placement = Annotated[tuple[Coordinate, ...], Items((2, 3))]
+Quaternion = Annotated[tuple[Annotated[float, Range(-1e3, 1e3)], ...], Items((4,))]
+
+
+class _Placed(ScenarioModel):
+    """Exactly one of ``position`` (static, [m]) or ``trajectory`` (moving centre)."""
+
+    @classmethod
+    def check_keys(cls, data: Mapping[str, Any]) -> None:
+        placement = "point" if "point" in cls.model_fields else "position"
+        if (placement in data) == ("trajectory" in data):
+            raise fail(f"expected exactly one of '{placement}' (static) or 'trajectory' (moving)")
+
+
+class SphereMapping(_Placed):
+    """``{type: sphere, radius: r [m], position | trajectory}``."""
+
+    type: Literal["sphere"]
+    radius: Length
+    position: Placement | None = None
+    trajectory: TrajectoryMapping | None = None
+
+
+class BoxMapping(_Placed):
+    """``{type: box, size: [lx, ly, lz] [m], orientation: [w, x, y, z], position | trajectory}``."""
+
+    type: Literal["box"]
+    size: Annotated[tuple[Length, ...], Items((3,))]
+    orientation: Quaternion = IDENTITY_QUATERNION
+    position: Placement | None = None
+    trajectory: TrajectoryMapping | None = None
+
+    @model_validator(mode="after")
+    def _rotation(self) -> BoxMapping:
+        return _check_rotation(self)
+
+
+class CylinderMapping(_Placed):
+    """``{type: cylinder, radius: r [m], length: l [m] along z, orientation, position | trajectory}``."""
+
+    type: Literal["cylinder"]
+    radius: Length
+    length: Length
+    orientation: Quaternion = IDENTITY_QUATERNION
+    position: Placement | None = None
+    trajectory: TrajectoryMapping | None = None
+
+    @model_validator(mode="after")
+    def _rotation(self) -> CylinderMapping:
+        return _check_rotation(self)
+
+
+class CapsuleMapping(CylinderMapping):
+    """``{type: capsule, radius: r [m], length: l [m] of the z segment, orientation, position | trajectory}``."""
+
+    type: Literal["capsule"]  # type: ignore[assignment]
+
+
+class PlaneMapping(_Placed):
+    """``{type: plane, normal: n, point | trajectory}``: the solid half-space behind ``point``."""
+
+    type: Literal["plane"]
+    normal: Point3
+    point: Placement | None = None
+    trajectory: TrajectoryMapping | None = None
+
+    @model_validator(mode="after")
+    def _normal_not_zero(self) -> PlaneMapping:
+        if math.hypot(*self.normal) < 1e-9:
+            raise fail(f"expected a non-zero vector, got {list(self.normal)}", "normal")
+        return self
+
+
+def _check_rotation(shape: BoxMapping | CylinderMapping) -> Any:
+    """Refuse a zero quaternion (any other is normalised)."""
+    try:
+        unit_quaternion(shape.orientation)
+    except ShapeError:
+        raise fail(f"expected a non-zero quaternion [w, x, y, z], got {list(shape.orientation)}",
+                   "orientation") from None
+    return shape
+
+
+ObstacleMapping = tagged_union({"sphere": SphereMapping, "box": BoxMapping, "cylinder": CylinderMapping,
+                                "capsule": CapsuleMapping, "plane": PlaneMapping}, "type")
+
+
+def obstacle_spec(obstacle: ScenarioModel) -> ObstacleSpec:
+    """The obstacle value of a validated ``obstacles:`` entry."""
+    assert isinstance(obstacle, _Placed)
+    values = obstacle.model_dump(exclude={"trajectory"})
+    normal = None
+    orientation = unit_quaternion(values.get("orientation", IDENTITY_QUATERNION))
+    if isinstance(obstacle, PlaneMapping):
+        length = math.hypot(*obstacle.normal)
+        x, y, z = (number / length for number in obstacle.normal)
+        normal = (x, y, z)
+        orientation = quaternion_from_normal(normal)
+    trajectory = obstacle.trajectory
     return ObstacleSpec(
-        type=kind,
-        radius=fields.positive(data["radius"], f"{field}.radius") if "radius" in data else 0.0,
-        position=None if moving else fields.vector(data[placement], f"{field}.{placement}", (2, 3)),
-        trajectory=fields.trajectory_mapping(data["trajectory"], f"{field}.trajectory") if moving else None,
-        size=_size(data["size"], f"{field}.size") if kind == "box" else None,
-        length=fields.positive(data["length"], f"{field}.length") if "length" in data else None,
-        orientation=quaternion_from_normal(normal) if normal is not None else orientation,
+        type=values["type"],
+        radius=values.get("radius", 0.0),
+        position=values.get("point", values.get("position")),
+        trajectory=None if trajectory is None else frozen_trajectory(trajectory),
+        size=values.get("size"),
+        length=values.get("length"),
+        orientation=orientation,
         normal=normal,
     )
-
-
-def _size(value: object, field: str) -> tuple[float, float, float]:
-    """Parse a box's edge lengths: 3 positive numbers [m]."""
-    numbers = fields.vector(value, field, (3,))
-    lx, ly, lz = (fields.positive(number, f"{field}[{i}]") for i, number in enumerate(numbers))
-    return lx, ly, lz
-
-
-def _orientation(value: object, field: str) -> tuple[float, float, float, float]:
-    """Parse a quaternion [w, x, y, z]; a non-unit one is normalised, a zero one rejected."""
-    numbers = fields.vector(value, field, (4,))
-    try:
-        return unit_quaternion(numbers)
-    except ShapeError:
-        raise ScenarioError(field, f"expected a non-zero quaternion [w, x, y, z], got {list(numbers)}") from None
-
-
-def _normal(value: object, field: str) -> tuple[float, float, float]:
-    """Parse a plane's normal: 3 numbers, not all zero; returned unit length."""
-    numbers = fields.vector(value, field, (3,))
-    length = math.hypot(*numbers)
-    if length < 1e-9:
-        raise ScenarioError(field, f"expected a non-zero vector, got {list(numbers)}")
-    x, y, z = (number / length for number in numbers)
-    return x, y, z

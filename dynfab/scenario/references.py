@@ -35,7 +35,6 @@ _AXES = "xyz"
 RRT_BOUNDS_MARGIN = 0.5
 #: clearance the RRT path keeps from sphere surfaces, for the hand's own size [m]
 RRT_MARGIN = 0.1
-_RRT_KEYS = {"type", "goal", "duration", "seed"}
 
 
 def goal_axes(goal: GoalSpec, robot: Robot) -> list[int]:
@@ -120,16 +119,10 @@ def _from_mapping(data: Mapping[str, Any], field: str) -> Trajectory:
 
 
 def _rrt_reference(scenario: Scenario, robot: Robot, goal: GoalSpec, field: str) -> Trajectory:
-    unknown = sorted(set(goal.trajectory) - _RRT_KEYS)
-    if unknown:
-        raise ScenarioError(f"{field}.{unknown[0]}", "unknown key")
-    target = _numbers(goal.trajectory.get("goal"), f"{field}.goal")
-    duration = goal.trajectory.get("duration")
-    if not isinstance(duration, (int, float)) or isinstance(duration, bool) or not np.isfinite(duration) or duration <= 0:
-        raise ScenarioError(f"{field}.duration", f"expected a positive number of seconds, got {duration!r}")
+    # keys and ranges were checked with the scenario (scenario/trajectory_schema.py)
+    target = np.asarray(goal.trajectory["goal"], dtype=float)
+    duration = goal.trajectory["duration"]
     seed = goal.trajectory.get("seed", 0)
-    if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
-        raise ScenarioError(f"{field}.seed", f"expected a non-negative integer, got {seed!r}")
     if goal.parent_link is not None:
         raise ScenarioError(f"goal[{scenario.goals.index(goal)}].parent_link",
                             "rrt paths are planned in the world frame; remove parent_link")
@@ -155,9 +148,3 @@ def _rrt_reference(scenario: Scenario, robot: Robot, goal: GoalSpec, field: str)
         raise ScenarioError(field, f"RRT found no path: {error}") from None
     return SplineTrajectory(tuple(map(tuple, waypoints)), float(duration))
 
-
-def _numbers(value: object, field: str) -> tuple[float, ...]:
-    if not isinstance(value, (list, tuple)) or not all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) for v in value):
-        raise ScenarioError(field, f"expected a list of finite numbers, got {value!r}")
-    return tuple(float(v) for v in value)

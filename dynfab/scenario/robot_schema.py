@@ -9,12 +9,16 @@ import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
-from typing import Literal
+from typing import Annotated, Any, ClassVar, Literal
+
+from pydantic import BeforeValidator, model_validator
 
 from dynfab.describe import describe
 from dynfab.robots.mesh_paths import resolve_uri
-from dynfab.scenario import fields
 from dynfab.scenario.fields import ScenarioError
+from dynfab.scenario.model_errors import tagged_union
+from dynfab.scenario.model_types import Choice, Flag, Items, Range, ScenarioModel, Text, Whole, fail
+from dynfab.scenario.ranges import MAX_JOINT_VALUE, MAX_SPHERE_TOLERANCE, Length, Point3
 
 
 BUILTIN_ROBOTS: tuple[str, ...] = ("panda", "point", "boxer", "boxer-panda")
@@ -69,106 +73,109 @@ class UrdfRobotSpec:
     locked: Mapping[str, float] = dataclasses.field(default_factory=lambda: MappingProxyType({}))
 
 
-def parse_robot(value: object, field: str, base_dir: Path) -> str | UrdfRobotSpec:
-    """Parse ``robot``: a built-in name or a URDF description mapping."""
-    if isinstance(value, str):
-        return fields.choice(value, field, BUILTIN_ROBOTS)
-    data = fields.mapping(value, field, "a built-in robot name or a mapping")
-    fields.check_keys(
-        data,
-        field,
-        required=("urdf", "goal_link"),
-        optional=("collision_spheres", "self_collision_pairs", "planar", "package_dirs", "joints",
-                  "locked", "sphere_tolerance"),
-    )
-    package_dirs = tuple(base_dir / fields.text(d, f"{field}.package_dirs[{i}]")
-                         for i, d in enumerate(fields.sequence(data.get("package_dirs", []), f"{field}.package_dirs")))
-    uri = fields.text(data["urdf"], f"{field}.urdf")
-    urdf = resolve_uri(uri, base_dir, package_dirs)
+def _text_keys(value: Any) -> Any:
+    """A mapping with text keys (values are checked by the field type)."""
+    if not isinstance(value, Mapping):
+        raise fail(f"expected a mapping, got {describe(value)}")
+    for key in value:
+        if not isinstance(key, str):
+            raise fail(f"keys must be text, got {describe(key)}")
+    return value
+
+
+def _auto_or_list(value: Any) -> str | None:
+    return "auto" if value == "auto" else "list" if isinstance(value, list | tuple) else None
+
+
+Name = Annotated[str, Text()]
+JointValue = Annotated[float, Range(-MAX_JOINT_VALUE, MAX_JOINT_VALUE)]
+
+
+class CollisionSphereMapping(ScenarioModel):
+    """``{link, center: [x, y, z] [m] in the link frame, radius [m]}``."""
+
+    link: Name
+    center: Point3
+    radius: Length
+
+
+SphereList = Annotated[tuple[CollisionSphereMapping, ...], Items(what="spheres", allow_empty=True)]
+PairList = Annotated[tuple[Annotated[tuple[Annotated[int, Whole(0, 10_000)], ...],
+                                     Items((2,), what="sphere indices")], ...],
+                     Items(what="pairs", allow_empty=True, max_items=100_000)]
+
+Spheres = tagged_union({"auto": Literal["auto"], "list": SphereList}, None,
+                       "auto or a list of {link, center, radius}", _auto_or_list)
+Pairs = tagged_union({"auto": Literal["auto"], "list": PairList}, None,
+                     "auto or a list of [i, j] sphere index pairs", _auto_or_list)
+
+
+class UrdfRobotMapping(ScenarioModel):
+    """``robot:`` as a URDF file with its goal link, joints and collision model."""
+
+    expected: ClassVar[str] = "a built-in robot name or a mapping"
+    urdf: Annotated[str, Text(4096)]
+    goal_link: Name
+    collision_spheres: Spheres = ()
+    self_collision_pairs: Pairs | None = None
+    planar: Annotated[bool, Flag()] = False
+    package_dirs: Annotated[tuple[Annotated[str, Text(4096)], ...], Items(what="folders", allow_empty=True)] = ()
+    joints: Annotated[tuple[Name, ...], Items(what="joint names", allow_empty=True)] | None = None
+    locked: Annotated[dict[str, JointValue], BeforeValidator(_text_keys)] = {}
+    sphere_tolerance: Annotated[float, Range(0.0, MAX_SPHERE_TOLERANCE, open_lower=True, unit=" m")] | None = None
+
+    @model_validator(mode="after")
+    def _pairs_fit_spheres(self) -> UrdfRobotMapping:
+        spheres = self.collision_spheres
+        if self.sphere_tolerance is not None and spheres != "auto":
+            raise fail("only applies to collision_spheres: auto", "sphere_tolerance")
+        pairs = self.self_collision_pairs
+        if spheres == "auto" and pairs not in (None, "auto") and pairs:
+            raise fail("index pairs need explicit collision_spheres; with collision_spheres: auto use "
+                       "self_collision_pairs: auto", "self_collision_pairs")
+        count = 0 if spheres == "auto" else len(spheres)
+        for i, pair in enumerate(() if pairs in (None, "auto") else pairs):
+            for k, index in enumerate(pair):
+                if index >= count:
+                    raise fail(f"sphere index {index} out of range (0 to {count - 1})",
+                               f"self_collision_pairs[{i}][{k}]")
+            if pair[0] == pair[1]:
+                raise fail(f"expected two different spheres, got {list(pair)}", f"self_collision_pairs[{i}]")
+        return self
+
+
+RobotMapping = tagged_union({"name": Annotated[str, Choice(BUILTIN_ROBOTS)], "mapping": UrdfRobotMapping}, None,
+                            "a built-in robot name or a mapping",
+                            lambda value: "name" if isinstance(value, str) else
+                            "mapping" if isinstance(value, Mapping) else None)
+
+
+def robot_spec(robot: str | UrdfRobotMapping, field: str, base_dir: Path) -> str | UrdfRobotSpec:
+    """The robot value of a validated ``robot:`` key; a URDF path is resolved against
+    ``base_dir`` and the package folders.
+
+    Raises:
+        ScenarioError: The URDF file is not found.
+    """
+    if isinstance(robot, str):
+        return robot
+    package_dirs = tuple(base_dir / folder for folder in robot.package_dirs)
+    urdf = resolve_uri(robot.urdf, base_dir, package_dirs)
     if urdf is None:
-        raise ScenarioError(f"{field}.urdf", f"file not found: {uri} (a path relative to the scenario "
+        raise ScenarioError(f"{field}.urdf", f"file not found: {robot.urdf} (a path relative to the scenario "
                             "file, absolute, or package://NAME/... found through package_dirs, "
                             "DYNFAB_PACKAGE_PATH or an installed example-robot-data / pybullet)")
-    joints = None
-    if "joints" in data:
-        joints = tuple(fields.text(j, f"{field}.joints[{i}]")
-                       for i, j in enumerate(fields.sequence(data["joints"], f"{field}.joints")))
-    locked_data = fields.mapping(data.get("locked", {}), f"{field}.locked")
-    locked = {str(name): fields.number(value, f"{field}.locked.{name}") for name, value in locked_data.items()}
-    spheres = _spheres(data.get("collision_spheres", []), f"{field}.collision_spheres")
-    pairs = _pairs(data.get("self_collision_pairs", "auto" if spheres == "auto" else []),
-                   f"{field}.self_collision_pairs", spheres)
-    tolerance = 0.01
-    if "sphere_tolerance" in data:
-        if spheres != "auto":
-            raise ScenarioError(f"{field}.sphere_tolerance", "only applies to collision_spheres: auto")
-        tolerance = fields.positive(data["sphere_tolerance"], f"{field}.sphere_tolerance")
-    planar = data.get("planar", False)
-    if not isinstance(planar, bool):
-        raise ScenarioError(f"{field}.planar", f"expected true or false, got {describe(planar)}")
+    spheres = robot.collision_spheres
+    pairs = robot.self_collision_pairs
     return UrdfRobotSpec(
         urdf=urdf,
-        goal_link=fields.text(data["goal_link"], f"{field}.goal_link"),
-        collision_spheres=spheres,
-        self_collision_pairs=pairs,
-        sphere_tolerance=tolerance,
-        planar=planar,
+        goal_link=robot.goal_link,
+        collision_spheres="auto" if spheres == "auto" else tuple(
+            CollisionSphereSpec(sphere.link, sphere.center, sphere.radius) for sphere in spheres),
+        self_collision_pairs=pairs if pairs is not None else "auto" if spheres == "auto" else (),
+        sphere_tolerance=0.01 if robot.sphere_tolerance is None else robot.sphere_tolerance,
+        planar=robot.planar,
         package_dirs=package_dirs,
-        joints=joints,
-        locked=MappingProxyType(locked),
+        joints=robot.joints,
+        locked=MappingProxyType(dict(robot.locked)),
     )
-
-
-def _spheres(value: object, field: str) -> tuple[CollisionSphereSpec, ...] | Literal["auto"]:
-    """Parse ``collision_spheres``: ``auto`` or a list of spheres."""
-    if value == "auto":
-        return "auto"
-    if isinstance(value, str):
-        raise ScenarioError(field, f"expected auto or a list of {{link, center, radius}}, got {value!r}")
-    return tuple(_collision_sphere(sphere, f"{field}[{i}]") for i, sphere in enumerate(fields.sequence(value, field)))
-
-
-def _pairs(value: object, field: str, spheres: tuple[CollisionSphereSpec, ...] | Literal["auto"]
-           ) -> tuple[tuple[int, int], ...] | Literal["auto"]:
-    """Parse ``self_collision_pairs``: ``auto`` or index pairs into explicit spheres."""
-    if value == "auto":
-        return "auto"
-    if isinstance(value, str):
-        raise ScenarioError(field, f"expected auto or a list of [i, j] sphere index pairs, got {value!r}")
-    pairs = fields.sequence(value, field)
-    if spheres == "auto" and pairs:
-        raise ScenarioError(field, "index pairs need explicit collision_spheres; with "
-                            "collision_spheres: auto use self_collision_pairs: auto")
-    count = 0 if spheres == "auto" else len(spheres)
-    return tuple(_sphere_pair(pair, f"{field}[{i}]", count) for i, pair in enumerate(pairs))
-
-
-def _collision_sphere(value: object, field: str) -> CollisionSphereSpec:
-    """Parse one ``{link, center, radius}`` collision sphere."""
-    data = fields.mapping(value, field)
-    fields.check_keys(data, field, required=("link", "center", "radius"))
-    x, y, z = fields.vector(data["center"], f"{field}.center", (3,))
-    return CollisionSphereSpec(
-        link=fields.text(data["link"], f"{field}.link"),
-        center=(x, y, z),
-        radius=fields.positive(data["radius"], f"{field}.radius"),
-    )
-
-
-def _sphere_pair(value: object, field: str, n_spheres: int) -> tuple[int, int]:
-    """Parse a self-collision pair ``[i, j]`` of distinct collision-sphere indices."""
-    pair = fields.sequence(value, field)
-    if len(pair) != 2:
-        raise ScenarioError(field, f"expected 2 sphere indices, got {len(pair)}")
-    indices = []
-    for k, index in enumerate(pair):
-        if isinstance(index, bool) or not isinstance(index, int):
-            raise ScenarioError(f"{field}[{k}]", f"expected an integer, got {describe(index)}")
-        if not 0 <= index < n_spheres:
-            raise ScenarioError(
-                f"{field}[{k}]", f"sphere index {index} out of range (0 to {n_spheres - 1})"
-            )
-        indices.append(index)
-    if indices[0] == indices[1]:
-        raise ScenarioError(field, f"expected two different spheres, got {indices}")
-    return indices[0], indices[1]

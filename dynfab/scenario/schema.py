@@ -2,7 +2,10 @@
 
 A scenario names a robot, a planner, the control period ``dt`` [s], the simulated
 ``duration`` [s], the initial state, one or more weighted goals and the obstacles.
-Parsing never evaluates text as code (``yaml.safe_load`` only). Every violation raises
+The file is read under the limits of :mod:`dynfab.scenario.yaml_loader` (size, encoding,
+nesting, aliases, duplicate keys; never code), then validated by the pydantic model
+:class:`ScenarioDocument` (whose JSON Schema ``dynfab schema`` prints), with the
+documented range of every number (:mod:`dynfab.scenario.ranges`). Every violation raises
 :class:`ScenarioError` with a one-line message that starts with the field path, e.g.
 ``goal[0].position: expected 3 numbers, got 2``.
 
@@ -16,26 +19,39 @@ import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Annotated, Any
 
-import yaml
+from pydantic import ValidationError, model_validator
 
 from dynfab.fabric.backends import BACKENDS
 from dynfab.scenario import fields
 from dynfab.scenario.fields import TRAJECTORY_TYPES, ScenarioError
-from dynfab.scenario.limits_schema import LimitsSpec, parse_limits
-from dynfab.scenario.goal_schema import DEFAULT_ANGLE_TOLERANCE, GoalSpec, GoalType, parse_goal
-from dynfab.scenario.obstacle_schema import OBSTACLE_TYPES, ObstacleSpec, ObstacleType, parse_obstacle
-from dynfab.scenario.robot_schema import BUILTIN_ROBOTS, CollisionSphereSpec, UrdfRobotSpec, parse_robot
-from dynfab.scenario.simulation_schema import SIMULATION_KEYS, Simulation, parse_simulation
+from dynfab.scenario.goal_schema import DEFAULT_ANGLE_TOLERANCE, GoalMapping, GoalSpec, GoalType, goal_spec
+from dynfab.scenario.joint_limits import check_within_limits
+from dynfab.scenario.limits_schema import LimitsMapping, LimitsSpec
+from dynfab.scenario.model_errors import scenario_error
+from dynfab.scenario.model_types import Choice, Flag, Items, Range, ScenarioModel, fail
+from dynfab.scenario.obstacle_schema import OBSTACLE_TYPES, ObstacleMapping, ObstacleSpec, ObstacleType, obstacle_spec
+from dynfab.scenario.ranges import (
+    MAX_DT,
+    MAX_DURATION,
+    MAX_GOALS,
+    MAX_JOINT_VALUE,
+    MAX_OBSTACLES,
+    MAX_SPEED,
+    MAX_STEPS,
+)
+from dynfab.scenario.robot_schema import BUILTIN_ROBOTS, CollisionSphereSpec, RobotMapping, UrdfRobotSpec, robot_spec
+from dynfab.scenario.simulation_schema import CONTROL, DELAY, NOISE, SIMULATOR, Simulation
+from dynfab.scenario.yaml_loader import load_yaml_file
 
 if TYPE_CHECKING:
     from dynfab.robots.robot import Robot
 
 __all__ = ["BUILTIN_ROBOTS", "DEFAULT_ANGLE_TOLERANCE", "OBSTACLE_TYPES", "PLANNERS", "TRAJECTORY_TYPES",
            "CollisionSphereSpec", "GoalSpec", "GoalType", "InitialState", "ObstacleSpec", "ObstacleType",
-           "Scenario", "ScenarioError", "Simulation", "UrdfRobotSpec", "load_scenario", "scenario_from_dict",
-           "validate_for_robot"]
+           "Scenario", "ScenarioDocument", "ScenarioError", "Simulation", "UrdfRobotSpec", "load_scenario",
+           "scenario_from_dict", "validate_for_robot"]
 
 
 PLANNERS: tuple[str, ...] = ("static-fabric", "dynamic-fabric", "mpc")
@@ -93,6 +109,75 @@ class Scenario:
     backend: str = "vm"
 
 
+JointValues = Annotated[tuple[Annotated[float, Range(-MAX_JOINT_VALUE, MAX_JOINT_VALUE)], ...], Items(max_items=64)]
+Velocities = Annotated[tuple[Annotated[float, Range(-MAX_SPEED, MAX_SPEED)], ...], Items(max_items=64)]
+
+
+class InitialStateMapping(ScenarioModel):
+    """``initial_state: {q: [...] [rad or m], qdot: [...] [rad/s or m/s]}`` (``qdot`` optional)."""
+
+    q: JointValues
+    qdot: Velocities | None = None
+
+
+class ScenarioDocument(ScenarioModel):
+    """A scenario file (DESIGN.md section 5); every number has its documented range
+    (:mod:`dynfab.scenario.ranges`), ``duration / dt`` is at most ``MAX_STEPS``."""
+
+    model_config = {"title": "dynfab scenario"}
+    robot: RobotMapping
+    planner: Annotated[str, Choice(PLANNERS)]
+    dt: Annotated[float, Range(0.0, MAX_DT, open_lower=True, unit=" s")]
+    duration: Annotated[float, Range(0.0, MAX_DURATION, open_lower=True, unit=" s")]
+    initial_state: InitialStateMapping
+    goal: Annotated[tuple[GoalMapping, ...], Items(what="goals", allow_empty=True, max_items=MAX_GOALS)]
+    obstacles: Annotated[tuple[ObstacleMapping, ...],
+                         Items(what="obstacles", allow_empty=True, max_items=MAX_OBSTACLES)] = ()
+    limits: LimitsMapping = LimitsMapping()
+    simulator: Annotated[str, SIMULATOR] = "kinematic"
+    control: Annotated[str, CONTROL] = "torque"
+    delay: Annotated[float, DELAY] = 0.0
+    noise: Annotated[float, NOISE] = 0.0
+    recovery: Annotated[bool, Flag()] = True
+    backend: Annotated[str, Choice(BACKENDS)] = "vm"
+
+    @model_validator(mode="after")
+    def _consistent(self) -> ScenarioDocument:
+        if self.duration < self.dt:
+            raise fail(f"must be at least dt = {self.dt:g} s, got {self.duration:g}", "duration")
+        if self.duration / self.dt > MAX_STEPS:
+            raise fail(f"{self.duration:g} s at dt = {self.dt:g} s is {self.duration / self.dt:.3g} control steps, "
+                       f"more than {MAX_STEPS}", "duration")
+        if not self.goal:
+            raise fail("expected at least one goal, got an empty list", "goal")
+        if self.simulator != "mujoco":
+            for key in ("control", "delay", "noise"):
+                if key in self.model_fields_set:
+                    raise fail("applies to simulator: mujoco only (the kinematic simulator follows the planner "
+                               "exactly)", key)
+        return self
+
+    def scenario(self, base_dir: Path) -> Scenario:
+        """The scenario value; a URDF path is resolved against ``base_dir``.
+
+        Raises:
+            ScenarioError: The URDF file is not found.
+        """
+        return Scenario(
+            robot=robot_spec(self.robot, "robot", base_dir),
+            planner=self.planner,
+            dt=self.dt,
+            duration=self.duration,
+            initial_state=InitialState(self.initial_state.q, self.initial_state.qdot),
+            goals=tuple(goal_spec(goal) for goal in self.goal),
+            obstacles=tuple(obstacle_spec(obstacle) for obstacle in self.obstacles),
+            limits=self.limits.spec(),
+            simulation=Simulation(self.simulator, self.control, self.delay, self.noise),
+            recovery=self.recovery,
+            backend=self.backend,
+        )
+
+
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario YAML file.
 
@@ -106,15 +191,7 @@ def load_scenario(path: str | Path) -> Scenario:
         ScenarioError: If the file cannot be read, is not valid YAML or breaks the contract.
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as error:
-        raise ScenarioError(str(path), f"cannot read file ({error.strerror})") from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as error:
-        raise ScenarioError(str(path), fields.yaml_problem(error)) from None
-    scenario = scenario_from_dict(data, path.parent)
+    scenario = scenario_from_dict(load_yaml_file(path), path.parent)
     return dataclasses.replace(scenario, path=path)
 
 
@@ -131,45 +208,23 @@ def scenario_from_dict(data: object, base_dir: str | Path = ".") -> Scenario:
     Raises:
         ScenarioError: On the first violation of the contract.
     """
-    root = fields.mapping(data, "scenario")
-    fields.check_keys(
-        root,
-        "",
-        required=("robot", "planner", "dt", "duration", "initial_state", "goal"),
-        optional=("obstacles", "limits", "recovery", "backend") + SIMULATION_KEYS,
-    )
-    dt = fields.positive(root["dt"], "dt")
-    duration = fields.positive(root["duration"], "duration")
-    if duration < dt:
-        raise ScenarioError("duration", f"must be at least dt = {dt:g} s, got {duration:g}")
-    goals = fields.sequence(root["goal"], "goal")
-    if not goals:
-        raise ScenarioError("goal", "expected at least one goal, got an empty list")
-    obstacles = fields.sequence(root.get("obstacles", []), "obstacles")
-    return Scenario(
-        robot=parse_robot(root["robot"], "robot", Path(base_dir)),
-        planner=fields.choice(root["planner"], "planner", PLANNERS),
-        dt=dt,
-        duration=duration,
-        initial_state=_initial_state(root["initial_state"], "initial_state"),
-        goals=tuple(parse_goal(goal, f"goal[{i}]") for i, goal in enumerate(goals)),
-        obstacles=tuple(parse_obstacle(obs, f"obstacles[{i}]") for i, obs in enumerate(obstacles)),
-        limits=parse_limits(root["limits"], "limits") if "limits" in root else LimitsSpec(),
-        simulation=parse_simulation(root),
-        recovery=_flag(root.get("recovery", True), "recovery"),
-        backend=fields.choice(root.get("backend", "vm"), "backend", BACKENDS),
-    )
+    try:
+        document = ScenarioDocument.model_validate(data)
+    except ValidationError as error:
+        raise scenario_error(error) from None
+    return document.scenario(Path(base_dir))
 
 
 def validate_for_robot(scenario: Scenario, robot: Robot) -> Scenario:
     """Check the robot-dependent shapes and names, and fill in default goal links.
 
-    Checks: ``initial_state.q`` has ``robot.kinematics.dof`` entries and ``qdot`` one per
+    Checks: ``initial_state.q`` has ``robot.kinematics.dof`` entries within the joint
+    limits (:mod:`dynfab.scenario.joint_limits`) and ``qdot`` one per
     velocity coordinate (``dof``, or ``dof − 1`` on a differential-drive base; omitted:
     zeros); goal
     positions have 2 numbers for planar robots and 3 otherwise (or one per axis of
     ``axes``, which must not contain z for planar robots); joint goals have ``dof``
-    entries; obstacle positions have 3 numbers (planar robots: 2 or 3; a plane's normal
+    entries within the joint limits; obstacle positions have 3 numbers (planar robots: 2 or 3; a plane's normal
     must then have an x or y part: planar robots see shapes at the height of their
     centre); every link named by the scenario exists.
 
@@ -191,6 +246,7 @@ def validate_for_robot(scenario: Scenario, robot: Robot) -> Scenario:
     state = scenario.initial_state
     joints = robot.kinematics.joint_names
     fields.check_length(state.q, "initial_state.q", (dof,), f" (one per joint: {', '.join(joints)})")
+    check_within_limits(state.q, robot, "initial_state.q")
     if state.qdot is None:
         state = dataclasses.replace(state, qdot=(0.0,) * velocities)
     velocity_names = ("v", "omega") + joints[3:] if robot.base is not None else joints
@@ -224,7 +280,8 @@ def _goal_for_robot(
     position = goal.position or ()
     if goal.type == "joint":
         fields.check_length(position, f"{field}.position", (robot.kinematics.dof,),
-                      f" (one per joint: {', '.join(robot.kinematics.joint_names)})")
+                            f" (one per joint: {', '.join(robot.kinematics.joint_names)})")
+        check_within_limits(position, robot, f"{field}.position")
         return goal
     link = robot.goal_link if goal.link is None else goal.link
     _check_link(link, f"{field}.link", links)
@@ -243,19 +300,3 @@ def _check_link(link: str, field: str, links: tuple[str, ...]) -> None:
     """Raise unless ``link`` is one of the robot's links."""
     if link not in links:
         raise ScenarioError(field, f"unknown link {link!r} (robot links: {', '.join(links)})")
-
-
-def _flag(value: object, field: str) -> bool:
-    if not isinstance(value, bool):
-        raise ScenarioError(field, f"expected true or false, got {value!r}")
-    return value
-
-
-def _initial_state(value: object, field: str) -> InitialState:
-    """Parse ``initial_state``; ``qdot`` defaults to zeros."""
-    data = fields.mapping(value, field)
-    fields.check_keys(data, field, required=("q",), optional=("qdot",))
-    q = fields.vector(data["q"], f"{field}.q")
-    if "qdot" not in data:
-        return InitialState(q=q, qdot=None)
-    return InitialState(q=q, qdot=fields.vector(data["qdot"], f"{field}.qdot"))

@@ -11,19 +11,21 @@ noise: 0.0             # mujoco only: std of Gaussian noise on what the planner 
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
 
-from dynfab.scenario import fields
-from dynfab.scenario.fields import ScenarioError
+from dynfab.scenario.model_errors import checked
+from dynfab.scenario.model_types import Choice, Range
+from dynfab.scenario.ranges import MAX_DELAY, MAX_NOISE
 
-__all__ = ["CONTROLS", "SIMULATION_KEYS", "SIMULATORS", "Simulation", "parse_simulation"]
+__all__ = ["CONTROLS", "SIMULATORS", "Simulation"]
 
 SIMULATORS: tuple[str, ...] = ("kinematic", "mujoco")
 CONTROLS: tuple[str, ...] = ("torque", "velocity", "position")
-#: The top-level keys read here.
-SIMULATION_KEYS: tuple[str, ...] = ("simulator", "control", "delay", "noise")
+#: The values of each key, as in the scenario file.
+SIMULATOR = Choice(SIMULATORS)
+CONTROL = Choice(CONTROLS)
+DELAY = Range(0.0, MAX_DELAY)
+NOISE = Range(0.0, MAX_NOISE)
 
 
 @dataclass(frozen=True)
@@ -38,6 +40,10 @@ class Simulation:
         delay: Under MuJoCo, the age of the state the planner sees [s].
         noise: Under MuJoCo, the standard deviation of the Gaussian noise on the state the
             planner sees [rad or m on q, rad/s or m/s on the velocities].
+
+    Raises:
+        ScenarioError: An unknown simulator or control, or a delay or noise outside its
+            range (:mod:`dynfab.scenario.ranges`).
     """
 
     simulator: str = "kinematic"
@@ -46,26 +52,5 @@ class Simulation:
     noise: float = 0.0
 
     def __post_init__(self) -> None:
-        fields.choice(self.simulator, "simulator", SIMULATORS)
-        fields.choice(self.control, "control", CONTROLS)
-        for key in ("delay", "noise"):
-            if fields.number(getattr(self, key), key) < 0.0:
-                raise ScenarioError(key, f"must be >= 0, got {getattr(self, key):g}")
-
-
-def parse_simulation(root: Mapping[str, Any]) -> Simulation:
-    """The simulation keys of a scenario's top level (defaults for those it omits).
-
-    Raises:
-        ScenarioError: An unknown simulator or control, a negative or non-finite delay or
-            noise, or ``control``, ``delay`` or ``noise`` without ``simulator: mujoco``.
-    """
-    simulation = Simulation(
-        simulator=root.get("simulator", "kinematic"), control=root.get("control", "torque"),
-        delay=root.get("delay", 0.0), noise=root.get("noise", 0.0))
-    if simulation.simulator != "mujoco":
-        for key in ("control", "delay", "noise"):
-            if key in root:
-                raise ScenarioError(key, "applies to simulator: mujoco only (the kinematic simulator follows "
-                                    "the planner exactly)")
-    return simulation
+        for key, check in (("simulator", SIMULATOR), ("control", CONTROL), ("delay", DELAY), ("noise", NOISE)):
+            checked(check.check, getattr(self, key), key)

@@ -19,12 +19,10 @@ from dynfab.geometry.distance import shape_distance
 from dynfab.robots.mesh_collision import MeshCollisionModel
 from dynfab.robots.mesh_sweep import PlacedShape, sweep_meshes
 from dynfab.robots.robot import Robot
+from dynfab.scenario.joint_limits import JOINT_LIMIT_TOLERANCE, check_within_limits
 from dynfab.scenario.schema import ScenarioError
 
 __all__ = ["JOINT_LIMIT_TOLERANCE", "check_joint_limits", "check_start_collisions"]
-
-#: A start value this far beyond a limit is still accepted (round-off in files) [rad or m].
-JOINT_LIMIT_TOLERANCE = 1e-9
 
 _FIELD = "initial_state.q"
 
@@ -35,12 +33,7 @@ def check_joint_limits(q: ArrayLike, robot: Robot) -> None:
     Raises:
         ScenarioError: ``initial_state.q[3] (elbow_joint): 3.5 is outside [-3.14159, 3.14159]``.
     """
-    kinematics = robot.kinematics
-    for i, value in enumerate(np.asarray(q, dtype=float)):
-        lower, upper = kinematics.lower[i], kinematics.upper[i]
-        if not lower - JOINT_LIMIT_TOLERANCE <= value <= upper + JOINT_LIMIT_TOLERANCE:
-            raise ScenarioError(f"{_FIELD}[{i}] ({kinematics.joint_names[i]})",
-                                f"{value:.6g} is outside [{lower:.6g}, {upper:.6g}]")
+    check_within_limits(np.asarray(q, dtype=float).tolist(), robot, _FIELD)
 
 
 def check_start_collisions(q: ArrayLike, robot: Robot, mesh_model: MeshCollisionModel | None,
