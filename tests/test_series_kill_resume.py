@@ -1,0 +1,64 @@
+"""A series killed with SIGKILL mid-run and started again loses no finished run, re-runs
+none, and ends with the same results as an uninterrupted series (issue 11 item 6).
+
+Timings (solver and wall time) differ between any two executions, so the summaries are
+compared with those rows left out; every other byte is equal.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ARGS = ["experiment", "exp2a", "--runs", "4", "--jobs", "1"]
+TIMINGS = ("solver time", "wall time")
+
+
+def _dynfab(out: Path) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "dynfab.cli", *ARGS, "--out", str(out)],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
+def _runs(out: Path) -> list[str]:
+    log = out / "runs.jsonl"
+    return log.read_text(encoding="utf-8").splitlines() if log.exists() else []
+
+
+def _without_timings(path: Path) -> list[str]:
+    return [line for line in path.read_text(encoding="utf-8").splitlines()
+            if not any(timing in line for timing in TIMINGS)]
+
+
+def _results(lines: list[str]) -> dict[tuple[int, str], dict]:
+    results = {}
+    for line in lines:
+        record = json.loads(line)
+        metrics = {k: v for k, v in record["metrics"].items() if k != "solver_time_ms"}
+        results[(record["seed"], record["planner"])] = metrics
+    return results
+
+
+def test_a_killed_series_resumes_without_losing_or_repeating_runs(tmp_path: Path) -> None:
+    killed, clean = tmp_path / "killed", tmp_path / "clean"
+    process = _dynfab(killed)
+    deadline = time.monotonic() + 300
+    while len(_runs(killed)) < 3 and process.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert process.poll() is None, "the series ended before it could be killed"
+    os.kill(process.pid, signal.SIGKILL)
+    process.wait()
+    before = _runs(killed)
+    assert 3 <= len(before) < 8
+    assert subprocess.run([sys.executable, "-m", "dynfab.cli", *ARGS, "--out", str(killed)],
+                          capture_output=True).returncode == 0
+    after = _runs(killed)
+    assert after[:len(before)] == before                       # no finished run lost or rewritten
+    assert len(after) == 8 and len(_results(after)) == 8       # every run once, none repeated
+    assert _dynfab(clean).wait() == 0
+    assert _results(after) == _results(_runs(clean))           # the same results as uninterrupted
+    assert _without_timings(killed / "summary.md") == _without_timings(clean / "summary.md")
