@@ -8,7 +8,7 @@ import yaml
 
 from dynfab.cli import main
 from dynfab.motion.reference_checks import check_times, first_non_finite
-from dynfab.motion.trajectories import SplineTrajectory
+from dynfab.motion.spline_trajectory import SplineTrajectory
 from dynfab.motion.trajectory_mapping import trajectory_from_mapping
 
 BASE = {

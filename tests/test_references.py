@@ -13,11 +13,11 @@ from dynfab.scenario.references import RRT_MARGIN, scenario_references
 from dynfab.robots.robot import Robot
 from dynfab.scenario.runner import robot_for
 from dynfab.scenario.schema import Scenario, ScenarioError, scenario_from_dict, validate_for_robot
+from dynfab.motion.spline_trajectory import SplineTrajectory
 from dynfab.motion.trajectories import (
     CircleTrajectory,
     ExpressionTrajectory,
     LinearTrajectory,
-    SplineTrajectory,
     StaticPoint,
     Trajectory,
 )

@@ -15,12 +15,12 @@ import numpy as np
 import pytest
 
 from dynfab.motion.expression import MAX_LENGTH, ExpressionError, parse_expression
+from dynfab.motion.spline_trajectory import SplineTrajectory
 from dynfab.motion.trajectories import (
     CircleTrajectory,
     ExpressionTrajectory,
     LinearTrajectory,
     PolynomialTrajectory,
-    SplineTrajectory,
     StaticPoint,
     Trajectory,
     TrajectoryError,

@@ -31,9 +31,9 @@ from typing import Any
 import numpy as np
 from scipy.optimize import least_squares
 
+from dynfab.motion.spline_trajectory import SplineTrajectory
 from dynfab.experiments.panda_sampling import Q0, PandaSampler, panda_scenario
 from dynfab.experiments.sampling import rounded
-from dynfab.motion.trajectories import SplineTrajectory
 
 GOAL = np.array([0.5, 0.0, 0.5])
 TOLERANCE = 0.05

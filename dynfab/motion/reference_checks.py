@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from dynfab.motion.trajectories import SplineTrajectory, Trajectory
+from dynfab.motion.spline_trajectory import SplineTrajectory
+from dynfab.motion.trajectories import Trajectory
 
 #: control steps sampled one by one up to this many (beyond, the uniform grid alone) [-]
 MAX_STEP_SAMPLES = 1_000_000

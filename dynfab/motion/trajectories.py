@@ -23,7 +23,6 @@ from typing import Any
 import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.interpolate import CubicSpline
 
 from dynfab.motion.expression import ExpressionError, parse_expression
 from dynfab.motion.trajectory_values import TrajectoryError, numbers, point, positive, scalar, sequence
@@ -32,7 +31,7 @@ Samples = tuple[np.ndarray, np.ndarray, np.ndarray]
 """Positions, velocities and accelerations at T times, each of shape (T, d)."""
 
 
-def _derived() -> Any:
+def derived_field() -> Any:
     """A dataclass field computed in ``__post_init__``: not an argument, not compared."""
     return dataclasses.field(init=False, repr=False, compare=False)
 
@@ -96,7 +95,7 @@ class StaticPoint(Trajectory):
     """
 
     position: Sequence[float]
-    _position: np.ndarray = _derived()
+    _position: np.ndarray = derived_field()
 
     def __post_init__(self) -> None:
         _set(self, "position", numbers(self.position, "position"))
@@ -121,8 +120,8 @@ class LinearTrajectory(Trajectory):
 
     start: Sequence[float]
     velocity: Sequence[float]
-    _start: np.ndarray = _derived()
-    _velocity: np.ndarray = _derived()
+    _start: np.ndarray = derived_field()
+    _velocity: np.ndarray = derived_field()
 
     def __post_init__(self) -> None:
         _set(self, "start", point(self.start, "start"))
@@ -167,12 +166,12 @@ class CircleTrajectory(Trajectory):
     angular_velocity: float
     normal: Sequence[float] = (0.0, 0.0, 1.0)
     phase: float = 0.0
-    _center: np.ndarray = _derived()
-    _radius: float = _derived()
-    _angular_velocity: float = _derived()
-    _normal: np.ndarray = _derived()
-    _phase: float = _derived()
-    _basis: np.ndarray = _derived()
+    _center: np.ndarray = derived_field()
+    _radius: float = derived_field()
+    _angular_velocity: float = derived_field()
+    _normal: np.ndarray = derived_field()
+    _phase: float = derived_field()
+    _basis: np.ndarray = derived_field()
 
     def __post_init__(self) -> None:
         _set(self, "center", point(self.center, "center"))
@@ -207,8 +206,8 @@ class PolynomialTrajectory(Trajectory):
     """
 
     coefficients: Sequence[Sequence[float]]
-    _powers: np.ndarray = _derived()
-    _matrices: np.ndarray = _derived()
+    _powers: np.ndarray = derived_field()
+    _matrices: np.ndarray = derived_field()
 
     def __post_init__(self) -> None:
         axes = sequence(self.coefficients, "coefficients")
@@ -255,11 +254,11 @@ class ExpressionTrajectory(Trajectory):
     """
 
     expressions: Sequence[str]
-    _function: ca.Function = _derived()
-    _time: np.ndarray = _derived()
-    _result: np.ndarray = _derived()
-    _buffer: Any = _derived()
-    _run: Callable[[], None] = _derived()
+    _function: ca.Function = derived_field()
+    _time: np.ndarray = derived_field()
+    _result: np.ndarray = derived_field()
+    _buffer: Any = derived_field()
+    _run: Callable[[], None] = derived_field()
 
     def __post_init__(self) -> None:
         texts = sequence(self.expressions, "expressions")
@@ -322,65 +321,6 @@ class ExpressionTrajectory(Trajectory):
         # Called with T columns, the function runs once per column: output (d, 3 T).
         stacked = np.asarray(self._function(ca.DM(times).T)).reshape(self.dimension, times.size, 3)
         return stacked[:, :, 0].T.copy(), stacked[:, :, 1].T.copy(), stacked[:, :, 2].T.copy()
-
-
-@dataclass(frozen=True)
-class SplineTrajectory(Trajectory):
-    """A C2 cubic spline through waypoints, from rest at t = 0 to rest at t = T.
-
-    Waypoint Pᵢ is reached at ``tᵢ = T sᵢ / s_N``, where ``sᵢ`` is the chord length
-    Σⱼ₌₁ⁱ |Pⱼ − Pⱼ₋₁| [m], so the speed is roughly uniform between the ends. The spline
-    is clamped (``ẋ̃ = 0`` at t = 0 and t = T); before t = 0 it holds P₀, from t = T on
-    it holds P_N, both with ``ẋ̃ = ẍ̃ = 0``. It is C2 on [0, T); a clamped cubic cannot
-    also fix the end accelerations, so ``ẍ̃`` jumps to 0 at t = T (and from 0 at t = 0).
-
-    Attributes:
-        waypoints: P₀ ... P_N [m], at least 2, each of 2 or 3 numbers (all alike);
-            consecutive waypoints must differ.
-        duration: T [s] > 0, the time the last waypoint is reached.
-    """
-
-    waypoints: Sequence[Sequence[float]]
-    duration: float
-    _spline: CubicSpline = _derived()
-
-    def __post_init__(self) -> None:
-        items = sequence(self.waypoints, "waypoints")
-        if len(items) < 2:
-            raise TrajectoryError("waypoints", f"expected at least 2 waypoints, got {len(items)}")
-        first = point(items[0], "waypoints[0]")
-        points = [first]
-        for i, item in enumerate(items[1:], 1):
-            points.append(numbers(item, f"waypoints[{i}]", len(first)))
-        duration = positive(self.duration, "duration")
-        chords = np.linalg.norm(np.diff(np.array(points), axis=0), axis=1)
-        for i, chord in enumerate(chords, 1):
-            if chord == 0.0:
-                problem = f"equals waypoints[{i - 1}] (consecutive waypoints must differ)"
-                raise TrajectoryError(f"waypoints[{i}]", problem)
-        knots = duration * np.concatenate([[0.0], np.cumsum(chords)]) / np.sum(chords)
-        knots[-1] = duration
-        object.__setattr__(self, "waypoints", tuple(tuple(point.tolist()) for point in points))
-        object.__setattr__(self, "duration", duration)
-        spline = CubicSpline(knots, np.array(points), bc_type="clamped", axis=0)
-        object.__setattr__(self, "_spline", spline)
-
-    @property
-    def dimension(self) -> int:
-        return len(self.waypoints[0])
-
-    @property
-    def knot_times(self) -> np.ndarray:
-        """The times ``tᵢ`` at which the waypoints are reached [s] (segment ends)."""
-        return np.array(self._spline.x)
-
-    def _sample(self, times: np.ndarray) -> Samples:
-        clamped = np.clip(times, 0.0, self.duration)
-        moving = ((times >= 0.0) & (times < self.duration))[:, None]
-        position = self._spline(clamped)
-        velocity = np.where(moving, self._spline(clamped, 1), 0.0)
-        acceleration = np.where(moving, self._spline(clamped, 2), 0.0)
-        return position, velocity, acceleration
 
 
 def _set(instance: Trajectory, name: str, value: Any) -> None:

@@ -6,12 +6,12 @@ from collections.abc import Mapping
 from typing import Any
 
 from dynfab.describe import describe
+from dynfab.motion.spline_trajectory import SplineTrajectory
 from dynfab.motion.trajectories import (
     CircleTrajectory,
     ExpressionTrajectory,
     LinearTrajectory,
     PolynomialTrajectory,
-    SplineTrajectory,
     Trajectory,
 )
 from dynfab.motion.trajectory_values import TrajectoryError

@@ -20,8 +20,8 @@ from dynfab.motion.directions import RotatingDirections
 from dynfab.motion.global_planning import GlobalPlanningError, plan_path
 from dynfab.motion.reference_checks import first_non_finite
 from dynfab.motion.references import References
+from dynfab.motion.spline_trajectory import SplineTrajectory
 from dynfab.motion.trajectories import (
-    SplineTrajectory,
     StaticPoint,
     Trajectory,
     TrajectoryError,
