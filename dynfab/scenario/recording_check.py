@@ -25,7 +25,7 @@ from dynfab.scenario.recording import Recording
 from dynfab.scenario.references import scenario_references
 from dynfab.scenario.runner import obstacle_centres, robot_for
 from dynfab.scenario.schema import Scenario, ScenarioError, validate_for_robot
-from dynfab.scenario.start_state import JOINT_LIMIT_TOLERANCE
+from dynfab.scenario.joint_limits import JOINT_LIMIT_TOLERANCE
 
 __all__ = ["CheckReport", "LimitViolation", "check_recording"]
 

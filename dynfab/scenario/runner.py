@@ -19,7 +19,7 @@ from dynfab.scenario.exact_metrics import mesh_model_for, obstacle_shapes, with_
 from dynfab.scenario.references import goal_axes, scenario_references
 from dynfab.scenario.metrics import (Metrics, clearance_over_time, compute_metrics, shape_clearance_over_time,
                                      with_contacts)
-from dynfab.scenario.start_state import check_joint_limits, check_start_collisions
+from dynfab.scenario.start_state import check_start_collisions
 from dynfab.robots import load_robot, robot_from_urdf
 from dynfab.geometry.sphere_fitting import SphereFitParameters
 from dynfab.robots.builtin import UnknownRobotError
@@ -141,7 +141,6 @@ def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None
     robot = robot_for(scenario)
     scenario = validate_for_robot(scenario, robot)
     state = scenario.initial_state
-    check_joint_limits(state.q, robot)
     references = scenario_references(scenario, robot)
     mesh_model = mesh_model_for(robot)
     start_centres = obstacle_centres(references, np.zeros(1))

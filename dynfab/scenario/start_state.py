@@ -1,6 +1,7 @@
-"""Checks of a scenario's start state before anything runs (ScenarioError, exit 2).
+"""Checks of a scenario's start state before anything runs (ScenarioError, exit 2); the
+joint limits are checked with the rest of the robot-dependent values, in
+:func:`dynfab.scenario.schema.validate_for_robot`.
 
-- Every joint within its limits: ``lower - JOINT_LIMIT_TOLERANCE <= q_i <= upper + ...``.
 - No collision with an obstacle and no self-collision at ``t = 0``: on the collision
   meshes for a robot that has them (scenario/exact_metrics.py), else on the collision
   spheres (obstacle clearance ``d_o(R_oᵀ (p_i - c_o)) - r_i < 0`` with the exact signed
@@ -19,21 +20,11 @@ from dynfab.geometry.distance import shape_distance
 from dynfab.robots.mesh_collision import MeshCollisionModel
 from dynfab.robots.mesh_sweep import PlacedShape, sweep_meshes
 from dynfab.robots.robot import Robot
-from dynfab.scenario.joint_limits import JOINT_LIMIT_TOLERANCE, check_within_limits
 from dynfab.scenario.schema import ScenarioError
 
-__all__ = ["JOINT_LIMIT_TOLERANCE", "check_joint_limits", "check_start_collisions"]
+__all__ = ["check_start_collisions"]
 
 _FIELD = "initial_state.q"
-
-
-def check_joint_limits(q: ArrayLike, robot: Robot) -> None:
-    """Raise if a start joint value is outside its limits.
-
-    Raises:
-        ScenarioError: ``initial_state.q[3] (elbow_joint): 3.5 is outside [-3.14159, 3.14159]``.
-    """
-    check_within_limits(np.asarray(q, dtype=float).tolist(), robot, _FIELD)
 
 
 def check_start_collisions(q: ArrayLike, robot: Robot, mesh_model: MeshCollisionModel | None,
