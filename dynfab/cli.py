@@ -225,7 +225,7 @@ def _cluster(workers: int | None, scheduler: str | None) -> Cluster | None:
 
 def _record(result: RunResult, path: Path) -> None:
     """Write the run's recording (scenario/recording.py) to ``path``."""
-    save_recording(path, run_recording(result.robot, result.record, result.scenario.dt))
+    save_recording(path, run_recording(result.robot, result.record, result.scenario.dt, result.scenario.path))
     print(f"dynfab: recording written to {path}", file=sys.stderr)
 
 

@@ -12,6 +12,7 @@ import yaml
 from dynfab.cli import main
 from dynfab.experiments.arms import ARM_NAMES, scenario
 from dynfab.experiments.registry import EXPERIMENTS
+from dynfab.scenario.recording import load_recording
 
 
 def test_the_series_is_registered_and_draws_each_arm_in_turn() -> None:
@@ -45,4 +46,5 @@ def test_a_recorded_series_writes_one_recording_per_run(tmp_path: Path, capsys: 
     result = run_series(EXPERIMENTS["arms"], 1, 6, tmp_path, jobs=1, record=True)
     recording = tmp_path / "recordings" / "arms_6_static-fabric.npz"
     assert result.records[0].metrics["success"] and recording.is_file()
+    assert load_recording(recording).scenario == str((tmp_path / "scenarios" / "arms_6_static-fabric.yaml").resolve())
     assert main(["check", str(recording), str(tmp_path / "scenarios" / "arms_6_static-fabric.yaml")]) == 0

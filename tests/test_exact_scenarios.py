@@ -147,7 +147,8 @@ def test_record_round_trip(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     result = run_scenario(scenario_from_dict(yaml.safe_load(path.read_text())))
     recording = load_recording(out)
     with np.load(out) as data:
-        assert set(data.files) == {"t", "q", "qdot", "qddot", "joint_names", "velocity_names", "dt"}
+        assert set(data.files) == {"t", "q", "qdot", "qddot", "joint_names", "velocity_names", "dt", "scenario"}
+    assert recording.scenario == str(path.resolve())
     np.testing.assert_array_equal(recording.t, result.record.t)
     np.testing.assert_allclose(recording.q, result.record.q, atol=1e-12)
     np.testing.assert_allclose(recording.qdot, result.record.qdot, atol=1e-12)

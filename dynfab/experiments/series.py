@@ -234,7 +234,8 @@ def _execute(experiment: str, pending: list[Pair], files: dict[Pair, Path], jobs
                     except Exception as error:
                         raise RunError(f"{files[(seed, planner)]}: {type(error).__name__}: {error}") from error
                     if recordings is not None and recording is not None:
-                        save_recording(recordings / (files[(seed, planner)].stem + ".npz"), recording)
+                        save_recording(recordings / (files[(seed, planner)].stem + ".npz"),
+                                       dataclasses.replace(recording, scenario=str(files[(seed, planner)].resolve())))
                     record = RunRecord(seed, planner, metrics, wall_time)
                     file.write(json.dumps({"experiment": experiment, **dataclasses.asdict(record)}) + "\n")
                     file.flush()

@@ -11,7 +11,9 @@ A recording holds N + 1 rows for a run of N control steps; row k is the state at
 - ``qddot`` (N+1, m): the command held over ``[t[k], t[k] + dt)``; the last row, after
   the run's end, is zero;
 - ``joint_names`` (n,) and ``velocity_names`` (m,): strings;
-- ``dt`` (): the control period [s].
+- ``dt`` (): the control period [s];
+- ``scenario`` (): the absolute path of the run's scenario file, or ``""`` when the run
+  was not loaded from a file (``dynfab plot`` and ``dynfab view`` replay from it).
 """
 
 from __future__ import annotations
@@ -46,21 +48,24 @@ class Recording:
     joint_names: tuple[str, ...]
     velocity_names: tuple[str, ...]
     dt: float
+    scenario: str = ""
 
 
 def recording_of(record: Record, joint_names: tuple[str, ...], velocity_names: tuple[str, ...],
-                 dt: float) -> Recording:
+                 dt: float, scenario: Path | None = None) -> Recording:
     """The recording of a simulated run: its N + 1 states and N commands plus a zero row."""
     qddot = np.vstack([record.qddot, np.zeros((1, record.qdot.shape[1]))])
     return Recording(np.array(record.t), np.array(record.q), np.array(record.qdot), qddot,
-                     tuple(joint_names), tuple(velocity_names), float(dt))
+                     tuple(joint_names), tuple(velocity_names), float(dt),
+                     "" if scenario is None else str(Path(scenario).resolve()))
 
 
-def run_recording(robot: Robot, record: Record, dt: float) -> Recording:
-    """The recording of a run of ``robot``, naming its joints and velocity coordinates."""
+def run_recording(robot: Robot, record: Record, dt: float, scenario: Path | None = None) -> Recording:
+    """The recording of a run of ``robot`` (from the file ``scenario``), naming its joints
+    and velocity coordinates."""
     joints = robot.kinematics.joint_names
     velocities = ("v", "omega") + joints[3:] if robot.base is not None else joints
-    return recording_of(record, joints, velocities, dt)
+    return recording_of(record, joints, velocities, dt, scenario)
 
 
 def save_recording(path: str | Path, recording: Recording) -> None:
@@ -68,12 +73,13 @@ def save_recording(path: str | Path, recording: Recording) -> None:
     with open(path, "wb") as file:
         np.savez(file, t=recording.t, q=recording.q, qdot=recording.qdot, qddot=recording.qddot,
                  joint_names=np.array(recording.joint_names, dtype=str),
-                 velocity_names=np.array(recording.velocity_names, dtype=str), dt=np.float64(recording.dt))
+                 velocity_names=np.array(recording.velocity_names, dtype=str), dt=np.float64(recording.dt),
+                 scenario=np.array(recording.scenario, dtype=str))
 
 
 def load_recording(path: str | Path) -> Recording:
-    """Read a recording written by :func:`save_recording` (``velocity_names`` and ``dt``
-    may be missing: then the joint names and ``t[1] - t[0]``).
+    """Read a recording written by :func:`save_recording` (``velocity_names``, ``dt`` and
+    ``scenario`` may be missing: then the joint names, ``t[1] - t[0]`` and ``""``).
 
     Raises:
         RecordingError: The file cannot be read, a key is missing, or the shapes disagree.
@@ -96,4 +102,5 @@ def load_recording(path: str | Path) -> Recording:
         if array.shape != (t.size, len(velocity_names)):
             raise RecordingError(f"{path}: {key} has shape {array.shape}, expected ({t.size}, {len(velocity_names)})")
     dt = float(arrays["dt"]) if "dt" in arrays else float(t[1] - t[0]) if t.size > 1 else 0.0
-    return Recording(t, q, qdot, qddot, joint_names, velocity_names, dt)
+    scenario = str(arrays["scenario"]) if "scenario" in arrays else ""
+    return Recording(t, q, qdot, qddot, joint_names, velocity_names, dt, scenario)
