@@ -101,3 +101,17 @@ def test_invalid_parameters_name_the_field() -> None:
         SphereFitParameters(tolerance=0.0)
     with pytest.raises(ValueError, match="no triangles"):
         fit_spheres([])
+
+
+def test_fewest_spheres_cover_an_l_shape_with_fewer_spheres_than_greedy() -> None:
+    arm = trimesh.creation.box(extents=(0.3, 0.06, 0.06))
+    leg = trimesh.creation.box(extents=(0.06, 0.3, 0.06)).apply_translation((0.12, 0.12, 0.0))
+    greedy = fit_spheres([arm, leg], SphereFitParameters(max_bulge=0.04))
+    fewest = fit_spheres([arm, leg], SphereFitParameters(max_bulge=0.04, fewest=True))
+    assert len(fewest.spheres) < len(greedy.spheres)
+    surface = np.vstack([_box_surface(np.array([0.3, 0.06, 0.06]), 0.003),
+                         _box_surface(np.array([0.06, 0.3, 0.06]), 0.003) + (0.12, 0.12, 0.0)])
+    centers = np.array([s.center for s in fewest.spheres])
+    radii = np.array([s.radius for s in fewest.spheres])
+    assert outside_distances(surface, centers, radii).max() <= 0.01 + 5e-4
+    assert fewest.coverage <= 0.01 + 1e-9 and fewest.bulge <= 0.05

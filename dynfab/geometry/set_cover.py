@@ -1,0 +1,89 @@
+"""Set cover: choose few columns of a boolean matrix so that every row has a chosen column.
+
+Rows are things to cover (surface samples, near-contact configurations), columns the
+candidates that may cover them (spheres, sphere pairs); ``cover[i, j]`` is true when
+candidate ``j`` covers row ``i``. Two solvers:
+
+- :func:`greedy_cover` then :func:`prune`: take the candidate that covers most uncovered
+  rows until all are covered, then drop candidates the others make redundant; fast, at
+  most ``H(max column size)`` times the optimum (about 1.2-1.4 times on the meshes here);
+- :func:`fewest_cover`: the minimum number of columns, as the integer program
+
+      minimise  Σ_j x_j   subject to   cover x >= 1,   x_j in {0, 1}
+
+  solved by HiGHS (``scipy.optimize.milp``) within a time limit on the reduced problem:
+  a column whose rows another column also covers is dropped (some optimum never needs
+  it), then a row whose columns include all columns of another row (covering that one
+  covers it). The greedy solution is kept whenever the solver returns nothing better.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import sparse
+from scipy.optimize import Bounds, LinearConstraint, milp
+
+__all__ = ["fewest_cover", "greedy_cover", "prune"]
+
+
+def greedy_cover(cover: sparse.csc_matrix) -> list[int]:
+    """Columns, best first, until every coverable row is covered."""
+    uncovered = np.ones(cover.shape[0], dtype=np.float32)
+    chosen: list[int] = []
+    while uncovered.any():
+        gains = cover.T @ uncovered
+        best = int(np.argmax(gains))
+        if gains[best] <= 0.0:
+            break
+        chosen.append(best)
+        uncovered[cover[:, best].indices] = 0.0
+    return chosen
+
+
+def prune(cover: sparse.csc_matrix, chosen: list[int]) -> list[int]:
+    """Drop chosen columns (latest first) whose rows the other chosen columns cover."""
+    kept = list(chosen)
+    counts = np.asarray(cover[:, kept].sum(axis=1)).ravel()
+    for candidate in reversed(chosen):
+        rows = cover[:, candidate].indices
+        if np.all(counts[rows] >= 2):
+            kept.remove(candidate)
+            counts[rows] -= 1
+    return kept
+
+
+def fewest_cover(cover: sparse.csc_matrix, time_limit: float = 20.0) -> list[int]:
+    """The fewest columns that cover every coverable row (sorted), or the pruned greedy
+    cover if the solver finds nothing smaller within ``time_limit`` [s]."""
+    greedy = prune(cover, greedy_cover(cover))
+    coverable = np.flatnonzero(np.asarray(cover.sum(axis=1)).ravel() > 0)
+    if len(greedy) <= 1:
+        return sorted(greedy)
+    columns = _kept(sparse.csc_matrix(cover[coverable], dtype=np.float32), keep_largest=True)
+    reduced = sparse.csc_matrix(cover[coverable][:, columns], dtype=np.float32)
+    rows = _kept(reduced.T.tocsc(), keep_largest=False)
+    matrix = sparse.csr_matrix(reduced[rows], dtype=float)
+    result = milp(np.ones(len(columns)), constraints=LinearConstraint(matrix, lb=1.0),
+                  integrality=np.ones(len(columns)), bounds=Bounds(0.0, 1.0),
+                  options={"time_limit": time_limit})
+    if result.x is None:
+        return sorted(greedy)
+    chosen = [int(columns[j]) for j in np.flatnonzero(result.x > 0.5)]
+    return sorted(chosen) if len(chosen) < len(greedy) else sorted(greedy)
+
+
+def _kept(sets: sparse.csc_matrix, keep_largest: bool) -> np.ndarray:
+    """Indices of the columns of ``sets`` (each column a set of rows) that are kept when
+    every column inside a larger one (``keep_largest``) or holding a smaller one (not
+    ``keep_largest``) is dropped; of equal columns the first is kept."""
+    dense = sets.toarray().astype(np.float32)
+    overlap = dense.T @ dense  # dense BLAS: these matrices are a third full or more
+    size = np.diag(overlap)
+    index = np.arange(len(size))
+    if keep_largest:  # drop j if j lies inside k, k larger or an earlier equal
+        related = overlap >= size[:, None] - 0.5
+        ranked = (size[None, :] > size[:, None]) | ((size[None, :] == size[:, None]) & (index[None, :] < index[:, None]))
+    else:  # drop j if k lies inside j, k smaller or an earlier equal
+        related = overlap >= size[None, :] - 0.5
+        ranked = (size[None, :] < size[:, None]) | ((size[None, :] == size[:, None]) & (index[None, :] < index[:, None]))
+    return np.flatnonzero(~(related & ranked).any(axis=1))
