@@ -36,6 +36,7 @@ from dynfab.fabric.leaves.orientation import OrientationGoalConfig, direction_ma
 from dynfab.fabric.joint_reference import joint_reference
 from dynfab.fabric.maps import DifferentialMap, Reference, linear_map, selected
 from dynfab.fabric.nonholonomic import least_squares_acceleration, velocity_map, velocity_map_derivative
+from dynfab.fabric.point_maps import link_point_maps
 from dynfab.fabric.parameters import ParameterLayout, ParameterSymbols, RuntimeParameters
 from dynfab.robots.robot import Robot
 from dynfab.fabric.spec import Spec
@@ -250,13 +251,9 @@ class FabricPlanner:
         return ca.vertcat(*[ca.SX(0) if j is None else q[j] for j in self.robot.position_index])
 
     def _sphere_maps(self, q: ca.SX, qdot: ca.SX) -> list[DifferentialMap]:
-        kin = self.robot.kinematics
-        dims = 2 if self.robot.planar else 3
-        maps = []
-        for sphere in self.robot.collision_spheres:
-            position = kin.position(q, sphere.link, offset=sphere.center)
-            maps.append(DifferentialMap.from_expression(position[:dims], q, qdot))
-        return maps
+        return link_point_maps(self.robot.kinematics, q, qdot,
+                               [(sphere.link, sphere.center) for sphere in self.robot.collision_spheres],
+                               dims=2 if self.robot.planar else 3)
 
     def _obstacle_terms(self, sphere_maps: list[DifferentialMap],
                         params: ParameterSymbols) -> list[tuple[WeightedGeometry, ca.SX]]:
