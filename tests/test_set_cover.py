@@ -50,3 +50,13 @@ def test_rows_no_column_covers_are_ignored() -> None:
     cover = _matrix(4, [{0, 1}, {1, 2}])  # row 3 is coverable by nothing
     assert fewest_cover(cover) == [0, 1]
     assert sorted(prune(cover, greedy_cover(cover))) == [0, 1]
+
+
+def test_costs_choose_the_cheaper_of_equally_small_covers() -> None:
+    # both {0, 2} and {1, 2} cover; column 0 costs more
+    cover = _matrix(4, [{0, 1}, {0, 1}, {2, 3}])
+    assert fewest_cover(cover) == [0, 2]
+    assert fewest_cover(cover, costs=np.array([1.5, 1.0, 1.0])) == [1, 2]
+    # a cheap pair of columns beats one expensive column
+    cover = _matrix(2, [{0, 1}, {0}, {1}])
+    assert fewest_cover(cover, costs=np.array([3.0, 1.0, 1.0])) == [1, 2]

@@ -7,9 +7,10 @@ candidate ``j`` covers row ``i``. Two solvers:
 - :func:`greedy_cover` then :func:`prune`: take the candidate that covers most uncovered
   rows until all are covered, then drop candidates the others make redundant; fast, at
   most ``H(max column size)`` times the optimum (about 1.2-1.4 times on the meshes here);
-- :func:`fewest_cover`: the minimum number of columns, as the integer program
+- :func:`fewest_cover`: the minimum number (or total cost ``w``) of columns, as the
+  integer program
 
-      minimise  Σ_j x_j   subject to   cover x >= 1,   x_j in {0, 1}
+      minimise  Σ_j w_j x_j   subject to   cover x >= 1,   x_j in {0, 1}
 
   solved by HiGHS (``scipy.optimize.milp``) within a time limit on the reduced problem:
   a column whose rows another column also covers is dropped (some optimum never needs
@@ -26,12 +27,13 @@ from scipy.optimize import Bounds, LinearConstraint, milp
 __all__ = ["fewest_cover", "greedy_cover", "prune"]
 
 
-def greedy_cover(cover: sparse.csc_matrix) -> list[int]:
-    """Columns, best first, until every coverable row is covered."""
+def greedy_cover(cover: sparse.csc_matrix, costs: np.ndarray | None = None) -> list[int]:
+    """Columns, best first (most newly covered rows per cost), until every coverable row
+    is covered."""
     uncovered = np.ones(cover.shape[0], dtype=np.float32)
     chosen: list[int] = []
     while uncovered.any():
-        gains = cover.T @ uncovered
+        gains = cover.T @ uncovered if costs is None else (cover.T @ uncovered) / costs
         best = int(np.argmax(gains))
         if gains[best] <= 0.0:
             break
@@ -52,30 +54,34 @@ def prune(cover: sparse.csc_matrix, chosen: list[int]) -> list[int]:
     return kept
 
 
-def fewest_cover(cover: sparse.csc_matrix, time_limit: float = 20.0) -> list[int]:
-    """The fewest columns that cover every coverable row (sorted), or the pruned greedy
-    cover if the solver finds nothing smaller within ``time_limit`` [s]."""
-    greedy = prune(cover, greedy_cover(cover))
+def fewest_cover(cover: sparse.csc_matrix, costs: np.ndarray | None = None,
+                 time_limit: float = 20.0) -> list[int]:
+    """The fewest columns (or the cheapest, with positive ``costs`` per column) that cover
+    every coverable row, sorted; the pruned greedy cover if the solver finds nothing
+    better within ``time_limit`` [s]."""
+    weights = np.ones(cover.shape[1]) if costs is None else np.asarray(costs, dtype=float)
+    greedy = prune(cover, greedy_cover(cover, weights))
     coverable = np.flatnonzero(np.asarray(cover.sum(axis=1)).ravel() > 0)
-    if len(greedy) <= 1:
+    if not greedy or (costs is None and len(greedy) == 1):
         return sorted(greedy)
-    columns = _kept(sparse.csc_matrix(cover[coverable], dtype=np.float32), keep_largest=True)
+    columns = _kept(sparse.csc_matrix(cover[coverable], dtype=np.float32), keep_largest=True, costs=weights)
     reduced = sparse.csc_matrix(cover[coverable][:, columns], dtype=np.float32)
     rows = _kept(reduced.T.tocsc(), keep_largest=False)
     matrix = sparse.csr_matrix(reduced[rows], dtype=float)
-    result = milp(np.ones(len(columns)), constraints=LinearConstraint(matrix, lb=1.0),
+    result = milp(weights[columns], constraints=LinearConstraint(matrix, lb=1.0),
                   integrality=np.ones(len(columns)), bounds=Bounds(0.0, 1.0),
                   options={"time_limit": time_limit})
     if result.x is None:
         return sorted(greedy)
     chosen = [int(columns[j]) for j in np.flatnonzero(result.x > 0.5)]
-    return sorted(chosen) if len(chosen) < len(greedy) else sorted(greedy)
+    return sorted(chosen) if weights[chosen].sum() < weights[greedy].sum() - 1e-9 else sorted(greedy)
 
 
-def _kept(sets: sparse.csc_matrix, keep_largest: bool) -> np.ndarray:
+def _kept(sets: sparse.csc_matrix, keep_largest: bool, costs: np.ndarray | None = None) -> np.ndarray:
     """Indices of the columns of ``sets`` (each column a set of rows) that are kept when
     every column inside a larger one (``keep_largest``) or holding a smaller one (not
-    ``keep_largest``) is dropped; of equal columns the first is kept."""
+    ``keep_largest``) is dropped; of equal columns the first is kept. With ``costs``, a
+    column is only dropped for one that costs no more."""
     dense = sets.toarray().astype(np.float32)
     overlap = dense.T @ dense  # dense BLAS: these matrices are a third full or more
     size = np.diag(overlap)
@@ -86,4 +92,7 @@ def _kept(sets: sparse.csc_matrix, keep_largest: bool) -> np.ndarray:
     else:  # drop j if k lies inside j, k smaller or an earlier equal
         related = overlap >= size[None, :] - 0.5
         ranked = (size[None, :] < size[:, None]) | ((size[None, :] == size[:, None]) & (index[None, :] < index[:, None]))
-    return np.flatnonzero(~(related & ranked).any(axis=1))
+    dominated = related & ranked
+    if costs is not None:
+        dominated &= costs[None, :] <= costs[:, None]
+    return np.flatnonzero(~dominated.any(axis=1))

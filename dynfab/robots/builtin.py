@@ -48,15 +48,15 @@ _PANDA_SPHERES: tuple[tuple[str, str, tuple[float, float, float], float], ...] =
     ("fingertips", "panda_hand", (0.0, 0.0, -0.02), 0.04),
 )
 
-#: Which spheres the built-in ``panda`` uses: ``"hand-written"`` (the table above, which
-#: leaves 29 % of Franka's collision-mesh surface more than 1 cm and 12 % more than 3 cm
-#: outside, up to 8.3 cm at PANDA_DEFAULT_Q) or ``"fitted"`` (panda_spheres.py: 46 spheres,
-#: 152 pairs, 1 cm coverage). The fitted table tripled the static fabric's step time on
-#: exp1's scenarios (0.044 -> 0.136 ms, 10 seeds; 0.080 ms without its pairs) at equal
-#: success (20/20), so the hand-written one stays the default; ``panda_robot("fitted")``
-#: gives the other. ``boxer-panda`` uses the hand-written table (its pairs are named by
-#: its labels).
-PANDA_SPHERE_MODEL = "hand-written"
+#: Which spheres the built-in ``panda`` uses: ``"fitted"`` (panda_spheres.py: 22 spheres
+#: fitted to Franka's collision meshes, none of whose surface points lies more than 1 cm
+#: outside them, and 30 pairs chosen on the meshes) or ``"hand-written"`` (the table above,
+#: the default until 2026-11: it leaves 29 % of the mesh surface more than 1 cm and 12 %
+#: more than 3 cm outside, up to 8.3 cm at PANDA_DEFAULT_Q, and its pairs let the meshes
+#: touch themselves in 11 of 50 Experiment-1 runs). ``panda_robot("hand-written")`` keeps the old model for comparisons
+#: with results made with it; ``boxer-panda`` still uses the hand-written table (its pairs
+#: are named by its labels).
+PANDA_SPHERE_MODEL = "fitted"
 
 # Sphere pairs >= 3 joints apart that can touch within the joint limits (found by
 # minimising their clearance from the closest of 50,000 random configurations) and

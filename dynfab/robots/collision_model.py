@@ -17,6 +17,9 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+import trimesh
+
 from dynfab.geometry.sphere_fitting import SphereFitParameters, fit_spheres
 
 from .kinematics import Kinematics
@@ -25,7 +28,7 @@ from .robot import CollisionSphere
 from .self_collision import PairSelection, bodies, select_pairs
 from .urdf import MeshFile, UrdfModel, load_urdf
 
-__all__ = ["CollisionModel", "LinkFit", "auto_collision_model", "cache_dir", "fit_link_spheres"]
+__all__ = ["CollisionModel", "LinkFit", "auto_collision_model", "cache_dir", "fit_body_spheres", "fit_link_spheres"]
 
 #: Bump when the fit or the file layout changes, so that old entries are not reused.
 _CACHE_VERSION = 3
@@ -94,6 +97,35 @@ def fit_link_spheres(kinematics: Kinematics,
         fit = fit_spheres(meshes, parameters)
         spheres = tuple(CollisionSphere(link, s.center, s.radius) for s in fit.spheres)
         fits.append(LinkFit(link=link, spheres=spheres, coverage=fit.coverage, bulge=fit.bulge))
+    return tuple(fits)
+
+
+def fit_body_spheres(kinematics: Kinematics,
+                     parameters: SphereFitParameters = SphereFitParameters()) -> tuple[LinkFit, ...]:
+    """Spheres for every *body* (links welded by fixed or locked joints,
+    :func:`~dynfab.robots.self_collision.bodies`) with collision geometry: the meshes of its
+    links are fitted together, in the frame of its first link with geometry, which the
+    spheres are attached to. Fewer spheres than :func:`fit_link_spheres` where welded links
+    meet (a flange, a hand and its closed fingers).
+
+    Raises:
+        LinkMeshError: A collision mesh that is missing or unreadable.
+    """
+    body_of = bodies(kinematics)
+    at_zero = np.zeros(kinematics.dof)
+    grouped: dict[int, tuple[str, list[trimesh.Trimesh]]] = {}
+    for link in kinematics.link_names:
+        meshes = link_collision_meshes(kinematics.model, link)
+        if not meshes:
+            continue
+        top, gathered = grouped.setdefault(body_of[link], (link, []))
+        to_top = np.array(kinematics.transform(at_zero, link, parent=top))
+        gathered.extend(mesh.copy().apply_transform(to_top) for mesh in meshes)
+    fits = []
+    for top, meshes in grouped.values():
+        fit = fit_spheres(meshes, parameters)
+        spheres = tuple(CollisionSphere(top, s.center, s.radius) for s in fit.spheres)
+        fits.append(LinkFit(link=top, spheres=spheres, coverage=fit.coverage, bulge=fit.bulge))
     return tuple(fits)
 
 

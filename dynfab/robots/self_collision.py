@@ -12,6 +12,22 @@ closest pair of its two bodies in a sample where their clearance
 comes below ``margin``: whenever two bodies come close in the sample, the pair that
 would touch first is kept apart. Pairs that never come that close are left out: they
 cannot meet (or meet too rarely for the sample to see; raise ``samples``).
+
+Two refinements (:class:`PairSelection`):
+
+- ``meshes``: whether two bodies touch or come close is decided on their collision meshes
+  (exact distances, :mod:`dynfab.robots.body_distances`) instead of their spheres. Spheres
+  that reach out of the meshes make bodies look close that never meet (a Panda's wrist
+  and forearm spheres overlap in configurations where the meshes are centimetres apart);
+  on the meshes only body pairs that really can meet are kept, as MoveIt does.
+- ``cover_slack``: instead of every closest pair, the fewest sphere pairs such that in
+  every near sample some kept pair's clearance is at most ``cover_slack`` more than the
+  bodies' distance (meshes or spheres; at least the closest pair qualifies)
+  (:func:`dynfab.geometry.set_cover.fewest_cover`): then no sampled configuration where
+  the bodies come close lets the kept pairs see them more than ``cover_slack`` farther
+  apart than they are. Of equally few pairs, those that overlap least where the bodies
+  are apart (sphere bulge that would block reachable configurations) are preferred: a
+  pair costs ``1 + f`` with ``f`` the share of far samples in which it overlaps.
 """
 
 from __future__ import annotations
@@ -21,7 +37,11 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
+from scipy import sparse
 
+from dynfab.geometry.set_cover import fewest_cover
+
+from .body_distances import body_meshes
 from .kinematics import Kinematics
 from .robot import CollisionSphere
 from .urdf import Joint
@@ -39,17 +59,36 @@ class PairSelection:
         always_fraction: Body pairs in contact in more than this share of the samples are
             skipped (they touch by design) [-].
         seed: Seed of the configuration sampling.
+        meshes: Decide contact and closeness of two bodies on their collision meshes
+            (every body with spheres needs meshes) instead of their spheres.
+        cover_slack: None: keep the closest sphere pair of every near sample; a number
+            [m]: keep the fewest pairs such that in every near sample one of them sees
+            the bodies at most this much farther apart than they are (see the module).
     """
 
     samples: int = 3000
     margin: float = 0.02
     always_fraction: float = 0.95
     seed: int = 0
+    meshes: bool = False
+    cover_slack: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.samples < 1:
+            raise ValueError(f"PairSelection.samples must be >= 1, got {self.samples}")
+        if self.cover_slack is not None and not (np.isfinite(self.cover_slack) and self.cover_slack >= 0):
+            raise ValueError(f"PairSelection.cover_slack must be None or >= 0, got {self.cover_slack}")
 
 
 def select_pairs(kinematics: Kinematics, spheres: Sequence[CollisionSphere],
                  selection: PairSelection = PairSelection()) -> tuple[tuple[int, int], ...]:
-    """Index pairs ``(i, j)``, ``i < j``, of ``spheres`` to keep apart (see the module)."""
+    """Index pairs ``(i, j)``, ``i < j``, of ``spheres`` to keep apart (see the module).
+
+    Raises:
+        LinkMeshError: With ``selection.meshes``, a collision mesh of a body with spheres
+            is missing or unreadable.
+        KeyError: With ``selection.meshes``, a body with spheres has no collision meshes.
+    """
     body_of = bodies(kinematics)
     sphere_body = np.array([body_of[s.link] for s in spheres])
     carriers = set(sphere_body.tolist())
@@ -57,23 +96,32 @@ def select_pairs(kinematics: Kinematics, spheres: Sequence[CollisionSphere],
     q = sample_configurations(kinematics, selection.samples, selection.seed)
     centres = sphere_centres(kinematics, spheres, q)
     radii = np.array([s.radius for s in spheres])
-    pairs: list[tuple[int, int]] = []
     ordered = sorted(carriers)
-    for a_index, a in enumerate(ordered):
-        for b in ordered[a_index + 1:]:
-            if b in neighbours[a]:
-                continue
-            first = np.flatnonzero(sphere_body == a)
-            second = np.flatnonzero(sphere_body == b)
-            gaps = (np.linalg.norm(centres[:, first, None, :] - centres[:, None, second, :], axis=3)
-                    - radii[first, None] - radii[None, second])
-            if np.mean(gaps.min(axis=(1, 2)) < 0.0) > selection.always_fraction:
-                continue
-            flat = gaps.reshape(len(gaps), -1)
-            near = flat.min(axis=1) < selection.margin
-            for cell in np.unique(np.argmin(flat[near], axis=1)):
-                u, v = divmod(int(cell), len(second))
-                pairs.append((int(min(first[u], second[v])), int(max(first[u], second[v]))))
+    body_pairs = [(a, b) for i, a in enumerate(ordered) for b in ordered[i + 1:] if b not in neighbours[a]]
+    mesh_distances = (body_meshes(kinematics, body_of, carriers).distances(q, body_pairs, selection.margin)
+                      if selection.meshes else {})
+    pairs: list[tuple[int, int]] = []
+    for a, b in body_pairs:
+        first = np.flatnonzero(sphere_body == a)
+        second = np.flatnonzero(sphere_body == b)
+        gaps = (np.linalg.norm(centres[:, first, None, :] - centres[:, None, second, :], axis=3)
+                - radii[first, None] - radii[None, second]).reshape(len(q), -1)
+        distance = mesh_distances[(a, b)] if selection.meshes else gaps.min(axis=1)
+        if np.mean(distance <= 0.0) > selection.always_fraction:
+            continue
+        close = distance < selection.margin
+        near = gaps[close]
+        if not len(near):
+            continue
+        if selection.cover_slack is None:
+            cells = np.unique(np.argmin(near, axis=1))
+        else:
+            bound = np.maximum(distance[close] + selection.cover_slack, near.min(axis=1))
+            phantom = np.mean(gaps[~close] < 0.0, axis=0) if (~close).any() else np.zeros(gaps.shape[1])
+            cells = fewest_cover(sparse.csc_matrix(near <= bound[:, None]), costs=1.0 + phantom)
+        for cell in cells:
+            u, v = divmod(int(cell), len(second))
+            pairs.append((int(min(first[u], second[v])), int(max(first[u], second[v]))))
     return tuple(sorted(pairs))
 
 
