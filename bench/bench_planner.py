@@ -34,18 +34,21 @@ PANDA_URDF = BENCH_DIR.parent / "dynfab" / "robots" / "data" / "panda.urdf"
 Q0 = np.array([1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0])
 
 
-def measure_ours(spheres: int, steps: int, dynamic: bool = False, scene: bool = False) -> dict:
+def measure_ours(spheres: int, steps: int, dynamic: bool = False, scene: bool = False,
+                 sphere_model: str = "fitted") -> dict:
     """Build the planner and time ``compute`` (run in a fresh interpreter by :func:`main`).
     ``dynamic``: the dynamic-fabric planner (goal and obstacles with velocities and
     accelerations), with moving obstacles. ``scene``: also 2 box slots and a pose goal (the
-    hand's position and all three of its axes)."""
+    hand's position and all three of its axes). ``sphere_model``: the Panda's collision
+    spheres, ``"fitted"`` (the default ``panda``) or ``"hand-written"`` (the default before
+    issue 9)."""
     from dynfab.fabric.leaves.orientation import OrientationGoalConfig
     from dynfab.fabric.parameters import ShapeSlots
     from dynfab.fabric.planner import FabricPlanner, GoalConfig, PlannerConfig
-    from dynfab.robots import load_robot
+    from dynfab.robots.builtin import panda_robot
 
     start = time.perf_counter()
-    robot = load_robot("panda")
+    robot = panda_robot(sphere_model)
     goals = (GoalConfig(link="panda_hand"),) + ((OrientationGoalConfig(link="panda_hand"),) if scene else ())
     planner = FabricPlanner(robot, PlannerConfig(goals=goals, obstacle_slots=spheres, dynamic=dynamic,
                                                  shape_slots=ShapeSlots(box=2 if scene else 0)))
@@ -74,12 +77,15 @@ def measure_ours(spheres: int, steps: int, dynamic: bool = False, scene: bool = 
         non_finite += not np.isfinite(out).all()
     return {"spheres": spheres, "build_s": build_s, "step_ms_median": 1e3 * statistics.median(times),
             "step_ms_mean": 1e3 * statistics.fmean(times), "n_instructions": planner.n_instructions,
-            "nan_fraction": non_finite / steps}
+            "nan_fraction": non_finite / steps, "robot_spheres": len(robot.collision_spheres),
+            "robot_pairs": len(robot.self_collision_pairs)}
 
 
-def _ours_in_fresh_process(spheres: int, steps: int, dynamic: bool = False, scene: bool = False) -> dict:
+def _ours_in_fresh_process(spheres: int, steps: int, dynamic: bool = False, scene: bool = False,
+                           sphere_model: str = "fitted") -> dict:
     code = ("import json, sys; sys.path.insert(0, %r); from bench_planner import measure_ours; "
-            "print(json.dumps(measure_ours(%d, %d, %r, %r)))" % (str(BENCH_DIR), spheres, steps, dynamic, scene))
+            "print(json.dumps(measure_ours(%d, %d, %r, %r, %r)))"
+            % (str(BENCH_DIR), spheres, steps, dynamic, scene, sphere_model))
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
@@ -123,6 +129,8 @@ def main(argv: list[str] | None = None) -> int:
           f"({scene['step_ms_median'] / plain['step_ms_median']:.2f}x) | {scene['n_instructions']} vs "
           f"{plain['n_instructions']} SX instructions | build {scene['build_s']:.2f} vs {plain['build_s']:.2f} s")
     print()
+    _print_sphere_models(_sphere_models(args.steps))
+    print()
     _print_speed(speed_measurements(args.steps), run_reference(5, min(args.steps, 1000), PANDA_URDF))
     if missing:
         print(REFERENCE_MISSING_MESSAGE)
@@ -135,8 +143,34 @@ def _all_measurements(spheres: list[int], steps: int) -> dict:
     for n in spheres:
         sweep.append({"spheres": n, "ours": _ours_in_fresh_process(n, steps),
                       "reference": run_reference(n, min(steps, 1000), PANDA_URDF)})
-    return {"sweep": sweep, "speed": speed_measurements(steps),
+    return {"sweep": sweep, "sphere_models": _sphere_models(steps), "speed": speed_measurements(steps),
             "reference_5_spheres": run_reference(5, min(steps, 1000), PANDA_URDF)}
+
+
+def _sphere_models(steps: int, rounds: int = 3) -> dict:
+    """Issue 9: the scene (5 spheres, 2 boxes, pose goal; static) with the Panda's fitted
+    spheres and with the hand-written ones, alternating in fresh processes; the ratio of
+    the medians of each model's per-round medians."""
+    runs: dict[str, list[dict]] = {"fitted": [], "hand-written": []}
+    for _ in range(rounds):
+        for model in runs:
+            runs[model].append(_ours_in_fresh_process(5, steps, scene=True, sphere_model=model))
+    result = {model: {**measured[0], "step_ms_median": statistics.median(m["step_ms_median"] for m in measured),
+                      "step_ms_rounds": [m["step_ms_median"] for m in measured]}
+              for model, measured in runs.items()}
+    result["ratio"] = result["fitted"]["step_ms_median"] / result["hand-written"]["step_ms_median"]
+    return result
+
+
+def _print_sphere_models(models: dict) -> None:
+    fitted, written = models["fitted"], models["hand-written"]
+    print("issue 9, the Panda's collision spheres: the scene above with the fitted spheres (default) vs the "
+          "hand-written ones (before), same run, 3 alternating rounds:")
+    for name, m in (("fitted", fitted), ("hand-written", written)):
+        rounds = ", ".join(f"{t:.4f}" for t in m["step_ms_rounds"])
+        print(f"  {name:<13} {m['robot_spheres']:>2} spheres, {m['robot_pairs']:>2} pairs | step median "
+              f"{m['step_ms_median']:.4f} ms (rounds {rounds}) | {m['n_instructions']} SX instructions")
+    print(f"  fitted / hand-written = {models['ratio']:.2f}x (target <= 1.5x)")
 
 
 def _print_speed(speed: dict, reference: dict | None) -> None:
