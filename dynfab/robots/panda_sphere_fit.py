@@ -10,7 +10,8 @@ joints ``panda_joint1..7``, the fingers locked closed), whose frames ``panda_lin
 1. spheres per *body* (:func:`~dynfab.robots.collision_model.fit_body_spheres`): the
    flange, hand and closed fingers are welded to ``panda_link7`` and fitted with it;
    the fewest spheres (:attr:`PANDA_FIT`) with no mesh surface point more than 1 cm
-   outside and no sphere more than 3 cm out of the meshes;
+   outside and spheres reaching at most 3 cm out of the meshes (the fitter's last step may
+   grow a sphere over points it missed: 4.0 cm on ``panda_link7``);
 2. a sphere of ``panda_link1`` whose centre lies within 1 cm of joint 1's axis is moved
    onto it, its radius grown by the shift (it still holds the old sphere, so coverage
    is kept): a point on that axis never moves, and the planner leaves static spheres

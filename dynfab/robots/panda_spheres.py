@@ -1,22 +1,31 @@
 """The Panda's collision spheres fitted to Franka's collision meshes (example-robot-data),
 made and rewritten by ``python -m dynfab.robots.panda_sphere_fit`` (see that module for the
-steps: the fewest spheres per body with 1 cm coverage and at most 3 cm bulge, the flange,
+steps: the fewest spheres per body with 1 cm coverage and 3 cm bulge (4.0 cm on
+``panda_link7``, where the fitter grew a sphere over points it had missed), the flange,
 hand and closed fingers fitted with ``panda_link7``, a ``panda_link1`` sphere moved onto
 joint 1's axis, pairs chosen on the meshes).
 
-Coverage: no point of the collision meshes more than 1.0 cm outside the spheres (checked on
-about 4 samples per mm^2... see tests/test_collision_model.py). Why these parameters (all
-measured in one session on the 2-core machine, static fabric, Experiment 1 seeds 0-49
-with each model's own scenarios, ``./run bench``'s scene of 5 spheres, 2 boxes and a pose
-goal):
+Claims, checked in tests/test_collision_model.py: no point of the collision meshes lies more
+than 1.0 cm outside the spheres (vertices plus about 1 sample per 4 mm^2); on 2000 random
+configurations, wherever two bodies' meshes touch, one of the kept pairs overlaps.
+
+Why these parameters (measured 2026-11-23 on the 2-core machine; static fabric; Experiment
+1 seeds 0-49, each model with its own scenarios; the scene of ``./run bench``: 5 spheres,
+2 boxes and a pose goal):
 
 - the 13 hand-written spheres (``panda_robot("hand-written")``) leave up to 8.3 cm of the
   meshes outside and their 19 pairs let the meshes touch themselves in 11 of 50 exp1 runs;
-- 1 cm coverage with at most 2 cm bulge needed 45 greedy spheres (152 pairs): 2.7 times
-  the step time; the fewest-sphere cover and per-body fits need 22 spheres at 3 cm bulge
-  (4 cm: 19), and pairs chosen on the meshes drop those the spheres' bulge invents;
-- 3 cm bulge keeps the robot as slim as the hand-written spheres (the sphere union reaches
-  1.6 cm out of the meshes on average, at most 3.9 cm; hand-written 1.7 and 8.2 cm).
+- the first fit (1 cm, at most 2 cm bulge, greedy cover per link, every closest pair: 46
+  spheres, 152 pairs) took 2.7 times the scene's step time;
+- the fewest-sphere cover with per-body fits needs 22 spheres at 3 cm bulge (19 at 4 cm);
+  pairs chosen on the meshes drop the pairs only the spheres' bulge brings together, and
+  the covering rule keeps 30 instead of 65; together 1.37-1.40 times the hand-written
+  model's step time in the scene (``./run bench``), target 1.5;
+- 3 cm bulge keeps the robot about as slim as the hand-written spheres: the surface of
+  the sphere union lies on average 1.6 cm (at most 3.9 cm) out of the meshes, against 1.7
+  (8.2) cm; exp1: 49/50 reached without collision (one deadlock, seed 34), the meshes
+  never touch an obstacle nor themselves (hand-written: 50/50, meshes touch themselves in
+  11 runs).
 
 Fitted:
 
