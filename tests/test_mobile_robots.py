@@ -12,7 +12,7 @@ import pytest
 
 from dynfab.robots import Kinematics, Robot, UnknownRobotError, load_robot, parse_urdf
 from dynfab.robots.builtin import (BOXER_BASE, BOXER_DISC_RADIUS, BOXER_SPHERE_RADIUS,
-                                   PANDA_DEFAULT_Q)
+                                   PANDA_DEFAULT_Q, panda_robot)
 from dynfab.robots.robot import BASE_JOINTS, DifferentialDriveBase
 from test_kinematics import to_pinocchio_q
 
@@ -83,7 +83,7 @@ def test_load_boxer_panda(boxer_panda: Robot) -> None:
     assert robot.goal_link == "panda_hand" and not robot.planar
     assert robot.base == BOXER_BASE
     np.testing.assert_array_equal(robot.default_q, (0.0, 0.0, 0.0) + PANDA_DEFAULT_Q)
-    panda = load_robot("panda")
+    panda = panda_robot("hand-written")  # boxer-panda keeps the hand-written spheres
     np.testing.assert_array_equal(robot.kinematics.lower[3:], panda.kinematics.lower)
     np.testing.assert_array_equal(robot.kinematics.upper[3:], panda.kinematics.upper)
     np.testing.assert_array_equal(robot.kinematics.velocity_limits[3:],
@@ -258,8 +258,8 @@ def test_self_collision_pairs_apart_at_default(boxer_panda: Robot) -> None:
         clearance = (np.linalg.norm(centers[a] - centers[b])
                      - spheres[a].radius - spheres[b].radius)
         assert clearance > 0.05, f"pair ({a}, {b}) in contact at default_q"
-    # the Panda's own pairs are all there
-    panda = load_robot("panda")
+    # the (hand-written) Panda's own pairs are all there
+    panda = panda_robot("hand-written")
     offset = len(spheres) - len(panda.collision_spheres)
     assert {(a + offset, b + offset) for a, b in panda.self_collision_pairs} <= set(pairs)
     # the rest are arm spheres against the base body
