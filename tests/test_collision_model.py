@@ -13,7 +13,7 @@ import trimesh
 from dynfab.geometry.sphere_fitting import outside_distances
 from dynfab.robots import Kinematics, load_urdf
 from dynfab.robots.builtin import panda_robot
-from dynfab.robots.collision_model import CollisionModel, auto_collision_model
+from dynfab.robots.collision_model import CollisionModel, auto_collision_model, fit_body_spheres, fit_link_spheres
 from dynfab.robots.link_meshes import LinkMeshError, link_collision_meshes
 from dynfab.robots.panda_sphere_fit import franka_kinematics
 from dynfab.robots.panda_spheres import PANDA_FITTED_SPHERES
@@ -161,6 +161,37 @@ def test_fewest_pairs_still_see_every_near_contact_within_the_slack(tmp_path: Pa
     kept = np.array(fewest)  # all a-c pairs: b is adjacent to both
     gaps = np.linalg.norm(centres[:, kept[:, 0]] - centres[:, kept[:, 1]], axis=2) - 0.24
     assert np.all(gaps.min(axis=1) <= distance[near] + 0.02 + 1e-12)
+
+
+def test_body_fit_covers_welded_links_with_spheres_on_the_first(tmp_path: Path) -> None:
+    """c gets a welded child d (fixed joint) holding a box across c's tip: one fit for both,
+    attached to c, covering both boxes within 1 cm, with fewer spheres than two fits."""
+    text = (Path(__file__).parent / "data" / "three_links.urdf").read_text()
+    text = text.replace("<!--MESH-->", '<collision><origin xyz="0.3 0 0"/><geometry><box size="0.6 0.1 0.1"/>'
+                                       "</geometry></collision>")
+    text = text.replace("</robot>", '<link name="d"><collision><origin xyz="0 0 0"/><geometry>'
+                                    '<box size="0.1 0.4 0.1"/></geometry></collision></link>'
+                                    '<joint name="weld" type="fixed"><parent link="c"/><child link="d"/>'
+                                    '<origin xyz="0.6 0 0"/></joint></robot>')
+    urdf = tmp_path / "welded.urdf"
+    urdf.write_text(text)
+    kinematics = Kinematics(load_urdf(urdf))
+    by_body = {fit.link: fit for fit in fit_body_spheres(kinematics)}
+    by_link = {fit.link: fit for fit in fit_link_spheres(kinematics)}
+    assert set(by_body) == {"a", "b", "c"} and set(by_link) == {"a", "b", "c", "d"}
+    assert len(by_body["c"].spheres) < len(by_link["c"].spheres) + len(by_link["d"].spheres)
+    centres = np.array([s.center for s in by_body["c"].spheres])
+    radii = np.array([s.radius for s in by_body["c"].spheres])
+    stem = _independent_surface(link_collision_meshes(kinematics.model, "c"))
+    bar = _independent_surface(link_collision_meshes(kinematics.model, "d")) + (0.6, 0.0, 0.0)
+    assert outside_distances(np.vstack([stem, bar]), centres, radii).max() <= 0.01 + 1e-9
+
+
+def test_pair_selection_refuses_bad_parameters() -> None:
+    with pytest.raises(ValueError, match="samples"):
+        PairSelection(samples=0)
+    with pytest.raises(ValueError, match="cover_slack"):
+        PairSelection(cover_slack=-0.01)
 
 
 def test_cache_is_used_and_a_changed_urdf_refits(tmp_path: Path) -> None:
