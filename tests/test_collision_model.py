@@ -87,8 +87,9 @@ def test_pairs_skip_same_and_adjacent_bodies(arm: tuple[str, CollisionModel]) ->
 
 
 def test_every_kept_pair_can_meet(arm: tuple[str, CollisionModel]) -> None:
-    """For each body pair kept, some sampled configuration brings its spheres within the
-    margin; and for at least one pair a configuration where the spheres overlap exists."""
+    """Each kept pair comes within the margin plus the covering slack in some sampled
+    configuration (it covers one where the meshes are within the margin); and for at least
+    one pair a configuration where the spheres overlap exists."""
     name, model = arm
     kinematics = Kinematics(load_urdf(arm_urdf(name)))
     q = np.random.default_rng(0).uniform(np.where(np.isfinite(kinematics.lower), kinematics.lower, -np.pi),
@@ -99,7 +100,7 @@ def test_every_kept_pair_can_meet(arm: tuple[str, CollisionModel]) -> None:
     pairs = np.array(model.self_collision_pairs)
     gaps = (np.linalg.norm(centres[:, pairs[:, 0]] - centres[:, pairs[:, 1]], axis=2)
             - radii[pairs[:, 0]] - radii[pairs[:, 1]])
-    assert np.all(gaps.min(axis=0) < PairSelection().margin)
+    assert np.all(gaps.min(axis=0) < PairSelection().margin + PairSelection().cover_slack)
     assert (gaps.min(axis=0) < 0.0).any()
 
 
@@ -137,8 +138,9 @@ def test_pairs_chosen_on_meshes_drop_pairs_only_the_spheres_bring_together(tmp_p
            CollisionSphere("c", (0.5, 0, 0), 0.8)]
     centres = sphere_centres(kinematics, fat, np.array([[0.0, 1.2, 1.2]]))[0]
     assert np.linalg.norm(centres[0] - centres[2]) < 1.6  # the spheres overlap there
-    assert select_pairs(kinematics, fat, PairSelection(samples=500)) == ((0, 2),)
-    assert select_pairs(kinematics, fat, PairSelection(samples=500, meshes=True)) == ()
+    on_spheres = PairSelection(samples=500, meshes=False, cover_slack=None)
+    assert select_pairs(kinematics, fat, on_spheres) == ((0, 2),)
+    assert select_pairs(kinematics, fat, PairSelection(samples=500)) == ()
 
 
 def test_fewest_pairs_still_see_every_near_contact_within_the_slack(tmp_path: Path) -> None:
@@ -148,8 +150,8 @@ def test_fewest_pairs_still_see_every_near_contact_within_the_slack(tmp_path: Pa
     kinematics = _chain_with_meshes(tmp_path, 3.0)
     spheres = [CollisionSphere(link, (x, 0.0, 0.0), 0.12) for link in ("a", "c") for x in (0.1, 0.3, 0.5, 0.7, 0.9)]
     spheres.append(CollisionSphere("b", (0.5, 0.0, 0.0), 0.05))  # else a and c count as neighbours
-    closest = select_pairs(kinematics, spheres, PairSelection(samples=2000, meshes=True))
-    fewest = select_pairs(kinematics, spheres, PairSelection(samples=2000, meshes=True, cover_slack=0.02))
+    closest = select_pairs(kinematics, spheres, PairSelection(samples=2000, cover_slack=None))
+    fewest = select_pairs(kinematics, spheres, PairSelection(samples=2000, cover_slack=0.02))
     assert 0 < len(fewest) < len(closest)
     body_of = bodies(kinematics)
     q = sample_configurations(kinematics, 2000, 0)

@@ -18,7 +18,7 @@ import numpy as np
 from dynfab.geometry.exact_collision import exact_distance, mesh_set
 
 from .kinematics import Kinematics
-from .link_meshes import link_collision_meshes
+from .link_meshes import LinkMeshError, link_collision_meshes
 from .mesh_collision import MeshCollisionModel
 
 __all__ = ["BodyMeshes", "body_meshes"]
@@ -39,11 +39,8 @@ class BodyMeshes:
     def distances(self, q: np.ndarray, pairs: Sequence[tuple[int, int]],
                   reach: float) -> dict[tuple[int, int], np.ndarray]:
         """Distance of each body pair at each row of ``q``, shape (N,) per pair [m]; ``inf``
-        where the bodies' bounding spheres are more than ``reach`` apart.
-
-        Raises:
-            KeyError: A body without meshes.
-        """
+        where the bodies' bounding spheres are more than ``reach`` apart. Pairs with a body
+        without meshes are left out of the result."""
         poses = self.model.link_poses(q)  # (N, L, 4, 4)
         meshes = self.model.meshes
         centres = np.einsum("nlij,lj->nli", poses[:, :, :3, :3], np.array([m.center for m in meshes])) \
@@ -51,6 +48,8 @@ class BodyMeshes:
         radii = np.array([m.radius for m in meshes])
         result = {}
         for a, b in pairs:
+            if a not in self.body_links or b not in self.body_links:
+                continue
             distance = np.full(len(q), np.inf)
             for i in self.body_links[a]:
                 for j in self.body_links[b]:
@@ -62,16 +61,17 @@ class BodyMeshes:
 
 
 def body_meshes(kinematics: Kinematics, body_of: Mapping[str, int], wanted: set[int]) -> BodyMeshes:
-    """The meshes of the links of the ``wanted`` bodies that have collision geometry.
-
-    Raises:
-        LinkMeshError: A collision mesh that is missing or unreadable.
-    """
+    """The meshes of the links of the ``wanted`` bodies that have collision geometry; a
+    link whose mesh file is missing or unreadable is left out (a body left without meshes
+    is not in :attr:`BodyMeshes.body_links`)."""
     links, sets = [], []
     for link in kinematics.link_names:
         if body_of[link] not in wanted:
             continue
-        meshes = link_collision_meshes(kinematics.model, link)
+        try:
+            meshes = link_collision_meshes(kinematics.model, link)
+        except LinkMeshError:
+            continue
         if meshes:
             links.append(link)
             sets.append(mesh_set(meshes))
