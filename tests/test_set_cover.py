@@ -5,6 +5,7 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
+import pytest
 from scipy import sparse
 
 from dynfab.geometry.set_cover import fewest_cover, greedy_cover, prune
@@ -60,3 +61,11 @@ def test_costs_choose_the_cheaper_of_equally_small_covers() -> None:
     # a cheap pair of columns beats one expensive column
     cover = _matrix(2, [{0, 1}, {0}, {1}])
     assert fewest_cover(cover, costs=np.array([3.0, 1.0, 1.0])) == [1, 2]
+
+
+def test_a_matrix_too_large_to_reduce_keeps_the_greedy_cover(monkeypatch: pytest.MonkeyPatch) -> None:
+    halves = [set(range(7)), set(range(7, 14))]
+    decoys = [{0, 1, 2, 3, 7, 8, 9, 10}, {4, 5, 11, 12}, {6, 13}]
+    cover = _matrix(14, decoys + halves)
+    monkeypatch.setattr("dynfab.geometry.set_cover.DENSE_LIMIT", 14 * 5 - 1)
+    assert fewest_cover(cover) == [0, 1, 2]

@@ -26,6 +26,10 @@ from scipy.optimize import Bounds, LinearConstraint, milp
 
 __all__ = ["fewest_cover", "greedy_cover", "prune"]
 
+#: Largest cover matrix (rows x columns) that :func:`fewest_cover` reduces as a dense
+#: float32 array (160 MB); larger problems keep the greedy cover.
+DENSE_LIMIT = 40_000_000
+
 
 def greedy_cover(cover: sparse.csc_matrix, costs: np.ndarray | None = None) -> list[int]:
     """Columns, best first (most newly covered rows per cost), until every coverable row
@@ -58,11 +62,11 @@ def fewest_cover(cover: sparse.csc_matrix, costs: np.ndarray | None = None,
                  time_limit: float = 20.0) -> list[int]:
     """The fewest columns (or the cheapest, with positive ``costs`` per column) that cover
     every coverable row, sorted; the pruned greedy cover if the solver finds nothing
-    better within ``time_limit`` [s]."""
+    better within ``time_limit`` [s] or the matrix exceeds :data:`DENSE_LIMIT` entries."""
     weights = np.ones(cover.shape[1]) if costs is None else np.asarray(costs, dtype=float)
     greedy = prune(cover, greedy_cover(cover, weights))
     coverable = np.flatnonzero(np.asarray(cover.sum(axis=1)).ravel() > 0)
-    if not greedy or (costs is None and len(greedy) == 1):
+    if not greedy or (costs is None and len(greedy) == 1) or len(coverable) * cover.shape[1] > DENSE_LIMIT:
         return sorted(greedy)
     columns = _kept(sparse.csc_matrix(cover[coverable], dtype=np.float32), keep_largest=True, costs=weights)
     reduced = sparse.csc_matrix(cover[coverable][:, columns], dtype=np.float32)
