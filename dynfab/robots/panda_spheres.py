@@ -19,7 +19,7 @@ Why these parameters (measured 2026-11-23 on the 2-core machine; static fabric; 
   spheres, 152 pairs) took 2.7 times the scene's step time;
 - the fewest-sphere cover with per-body fits needs 22 spheres at 3 cm bulge (19 at 4 cm);
   pairs chosen on the meshes drop the pairs only the spheres' bulge brings together, and
-  the covering rule keeps 30 instead of 65; together 1.37-1.40 times the hand-written
+  the covering rule keeps 30 instead of 65; together 1.37-1.41 times the hand-written
   model's step time in the scene (``./run bench``), target 1.5;
 - 3 cm bulge keeps the robot about as slim as the hand-written spheres: the surface of
   the sphere union lies on average 1.6 cm (at most 3.9 cm) out of the meshes, against 1.7
