@@ -8,6 +8,9 @@ obstacle references into the planner's runtime parameters before calling it.
 - ``dynamic-fabric``: goals and obstacles also pass their velocity and acceleration, which
   the dynamic pullback uses (paper section IV).
 
+The scenario's ``fabric:`` block (:mod:`dynfab.scenario.fabric_schema`) sets leaf and
+root parameters of the fabric planners; the MPC ignores it.
+
 Scenario goals become planner goals one to one, except a ``pose`` goal, which becomes two:
 the position of its point (first) and the orientation of its link, with the same weight.
 
@@ -130,6 +133,7 @@ def make_controller(scenario: Scenario, robot: Robot, references: References) ->
     goals = tuple(config for goal in scenario.goals for config in _goal_configs(goal))
     config = replace(PlannerConfig.for_robot(robot, goals, kinds.count("sphere"), _FABRIC_PLANNERS[scenario.planner],
                                              shape_slots), control_period=scenario.dt, backend=scenario.backend)
+    config = scenario.fabric.configured(config)
     planner = FabricPlanner(robot, config)
     slots = _place_obstacles(scenario.obstacles, planner.parameters)
     references = planner_references(scenario, references)
