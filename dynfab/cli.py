@@ -21,6 +21,7 @@ from dynfab.fabric.backends import BACKENDS
 from dynfab.scenario.recording import RecordingError, load_recording, run_recording, save_recording
 from dynfab.scenario.runner import RunResult, link_path, run_scenario
 from dynfab.scenario.schema import PLANNERS, Scenario, ScenarioError, load_scenario
+from dynfab.tune_command import add_tune_parser, tune_command
 
 if TYPE_CHECKING:
     from dynfab.experiments.cluster import Cluster
@@ -94,7 +95,10 @@ def main(argv: list[str] | None = None) -> int:
     spheres.add_argument("--joints", nargs="+", help="active joints (default: every movable, non-mimic joint)")
     commands.add_parser("schema", help="print the JSON Schema of scenario files (for editor completion, see the "
                                        "README)")
+    add_tune_parser(commands)
     args = parser.parse_args(argv)
+    if args.command == "tune":
+        return tune_command(args)
     if args.command == "schema":
         from dynfab.scenario.schema import ScenarioDocument
 
