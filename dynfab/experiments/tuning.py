@@ -95,14 +95,10 @@ class TuningSetup:
                 "duration": self.duration, "sampler_seed": self.sampler_seed,
                 "objective": dataclasses.asdict(self.objective), "space": space_description()}
 
-    def scenario(self, seed: int, block: Block) -> dict[str, Any]:
-        """The scenario-file mapping of ``seed`` with ``block`` (none if empty)."""
-        data = dict(self.experiment.sampler(seed, self.planner))
-        if self.duration is not None:
-            data["duration"] = self.duration
-        if block:
-            data["fabric"] = block
-        return data
+    def scenarios(self, seeds: Sequence[int]) -> list[dict[str, Any]]:
+        """The scenario-file mappings of ``seeds`` (without a ``fabric:`` block)."""
+        drawn = [dict(self.experiment.sampler(seed, self.planner)) for seed in seeds]
+        return drawn if self.duration is None else [{**data, "duration": self.duration} for data in drawn]
 
 
 @dataclass(frozen=True)
@@ -144,13 +140,14 @@ def tune(setup: TuningSetup, trials: int, study_path: Path, jobs: int = 1, clust
         study = _study(optuna, setup, study_path)
         distributions = {d.key: optuna.distributions.FloatDistribution(d.low, d.high, log=d.log) for d in SEARCH_SPACE}
         done = _finished(study, optuna)
+        training_scenarios = setup.scenarios(setup.training_seeds)
         executed = 0
         while len(done) < trials:
             trial = study.ask(distributions)
             block = block_of(trial.params)
             start = time.perf_counter()
             try:
-                evaluation = run_block(executor, setup, setup.training_seeds, block)
+                evaluation = run_block(executor, training_scenarios, block, setup.objective)
             except BaseException:  # Ctrl-C or a failed run: the trial runs again on the next call
                 _fail_and_requeue(study, optuna, trial.number, trial.params, trial.user_attrs)
                 raise
@@ -168,13 +165,14 @@ def tune(setup: TuningSetup, trials: int, study_path: Path, jobs: int = 1, clust
     return TuningResult(len(done), executed, best.number, best_block, training, held_out)  # type: ignore[arg-type]
 
 
-def run_block(executor: Executor, setup: TuningSetup, seeds: Sequence[int], block: Block) -> Evaluation:
-    """Run the scenarios of ``seeds`` with ``block`` on ``executor`` and evaluate them."""
-    scenarios = [setup.scenario(seed, block) for seed in seeds]
-    futures = [executor.submit(run_scenario_text, yaml.safe_dump(data, sort_keys=False), str(Path.cwd()), False)
-               for data in scenarios]
+def run_block(executor: Executor, scenarios: Sequence[dict[str, Any]], block: Block,
+              objective: Objective) -> Evaluation:
+    """Run ``scenarios`` (scenario-file mappings) with the ``fabric:`` block ``block`` (none
+    if empty) on ``executor`` and evaluate them."""
+    texts = [yaml.safe_dump({**data, "fabric": block} if block else data, sort_keys=False) for data in scenarios]
+    futures = [executor.submit(run_scenario_text, text, str(Path.cwd()), False) for text in texts]
     metrics = [future.result()[0] for future in futures]
-    return evaluate(metrics, [float(data["duration"]) for data in scenarios], setup.objective)
+    return evaluate(metrics, [float(data["duration"]) for data in scenarios], objective)
 
 
 def _optuna() -> Any:
@@ -202,7 +200,7 @@ def _study(optuna: Any, setup: TuningSetup, path: Path) -> optuna.Study:
     stored = study.user_attrs.get("setup")
     if stored is None:
         study.set_user_attr("setup", described)
-        defaults = default_values(setup.scenario(setup.train_seed, {}))
+        defaults = default_values(setup.scenarios([setup.train_seed])[0])
         study.enqueue_trial(defaults, user_attrs={"default": True})
     elif stored != described:
         changed = sorted(key for key in described if stored.get(key) != described[key])
@@ -233,7 +231,7 @@ def _held_out(study: optuna.Study, executor: Executor, setup: TuningSetup, block
     if stored is not None:
         return Evaluation(**stored)
     start = time.perf_counter()
-    evaluation = run_block(executor, setup, setup.held_out_seeds, block)
+    evaluation = run_block(executor, setup.scenarios(setup.held_out_seeds), block, setup.objective)
     study.set_user_attr(key, dataclasses.asdict(evaluation))
     progress(f"held-out, {'tuned' if block else 'defaults'}: {_summary(evaluation)}; "
              f"{time.perf_counter() - start:.1f} s")
