@@ -66,10 +66,8 @@ def tune_command(args: argparse.Namespace) -> int:
     try:
         setup = TuningSetup(experiment, args.planner or fabric[0], args.train, args.train_seed, args.held_out,
                             args.held_out_seed, args.duration, args.seed)
-        print(f"dynfab: tuning {args.name} ({setup.planner}) in {study}: {args.trials} trials on {args.train} "
-              f"training scenarios, then {args.held_out} held-out", file=sys.stderr)
         result = tune(setup, args.trials, study, args.jobs, cluster,
-                      progress=lambda line: print(f"  {line}", file=sys.stderr, flush=True))
+                      progress=lambda line: print(f"dynfab: {line}", file=sys.stderr, flush=True))
     except (TuningError, ClusterError) as error:
         return _error(str(error))
     except RunError as error:

@@ -140,6 +140,8 @@ def tune(setup: TuningSetup, trials: int, study_path: Path, jobs: int = 1, clust
         study = _study(optuna, setup, study_path)
         distributions = {d.key: optuna.distributions.FloatDistribution(d.low, d.high, log=d.log) for d in SEARCH_SPACE}
         done = _finished(study, optuna)
+        progress(f"tuning {setup.experiment.name} ({setup.planner}) in {study_path}: {trials} trials "
+                 f"({len(done)} finished) on {setup.train} training scenarios, then {setup.held_out} held-out")
         training_scenarios = setup.scenarios(setup.training_seeds)
         executed = 0
         while len(done) < trials:
