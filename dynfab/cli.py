@@ -209,8 +209,9 @@ def _experiment(args: argparse.Namespace) -> int:
               file=sys.stderr)
         return 130
     print((out / "summary.md").read_text(encoding="utf-8"), end="")
+    print("\n" + (out / "timings.md").read_text(encoding="utf-8"), end="")
     print(f"dynfab: {result.executed} runs executed; wrote {out}/runs.jsonl, runs.csv, summary.md, summary.json, "
-          f"scenarios/ and plots/", file=sys.stderr)
+          f"timings.md, timings.json, scenarios/ and plots/", file=sys.stderr)
     return 0
 
 

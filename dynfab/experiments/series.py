@@ -12,7 +12,10 @@ with a summary beside the paper's figures and plots.
 - ``summary.md``, ``summary.json``: per planner the success rate, collisions and
   deadlocks (goal not reached, no collision), and mean ± std of the metrics over the runs
   where every planner succeeded (as the paper compares them), beside the paper's figures
-  and ratios; the same metrics over each planner's own successful runs;
+  and ratios; the same metrics over each planner's own successful runs. Determined by the
+  seeds: byte-identical between executions, also after a kill and a resume;
+- ``timings.md``, ``timings.json``: solver time per call and wall time per run, with the
+  paper's timing figures and ratios (these differ between executions);
 - ``plots/metrics.png`` (box plots per planner over all runs), ``plots/outcomes.png`` (success,
   collision and deadlock counts) and ``plots/example_<seed>_<planner>.png``: one run of
   the experiment's first planner (its baseline, static fabrics in every experiment, and
@@ -41,7 +44,7 @@ from dynfab.experiments.cluster import Cluster, series_executor
 from dynfab.experiments.registry import Experiment
 from dynfab.experiments.series_plots import write_plots
 from dynfab.experiments.series_summary import (METRIC_KEYS, MetricValue, RunRecord, SeriesSummary, render_summary,
-                                               summarize, summary_dict)
+                                               render_timings, summarize, summary_dict, timings_dict)
 from dynfab.scenario.recording import Recording, run_recording, save_recording
 from dynfab.scenario.runner import run_scenario
 from dynfab.scenario.schema import scenario_from_dict
@@ -134,6 +137,8 @@ def run_series(experiment: Experiment, runs: int, seed: int, out_dir: str | Path
         _write_csv(out / "runs.csv", records, experiment.name)
         (out / "summary.md").write_text(render_summary(summary), encoding="utf-8")
         (out / "summary.json").write_text(json.dumps(summary_dict(summary), indent=2) + "\n", encoding="utf-8")
+        (out / "timings.md").write_text(render_timings(summary), encoding="utf-8")
+        (out / "timings.json").write_text(json.dumps(timings_dict(summary), indent=2) + "\n", encoding="utf-8")
         baseline = [r for r in records if r.planner == experiment.planners[0]]
         example = next((r for r in baseline if not r.metrics["success"]), baseline[0])
         write_plots(out / "plots", summary, records, example, files[(example.seed, example.planner)])
