@@ -337,10 +337,11 @@ def _report(results: list[RunResult], as_json: bool) -> None:
         else:
             print(json.dumps({result.scenario.planner: m for result, m in zip(results, metrics)}))
         return
+    width = max(len(key) for key in metrics[0])
     if len(results) > 1:
-        print(f"{'':>17}  " + "".join(f"{result.scenario.planner:>16}" for result in results))
+        print(f"{'':>{width}}  " + "".join(f"{result.scenario.planner:>16}" for result in results))
     for key in metrics[0]:
-        print(f"{key:>17}: " + "".join(f"{_shown(m[key]):>16}" for m in metrics))
+        print(f"{key:>{width}}: " + "".join(f"{_shown(m[key]):>16}" for m in metrics))
 
 
 def _shown(value: object) -> str:
