@@ -18,8 +18,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from dynfab.fabric.backends import BACKENDS
+from dynfab.plot_command import add_plot_parser, plot_command
 from dynfab.scenario.recording import RecordingError, load_recording, run_recording, save_recording
-from dynfab.scenario.runner import RunResult, link_path, run_scenario
+from dynfab.scenario.runner import RunResult, run_scenario
 from dynfab.scenario.schema import PLANNERS, Scenario, ScenarioError, load_scenario
 
 if TYPE_CHECKING:
@@ -92,6 +93,7 @@ def main(argv: list[str] | None = None) -> int:
     spheres.add_argument("--package-dir", type=Path, action="append", default=[],
                          help="folder where package:// URIs resolve (repeatable)")
     spheres.add_argument("--joints", nargs="+", help="active joints (default: every movable, non-mimic joint)")
+    add_plot_parser(commands)
     commands.add_parser("schema", help="print the JSON Schema of scenario files (for editor completion, see the "
                                        "README)")
     args = parser.parse_args(argv)
@@ -106,6 +108,8 @@ def main(argv: list[str] | None = None) -> int:
         return spheres_command(args.urdf, args.out, args.plot, args.tolerance, args.package_dir, args.joints)
     if args.command == "experiment":
         return _experiment(args)
+    if args.command == "plot":
+        return plot_command(args)
     if args.command == "export":
         from dynfab.export_command import export_command
 
@@ -349,29 +353,9 @@ def _shown(value: object) -> str:
 
 
 def _plot(result: RunResult, path: Path) -> None:
-    """Plot the goal link's workspace path; a goal given in other coordinates (joint
-    goals, a subset of axes) or without a point (axis goals) is not drawn, the link's
-    full path is."""
-    from dynfab.viz.plots import plot_run
+    from dynfab.viz.result_plot import plot_result
 
-    goal = result.scenario.goals[0]
-    dimension = 2 if result.robot.planar else 3
-    if goal.type not in ("joint", "axis") and result.goal_positions.shape[1] == dimension:
-        positions = result.goal_positions
-        markers = [(result.goal_reference if goal.type == "path" else goal.position, goal.tolerance)]
-    else:
-        link = goal.link if goal.type != "joint" else result.robot.goal_link
-        positions = link_path(result.robot, link, result.record.q)[:, :dimension]
-        markers = []
-    obstacles = result.scenario.obstacles
-    spheres = [k for k, o in enumerate(obstacles) if o.type == "sphere"]
-    shapes = [(o.shape, o.orientation, result.obstacle_centers[:, k]) for k, o in enumerate(obstacles)
-              if o.type != "sphere"]
-    plot_run(path, positions, markers, result.obstacle_centers[:, spheres], [obstacles[k].radius for k in spheres],
-             result.robot.planar, clearance_over_time=result.clearance if obstacles else None, times=result.record.t,
-             title=f"{result.robot.name}: {'success' if result.metrics.success else 'failure'}",
-             base_path=None if result.robot.base is None else result.record.q[:, :2], shapes=shapes)
-
+    plot_result(result, path)
 
 if __name__ == "__main__":
     sys.exit(main())
