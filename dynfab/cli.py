@@ -21,6 +21,7 @@ from dynfab.fabric.backends import BACKENDS
 from dynfab.scenario.recording import RecordingError, load_recording, run_recording, save_recording
 from dynfab.scenario.runner import RunResult, link_path, run_scenario
 from dynfab.scenario.schema import PLANNERS, Scenario, ScenarioError, load_scenario
+from dynfab.view_command import add_view_parser, view_command
 
 if TYPE_CHECKING:
     from dynfab.experiments.cluster import Cluster
@@ -92,6 +93,7 @@ def main(argv: list[str] | None = None) -> int:
     spheres.add_argument("--package-dir", type=Path, action="append", default=[],
                          help="folder where package:// URIs resolve (repeatable)")
     spheres.add_argument("--joints", nargs="+", help="active joints (default: every movable, non-mimic joint)")
+    add_view_parser(commands)
     commands.add_parser("schema", help="print the JSON Schema of scenario files (for editor completion, see the "
                                        "README)")
     args = parser.parse_args(argv)
@@ -100,6 +102,8 @@ def main(argv: list[str] | None = None) -> int:
 
         print(json.dumps(ScenarioDocument.model_json_schema(), indent=2))
         return 0
+    if args.command == "view":
+        return view_command(args)
     if args.command == "spheres":
         from dynfab.spheres_command import spheres_command
 
