@@ -29,6 +29,8 @@ SPHERE_COLOR = (230, 60, 60)
 PATH_SAMPLES = 200
 GOAL_MARKER_RADIUS = 0.03  # [m]
 HANDLE_SCALE = 0.2  # [m] length of a drag handle's arrows
+CAMERA_DIRECTION = np.array([1.0, -1.2, 0.8])  # from the scene's centre to the camera
+CAMERA_DISTANCE = 1.5  # times the scene's size
 
 Dragged = Callable[[int, np.ndarray], None]
 """``(index, world point)``: called when the user drags a goal or obstacle handle."""
@@ -66,6 +68,7 @@ class ViewScene:
         self._goal_nodes = {k: self._add_goal(k, goal_dragged) for k in range(len(world.scenario.goals))
                             if world.draggable_goal(k)}
         self.draw_paths()
+        self._aim_camera(world.state(0.0, np.asarray(world.scenario.initial_state.q)))
 
     def set_spheres_visible(self, visible: bool) -> None:
         for node in self._sphere_nodes:
@@ -81,8 +84,8 @@ class ViewScene:
 
     def update(self, state: SceneState, moving_only: bool) -> None:
         """Put the robot at ``state.q`` and goals and obstacles where ``state`` has them
-        (with ``moving_only`` only those on a moving reference, so as not to fight a
-        handle the user holds)."""
+        (with ``moving_only`` only those the scenario moves, so as not to fight a handle
+        the user holds)."""
         from viser import transforms
 
         poses = self._poses(state.q)
@@ -93,14 +96,26 @@ class ViewScene:
                 frame.wxyz = transforms.SO3.from_matrix(pose[:3, :3]).wxyz
             for node, sphere, pose in zip(self._sphere_nodes, self._world.robot.collision_spheres, sphere_frames):
                 node.position = pose[:3, :3] @ np.asarray(sphere.center) + pose[:3, 3]
-            references = self._world.references()
             for k, node in enumerate(self._obstacle_nodes):
-                if not moving_only or _moving(references.obstacles[k]):
+                if not moving_only or self._world.obstacle_moves(k):
                     node.position = state.obstacle_centres[k]
             for k, node in self._goal_nodes.items():
                 point = state.goal_points[k]
-                if point is not None and (not moving_only or _moving(references.goals[k])):
+                if point is not None and (not moving_only or self._world.goal_moves(k)):
                     node.position = point
+
+    def _aim_camera(self, state: SceneState) -> None:
+        """Start the browser's camera looking at the robot, goals and obstacles (the box
+        around them, seen from the front right and above, from :data:`CAMERA_DISTANCE`
+        times its size, at least 1 m)."""
+        points = [pose[:3, 3] for pose in self._poses(state.q)]
+        points += [p for p in state.goal_points if p is not None] + list(state.obstacle_centres)
+        low, high = np.min(points, axis=0), np.max(points, axis=0)
+        centre = 0.5 * (low + high)
+        size = max(float(np.max(high - low)), 1.0)
+        camera = self._server.initial_camera
+        camera.look_at = centre
+        camera.position = centre + CAMERA_DISTANCE * size * CAMERA_DIRECTION / np.linalg.norm(CAMERA_DIRECTION)
 
     def _add_obstacle(self, k: int, dragged: Dragged | None) -> viser.SceneNodeHandle:
         obstacle = self._world.scenario.obstacles[k]
@@ -143,12 +158,6 @@ class ViewScene:
             return
         segments = np.stack([points[:-1], points[1:]], axis=1).astype(np.float32)
         self._server.scene.add_line_segments(name, segments, color, thickness=0.005)
-
-
-def _moving(reference: object) -> bool:
-    from dynfab.motion.trajectories import StaticPoint
-
-    return not isinstance(reference, StaticPoint)
 
 
 def _rgb255(color: tuple[float, float, float]) -> tuple[int, int, int]:

@@ -1,10 +1,12 @@
 """The scenario as the viewer shows it: the robot, and where goals and obstacles are at
 time t, including where the user dragged them.
 
-A dragged goal or obstacle keeps its motion and is moved by a constant offset ``Δ``
-(:class:`~dynfab.motion.shifted_trajectory.ShiftedTrajectory`; a static one simply sits
-at the new point): dragging to ``P`` at time ``t`` sets ``Δ = P − x̃(t)`` on the axes the
-reference has.
+A dragged goal or obstacle keeps its motion and is moved by an offset ``Δ``
+(:class:`~dynfab.motion.shifted_trajectory.ShiftedTrajectory`): dragging to ``P`` at time
+``t`` sets the new offset ``Δ1 = P − x̃(t)`` on the axes the reference has, and the offset
+glides there from its value at ``t`` over the simulated time since the previous drag
+event (at most :data:`MAX_GLIDE`), so that a dragged item moves with the hand's velocity,
+which the dynamic fabric sees; the static fabric, by design, sees positions only.
 """
 
 from __future__ import annotations
@@ -24,6 +26,42 @@ from dynfab.scenario.schema import Scenario, validate_for_robot
 
 #: Goal types whose reference is a point of the workspace (a drag handle moves it).
 POINT_GOALS = ("position", "pose", "path")
+#: Longest glide of a dragged item to the handle's point [s] (and the glide after a pause
+#: in dragging).
+MAX_GLIDE = 0.2
+
+
+@dataclass(frozen=True)
+class Shift:
+    """The offset of one reference: gliding from ``start_offset`` to ``offset`` over
+    ``[start, start + glide]`` [m, s] (see :class:`ShiftedTrajectory`)."""
+
+    start_offset: np.ndarray
+    offset: np.ndarray
+    start: float = 0.0
+    glide: float = 0.0
+
+    def at(self, t: float) -> np.ndarray:
+        """The offset at ``t`` [m]."""
+        progress = 1.0 if self.glide == 0.0 else float(np.clip((t - self.start) / self.glide, 0.0, 1.0))
+        return self.start_offset + progress * (self.offset - self.start_offset)
+
+    def moved(self, offset: np.ndarray, t: float, dt: float) -> Shift:
+        """Gliding from the offset at ``t`` to ``offset``, over the time since the last move
+        (between ``dt`` and :data:`MAX_GLIDE`)."""
+        since = t - self.start
+        glide = MAX_GLIDE if since > MAX_GLIDE else max(since, dt)
+        return Shift(self.at(t), np.asarray(offset, dtype=float), t, glide)
+
+    def shifted(self, reference: Trajectory) -> Trajectory:
+        """``reference`` with this offset (itself while the offset is zero)."""
+        if not (self.offset.any() or self.start_offset.any()):
+            return reference
+        return ShiftedTrajectory(reference, tuple(self.offset), tuple(self.start_offset), self.start, self.glide)
+
+
+def _zero_shift(dimension: int) -> Shift:
+    return Shift(np.zeros(dimension), np.zeros(dimension))
 
 
 @dataclass(frozen=True)
@@ -50,8 +88,8 @@ class ViewWorld:
     Attributes:
         scenario: the scenario, validated for the robot.
         robot: the robot it names.
-        goal_offsets: per scenario goal, its offset (on the goal's axes) [m].
-        obstacle_offsets: per obstacle, its offset (on its trajectory's axes) [m].
+        goal_shifts: per scenario goal, its offset (on the goal's axes).
+        obstacle_shifts: per obstacle, its offset (on its trajectory's axes).
     """
 
     def __init__(self, scenario: Scenario, robot: Robot | None = None) -> None:
@@ -63,19 +101,27 @@ class ViewWorld:
         self.robot = robot_for(scenario) if robot is None else robot
         self.scenario = validate_for_robot(scenario, self.robot)
         self._references = scenario_references(self.scenario, self.robot)
-        self.goal_offsets = [np.zeros(g.dimension) for g in self._references.goals]
-        self.obstacle_offsets = [np.zeros(o.dimension) for o in self._references.obstacles]
+        self.goal_shifts = [_zero_shift(g.dimension) for g in self._references.goals]
+        self.obstacle_shifts = [_zero_shift(o.dimension) for o in self._references.obstacles]
 
     def draggable_goal(self, k: int) -> bool:
         """True if goal ``k`` is a workspace point in the world frame (it gets a handle)."""
         goal = self.scenario.goals[k]
         return goal.type in POINT_GOALS and goal.parent_link is None
 
+    def goal_moves(self, k: int) -> bool:
+        """True if goal ``k``'s scenario reference moves (a path goal)."""
+        return not isinstance(self._references.goals[k], StaticPoint)
+
+    def obstacle_moves(self, k: int) -> bool:
+        """True if obstacle ``k`` rides on a trajectory in the scenario."""
+        return not isinstance(self._references.obstacles[k], StaticPoint)
+
     def references(self) -> References:
         """The scenario's references moved by the offsets."""
         base = self._references
-        goals = tuple(_shifted(g, o) for g, o in zip(base.goals, self.goal_offsets))
-        obstacles = tuple(_shifted(r, o) for r, o in zip(base.obstacles, self.obstacle_offsets))
+        goals = tuple(shift.shifted(g) for g, shift in zip(base.goals, self.goal_shifts))
+        obstacles = tuple(shift.shifted(o) for o, shift in zip(base.obstacles, self.obstacle_shifts))
         return dataclasses.replace(base, goals=goals, obstacles=obstacles)
 
     def move_goal(self, k: int, point: np.ndarray, t: float) -> None:
@@ -88,17 +134,19 @@ class ViewWorld:
             raise ValueError(f"goal[{k}]: a {self.scenario.goals[k].type} goal has no point to move")
         axes = goal_axes(self.scenario.goals[k], self.robot)
         now = self._references.goals[k].evaluate(t).position
-        self.goal_offsets[k] = np.asarray(point, dtype=float)[axes] - now
+        self.goal_shifts[k] = self.goal_shifts[k].moved(np.asarray(point, dtype=float)[axes] - now, t,
+                                                        self.scenario.dt)
 
     def move_obstacle(self, k: int, point: np.ndarray, t: float) -> None:
         """Put obstacle ``k``'s centre at the world point ``point`` (3,) at time ``t`` [s]."""
         now = self._references.obstacles[k].evaluate(t).position
-        self.obstacle_offsets[k] = np.asarray(point, dtype=float)[: now.size] - now
+        self.obstacle_shifts[k] = self.obstacle_shifts[k].moved(np.asarray(point, dtype=float)[: now.size] - now, t,
+                                                                self.scenario.dt)
 
     def clear_offsets(self) -> None:
         """Every goal and obstacle back on its scenario reference."""
-        for offset in self.goal_offsets + self.obstacle_offsets:
-            offset[:] = 0.0
+        self.goal_shifts = [_zero_shift(g.dimension) for g in self._references.goals]
+        self.obstacle_shifts = [_zero_shift(o.dimension) for o in self._references.obstacles]
 
     def goal_point(self, k: int, t: float) -> np.ndarray | None:
         """Goal ``k``'s point in the world at ``t`` (axes it leaves free at 0) [m], or None."""
@@ -106,14 +154,14 @@ class ViewWorld:
             return None
         point = np.zeros(3)
         point[goal_axes(self.scenario.goals[k], self.robot)] = (
-            self._references.goals[k].evaluate(t).position + self.goal_offsets[k])
+            self._references.goals[k].evaluate(t).position + self.goal_shifts[k].at(t))
         return point
 
     def obstacle_centres(self, t: float) -> np.ndarray:
         """(m, 3) obstacle centres at ``t`` (planar ones at z = 0) [m]."""
         centres = np.zeros((len(self._references.obstacles), 3))
-        for k, (reference, offset) in enumerate(zip(self._references.obstacles, self.obstacle_offsets)):
-            position = reference.evaluate(t).position + offset
+        for k, (reference, shift) in enumerate(zip(self._references.obstacles, self.obstacle_shifts)):
+            position = reference.evaluate(t).position + shift.at(t)
             centres[k, : position.size] = position
         return centres
 
@@ -123,7 +171,7 @@ class ViewWorld:
         if not self.draggable_goal(k) or isinstance(reference, StaticPoint):
             return None
         points = np.zeros((len(times), 3))
-        points[:, goal_axes(self.scenario.goals[k], self.robot)] = reference.sample(times)[0] + self.goal_offsets[k]
+        points[:, goal_axes(self.scenario.goals[k], self.robot)] = reference.sample(times)[0] + self.goal_shifts[k].offset
         return points
 
     def obstacle_path(self, k: int, times: np.ndarray) -> np.ndarray | None:
@@ -131,7 +179,7 @@ class ViewWorld:
         reference = self._references.obstacles[k]
         if isinstance(reference, StaticPoint):
             return None
-        positions = reference.sample(times)[0] + self.obstacle_offsets[k]
+        positions = reference.sample(times)[0] + self.obstacle_shifts[k].offset
         points = np.zeros((len(times), 3))
         points[:, : positions.shape[1]] = positions
         return points
@@ -141,11 +189,3 @@ class ViewWorld:
         goals = tuple(self.goal_point(k, t) for k in range(len(self.scenario.goals)))
         return SceneState(t, np.array(q, dtype=float), goals, self.obstacle_centres(t))
 
-
-def _shifted(reference: Trajectory, offset: np.ndarray) -> Trajectory:
-    """``reference`` moved by ``offset`` (itself if the offset is zero)."""
-    if not offset.any():
-        return reference
-    if isinstance(reference, StaticPoint):
-        return StaticPoint(tuple(reference.evaluate(0.0).position + offset))
-    return ShiftedTrajectory(reference, tuple(offset))
