@@ -31,6 +31,7 @@ GOAL_MARKER_RADIUS = 0.03  # [m]
 HANDLE_SCALE = 0.2  # [m] length of a drag handle's arrows
 CAMERA_DIRECTION = np.array([1.0, -1.2, 0.8])  # from the scene's centre to the camera
 CAMERA_DISTANCE = 1.5  # times the scene's size
+GRID_SIZE = 4.0  # [m]
 
 Dragged = Callable[[int, np.ndarray], None]
 """``(index, world point)``: called when the user drags a goal or obstacle handle."""
@@ -51,7 +52,6 @@ class ViewScene:
         self._server = server
         self._world = world
         scene = server.scene
-        scene.add_grid("/grid", width=4.0, height=4.0, cell_size=0.25)
         links = tuple(dict.fromkeys(v.link for v in look.visuals))
         self._poses = LinkPoses(world.robot, links)
         self._link_frames = [scene.add_frame(f"/robot/{link}", show_axes=False) for link in links]
@@ -68,7 +68,7 @@ class ViewScene:
         self._goal_nodes = {k: self._add_goal(k, goal_dragged) for k in range(len(world.scenario.goals))
                             if world.draggable_goal(k)}
         self.draw_paths()
-        self._aim_camera(world.state(0.0, np.asarray(world.scenario.initial_state.q)))
+        self._frame_scene(world.state(0.0, np.asarray(world.scenario.initial_state.q)))
 
     def set_spheres_visible(self, visible: bool) -> None:
         for node in self._sphere_nodes:
@@ -104,15 +104,19 @@ class ViewScene:
                 if point is not None and (not moving_only or self._world.goal_moves(k)):
                     node.position = point
 
-    def _aim_camera(self, state: SceneState) -> None:
-        """Start the browser's camera looking at the robot, goals and obstacles (the box
-        around them, seen from the front right and above, from :data:`CAMERA_DISTANCE`
-        times its size, at least 1 m)."""
+    def _frame_scene(self, state: SceneState) -> None:
+        """A floor grid under the robot, goals and obstacles (twice the size of the box
+        around them, at least :data:`GRID_SIZE`), and the browser's camera looking at them
+        from the front right and above, from :data:`CAMERA_DISTANCE` times the box's size
+        (at least 1 m)."""
         points = [pose[:3, 3] for pose in self._poses(state.q)]
         points += [p for p in state.goal_points if p is not None] + list(state.obstacle_centres)
         low, high = np.min(points, axis=0), np.max(points, axis=0)
         centre = 0.5 * (low + high)
         size = max(float(np.max(high - low)), 1.0)
+        grid = max(GRID_SIZE, 2.0 * np.ceil(size))
+        self._server.scene.add_grid("/grid", width=grid, height=grid, cell_size=0.25,
+                                    position=(float(np.round(centre[0])), float(np.round(centre[1])), 0.0))
         camera = self._server.initial_camera
         camera.look_at = centre
         camera.position = centre + CAMERA_DISTANCE * size * CAMERA_DIRECTION / np.linalg.norm(CAMERA_DIRECTION)

@@ -217,7 +217,8 @@ class LiveView(View):
         status = self.session.status()
         goal = "—" if status.goal_distance is None else f"{status.goal_distance:.3f}"
         lines = [f"**t** {status.t:.2f} s · **planner** {status.planner}",
-                 f"**clearance** {status.clearance:.3f} m" if math.isfinite(status.clearance) else "**clearance** —",
+                 f"**clearance** (spheres) {status.clearance:.3f} m" if math.isfinite(status.clearance)
+                 else "**clearance** —",
                  f"**distance to goal** {goal}",
                  f"**step time** {status.step_time_ms:.3f} ms · **real time** ×{self._rate:.2f}"]
         if status.message:
