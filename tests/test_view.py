@@ -248,3 +248,49 @@ def test_view_process_serves_the_page_and_stops_cleanly_on_ctrl_c() -> None:
         out, err = process.communicate(timeout=30)
     assert process.returncode == 0
     assert "Traceback" not in err and "view stopped" in err
+
+
+@pytest.mark.parametrize("example, source", [("boxer_path.yaml", "built-in"),
+                                             ("point_moving_obstacle.yaml", "collision spheres"),
+                                             ("custom_urdf/arm_spheres.yaml", "collision spheres"),
+                                             ("panda_moving_box.yaml", "built-in")])
+def test_every_robot_kind_runs_in_the_view(example: str, source: str) -> None:
+    session = ViewSession(load_scenario(EXAMPLES / example))
+    spec = session.scenario.robot
+    look = robot_look(session.robot, *((spec.urdf, spec.package_dirs) if hasattr(spec, "urdf") else ()))
+    assert look.source == source and look.visuals
+    q0 = session.q.copy()
+    run_for(session, 1.0)
+    assert not np.allclose(session.q, q0)
+    state = session.scene()
+    assert state.obstacle_centres.shape == (len(session.scenario.obstacles), 3)
+    moving = [k for k in range(len(session.scenario.obstacles)) if session.world.obstacle_moves(k)]
+    for k in moving:  # drawn where the planner sees them
+        np.testing.assert_allclose(state.obstacle_centres[k, :2],
+                                   session.world._references.obstacles[k].evaluate(session.t).position[:2])
+
+
+def test_shifted_trajectory_glides_with_consistent_derivatives() -> None:
+    from dynfab.motion.shifted_trajectory import ShiftedTrajectory
+    from dynfab.motion.trajectories import CircleTrajectory, StaticPoint
+
+    circle = CircleTrajectory(center=(0.4, 0.0, 0.5), radius=0.2, angular_velocity=0.5, normal=(1.0, 0.0, 0.0))
+    shifted = ShiftedTrajectory(circle, (0.1, -0.2, 0.3), (0.0, 0.1, 0.0), start=1.0, glide=0.5)
+    times = np.array([0.5, 1.1, 1.3, 1.45, 2.0, 3.0])
+    position, velocity, acceleration = shifted.sample(times)
+    inner = circle.sample(times)
+    progress = np.clip((times - 1.0) / 0.5, 0.0, 1.0)[:, None]
+    np.testing.assert_allclose(position, inner[0] + [0.0, 0.1, 0.0] + progress * [0.1, -0.3, 0.3], atol=1e-12)
+    h = 1e-6
+    finite = (shifted.sample(times + h)[0] - shifted.sample(times - h)[0]) / (2 * h)
+    np.testing.assert_allclose(velocity, finite, atol=1e-7)
+    np.testing.assert_allclose(acceleration, inner[2])
+    at_rest = ShiftedTrajectory(StaticPoint((1.0, 2.0)), (0.5, 0.5))
+    np.testing.assert_allclose(at_rest.evaluate(7.0).position, [1.5, 2.5])
+    with pytest.raises(ValueError, match="offset"):
+        ShiftedTrajectory(circle, (0.1, 0.2))
+
+
+def test_the_core_does_not_import_viser() -> None:
+    check = "import sys, dynfab.cli, dynfab.viz.view_session; sys.exit('viser' in sys.modules)"
+    assert subprocess.run([sys.executable, "-c", check], timeout=120).returncode == 0
