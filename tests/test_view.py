@@ -119,7 +119,9 @@ def test_a_moving_goal_keeps_moving_after_a_drag() -> None:
     original = session.world._references.goals[0].evaluate(last_call).position
     np.testing.assert_allclose(shifted - original, [0.0, 0.1, -0.05], atol=1e-12)  # the glide (0.2 s) ended
     np.testing.assert_allclose(controller.planner.parameters.goal_position[0], shifted)
-    session.world.clear_offsets()
+    session.restore_references()
+    np.testing.assert_allclose(controller.references.goals[0].evaluate(session.t).position,
+                               session.world._references.goals[0].evaluate(session.t).position)
     session.reset()
     assert session.t == 0.0 and np.allclose(session.q, PANDA_Q0)
 

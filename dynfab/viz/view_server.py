@@ -184,8 +184,7 @@ class LiveView(View):
     def restore_references(self) -> None:
         """Goals and obstacles back on the scenario's references (the handles too)."""
         with self._lock:
-            self.session.world.clear_offsets()
-            self.session.switch_planner(self.session.planner)  # hands the references over
+            self.session.restore_references()
             self._scene.update(self.session.scene(), moving_only=False)
             self._scene.draw_paths()
 

@@ -159,6 +159,11 @@ class ViewSession:
         self.world.move_obstacle(k, point, self.t)
         self._retarget()
 
+    def restore_references(self) -> None:
+        """Every goal and obstacle back on its scenario reference, for the planner too."""
+        self.world.clear_offsets()
+        self._retarget()
+
     def step(self) -> bool:
         """One control period; False (and :attr:`message` says why) if the run stopped."""
         if self.message:
