@@ -213,8 +213,9 @@ def _experiment(args: argparse.Namespace) -> int:
               file=sys.stderr)
         return 130
     print((out / "summary.md").read_text(encoding="utf-8"), end="")
+    print("\n" + (out / "timings.md").read_text(encoding="utf-8"), end="")
     print(f"dynfab: {result.executed} runs executed; wrote {out}/runs.jsonl, runs.csv, summary.md, summary.json, "
-          f"scenarios/ and plots/", file=sys.stderr)
+          f"timings.md, timings.json, scenarios/ and plots/", file=sys.stderr)
     return 0
 
 
@@ -340,10 +341,11 @@ def _report(results: list[RunResult], as_json: bool) -> None:
         else:
             print(json.dumps({result.scenario.planner: m for result, m in zip(results, metrics)}))
         return
+    width = max(len(key) for key in metrics[0])
     if len(results) > 1:
-        print(f"{'':>17}  " + "".join(f"{result.scenario.planner:>16}" for result in results))
+        print(f"{'':>{width}}  " + "".join(f"{result.scenario.planner:>16}" for result in results))
     for key in metrics[0]:
-        print(f"{key:>17}: " + "".join(f"{_shown(m[key]):>16}" for m in metrics))
+        print(f"{key:>{width}}: " + "".join(f"{_shown(m[key]):>16}" for m in metrics))
 
 
 def _shown(value: object) -> str:

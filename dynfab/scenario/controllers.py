@@ -124,11 +124,14 @@ def _finite_point(trajectory: Trajectory, t: float, what: str) -> TrajectoryPoin
 
 
 def make_controller(scenario: Scenario, robot: Robot, references: References) -> Controller:
-    """The controller of ``scenario.planner`` for ``robot``.
+    """The controller of ``scenario.planner`` for ``robot``, planning within the velocity
+    limits less the scenario's ``limits.headroom`` (scenario/limits_schema.py).
 
     Raises:
         ScenarioError: if the scenario asks for something this planner cannot do.
     """
+    headroom = scenario.limits.headroom_for(scenario.simulation.simulator)
+    robot = replace(robot, limits=robot.limits.with_headroom(headroom))  # what the planner plans with
     if scenario.planner == "mpc":
         return make_mpc_controller(scenario, robot, references)
     if scenario.planner not in _FABRIC_PLANNERS:
