@@ -22,6 +22,7 @@ from dynfab.plot_command import add_plot_parser, plot_command
 from dynfab.scenario.recording import RecordingError, load_recording, run_recording, save_recording
 from dynfab.scenario.runner import RunResult, run_scenario
 from dynfab.scenario.schema import PLANNERS, Scenario, ScenarioError, load_scenario
+from dynfab.view_command import add_view_parser, view_command
 
 if TYPE_CHECKING:
     from dynfab.experiments.cluster import Cluster
@@ -94,6 +95,7 @@ def main(argv: list[str] | None = None) -> int:
                          help="folder where package:// URIs resolve (repeatable)")
     spheres.add_argument("--joints", nargs="+", help="active joints (default: every movable, non-mimic joint)")
     add_plot_parser(commands)
+    add_view_parser(commands)
     commands.add_parser("schema", help="print the JSON Schema of scenario files (for editor completion, see the "
                                        "README)")
     args = parser.parse_args(argv)
@@ -102,6 +104,8 @@ def main(argv: list[str] | None = None) -> int:
 
         print(json.dumps(ScenarioDocument.model_json_schema(), indent=2))
         return 0
+    if args.command == "view":
+        return view_command(args)
     if args.command == "spheres":
         from dynfab.spheres_command import spheres_command
 

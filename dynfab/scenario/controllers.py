@@ -82,6 +82,16 @@ class FabricController:
         self._write(t, self._moving_goals, self._moving_obstacles)
         return self.planner.compute(q, qdot)
 
+    def retarget(self, references: References, t: float) -> None:
+        """Follow ``references`` from now on (a goal or obstacle moved by hand in the viewer):
+        every goal and obstacle is written at time ``t`` [s] at once, and those that are not
+        at rest again every tick."""
+        self.references = references
+        self._moving_goals = tuple(i for i, goal in enumerate(references.goals) if not isinstance(goal, StaticPoint))
+        self._moving_obstacles = tuple(k for k, obstacle in enumerate(references.obstacles)
+                                       if not isinstance(obstacle, StaticPoint))
+        self._write_all(t)
+
     def _write_all(self, t: float) -> None:
         self._write(t, tuple(range(len(self.references.goals))), tuple(range(len(self.references.obstacles))))
 
