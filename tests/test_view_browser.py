@@ -31,7 +31,7 @@ VIEWPORT = {"width": 1280, "height": 800}
 SCENE = (slice(150, 800), slice(330, 940))
 #: Pixels of robot orange the robot must cover (it covers ~10^4 at this size).
 ROBOT_PIXELS = 1500
-SCENE_TIMEOUT = 90.0  # [s]
+SCENE_TIMEOUT = 180.0  # [s] (software WebGL on a busy 2-core machine)
 
 
 def chromium() -> str:
@@ -80,8 +80,8 @@ def test_the_browser_draws_the_robot_and_the_server_outlives_the_tab(tmp_path: P
             browser = playwright.chromium.launch(executable_path=browser_path, args=SOFTWARE_GL)
             page = browser.new_page(viewport=VIEWPORT)
             start = time.perf_counter()
-            page.goto(f"http://127.0.0.1:{port}/")
-            page.wait_for_selector("canvas", timeout=60_000)
+            page.goto(f"http://127.0.0.1:{port}/", timeout=120_000)
+            page.wait_for_selector("canvas", timeout=120_000)
             canvas_time = time.perf_counter() - start
             count, image = 0, None
             while count < ROBOT_PIXELS and time.perf_counter() - start < SCENE_TIMEOUT:
