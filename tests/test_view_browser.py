@@ -67,7 +67,7 @@ def robot_pixels(image: np.ndarray) -> int:
 def screenshot(page: sync_api.Page, path: Path) -> np.ndarray:
     from PIL import Image
 
-    page.screenshot(path=str(path))
+    page.screenshot(path=str(path), timeout=120_000)
     return np.asarray(Image.open(path).convert("RGB"), dtype=float) / 255.0
 
 
