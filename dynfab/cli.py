@@ -18,9 +18,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from dynfab.fabric.backends import BACKENDS
+from dynfab.plot_command import add_plot_parser, plot_command
 from dynfab.scenario.recording import RecordingError, load_recording, run_recording, save_recording
-from dynfab.scenario.runner import RunResult, link_path, run_scenario
+from dynfab.scenario.runner import RunResult, run_scenario
 from dynfab.scenario.schema import PLANNERS, Scenario, ScenarioError, load_scenario
+from dynfab.tune_command import add_tune_parser, tune_command
+from dynfab.view_command import add_view_parser, view_command
 
 if TYPE_CHECKING:
     from dynfab.experiments.cluster import Cluster
@@ -92,20 +95,29 @@ def main(argv: list[str] | None = None) -> int:
     spheres.add_argument("--package-dir", type=Path, action="append", default=[],
                          help="folder where package:// URIs resolve (repeatable)")
     spheres.add_argument("--joints", nargs="+", help="active joints (default: every movable, non-mimic joint)")
+    add_plot_parser(commands)
+    add_view_parser(commands)
     commands.add_parser("schema", help="print the JSON Schema of scenario files (for editor completion, see the "
                                        "README)")
+    add_tune_parser(commands)
     args = parser.parse_args(argv)
+    if args.command == "tune":
+        return tune_command(args)
     if args.command == "schema":
         from dynfab.scenario.schema import ScenarioDocument
 
         print(json.dumps(ScenarioDocument.model_json_schema(), indent=2))
         return 0
+    if args.command == "view":
+        return view_command(args)
     if args.command == "spheres":
         from dynfab.spheres_command import spheres_command
 
         return spheres_command(args.urdf, args.out, args.plot, args.tolerance, args.package_dir, args.joints)
     if args.command == "experiment":
         return _experiment(args)
+    if args.command == "plot":
+        return plot_command(args)
     if args.command == "export":
         from dynfab.export_command import export_command
 
@@ -209,8 +221,9 @@ def _experiment(args: argparse.Namespace) -> int:
               file=sys.stderr)
         return 130
     print((out / "summary.md").read_text(encoding="utf-8"), end="")
+    print("\n" + (out / "timings.md").read_text(encoding="utf-8"), end="")
     print(f"dynfab: {result.executed} runs executed; wrote {out}/runs.jsonl, runs.csv, summary.md, summary.json, "
-          f"scenarios/ and plots/", file=sys.stderr)
+          f"timings.md, timings.json, scenarios/ and plots/", file=sys.stderr)
     return 0
 
 
@@ -336,10 +349,11 @@ def _report(results: list[RunResult], as_json: bool) -> None:
         else:
             print(json.dumps({result.scenario.planner: m for result, m in zip(results, metrics)}))
         return
+    width = max(len(key) for key in metrics[0])
     if len(results) > 1:
-        print(f"{'':>17}  " + "".join(f"{result.scenario.planner:>16}" for result in results))
+        print(f"{'':>{width}}  " + "".join(f"{result.scenario.planner:>16}" for result in results))
     for key in metrics[0]:
-        print(f"{key:>17}: " + "".join(f"{_shown(m[key]):>16}" for m in metrics))
+        print(f"{key:>{width}}: " + "".join(f"{_shown(m[key]):>16}" for m in metrics))
 
 
 def _shown(value: object) -> str:
@@ -347,29 +361,9 @@ def _shown(value: object) -> str:
 
 
 def _plot(result: RunResult, path: Path) -> None:
-    """Plot the goal link's workspace path; a goal given in other coordinates (joint
-    goals, a subset of axes) or without a point (axis goals) is not drawn, the link's
-    full path is."""
-    from dynfab.viz.plots import plot_run
+    from dynfab.viz.result_plot import plot_result
 
-    goal = result.scenario.goals[0]
-    dimension = 2 if result.robot.planar else 3
-    if goal.type not in ("joint", "axis") and result.goal_positions.shape[1] == dimension:
-        positions = result.goal_positions
-        markers = [(result.goal_reference if goal.type == "path" else goal.position, goal.tolerance)]
-    else:
-        link = goal.link if goal.type != "joint" else result.robot.goal_link
-        positions = link_path(result.robot, link, result.record.q)[:, :dimension]
-        markers = []
-    obstacles = result.scenario.obstacles
-    spheres = [k for k, o in enumerate(obstacles) if o.type == "sphere"]
-    shapes = [(o.shape, o.orientation, result.obstacle_centers[:, k]) for k, o in enumerate(obstacles)
-              if o.type != "sphere"]
-    plot_run(path, positions, markers, result.obstacle_centers[:, spheres], [obstacles[k].radius for k in spheres],
-             result.robot.planar, clearance_over_time=result.clearance if obstacles else None, times=result.record.t,
-             title=f"{result.robot.name}: {'success' if result.metrics.success else 'failure'}",
-             base_path=None if result.robot.base is None else result.record.q[:, :2], shapes=shapes)
-
+    plot_result(result, path)
 
 if __name__ == "__main__":
     sys.exit(main())

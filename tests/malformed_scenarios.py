@@ -220,7 +220,40 @@ def _value_cases() -> list[tuple[str, dict[str, Any], str]]:
                  changed(("goal", 0), {"type": "joint", "position": [4.0, 0.0, 0.0]}, changed(("robot",), _URDF))),
          "goal[0].position[0]"),
     ]
-    return cases
+    return cases + _fabric_cases()
+
+
+def _fabric_cases() -> list[tuple[str, dict[str, Any], str]]:
+    """Malformed ``fabric:`` blocks: unknown parts and parameters, values out of range."""
+    fabric = ("fabric",)
+    return [
+        ("fabric not a mapping", changed(fabric, [1, 2]), "fabric"),
+        ("fabric unknown part", changed(fabric, {"obstacles": {"gain": 1.0}}), "fabric.obstacles"),
+        ("fabric unknown barrier key", changed(fabric, {"obstacle": {"horizon": 0.3}}), "fabric.obstacle.horizon"),
+        ("fabric unknown goal key", changed(fabric, {"goal": {"gain": 1.0, "stiffness": 2.0}}), "fabric.goal.stiffness"),
+        ("fabric unknown speed-control key", changed(fabric, {"speed_control": {"target_speed": 1.0}}),
+         "fabric.speed_control.target_speed"),
+        ("fabric part not a mapping", changed(fabric, {"goal": 5.0}), "fabric.goal"),
+        ("fabric obstacle gain negative", changed(fabric, {"obstacle": {"gain": -1.0}}), "fabric.obstacle.gain"),
+        ("fabric obstacle gain 1e300", changed(fabric, {"obstacle": {"gain": 1e300}}), "fabric.obstacle.gain"),
+        ("fabric obstacle range zero", changed(fabric, {"obstacle": {"range": 0.0}}), "fabric.obstacle.range"),
+        ("fabric obstacle range 1 km", changed(fabric, {"obstacle": {"range": 1000.0}}), "fabric.obstacle.range"),
+        ("fabric self-collision energy gain text", changed(fabric, {"self_collision": {"energy_gain": "big"}}),
+         "fabric.self_collision.energy_gain"),
+        ("fabric joint-limit range nan", changed(fabric, {"joint_limits": {"range": float("nan")}}),
+         "fabric.joint_limits.range"),
+        ("fabric goal gain zero", changed(fabric, {"goal": {"gain": 0.0}}), "fabric.goal.gain"),
+        ("fabric goal gain boolean", changed(fabric, {"goal": {"gain": True}}), "fabric.goal.gain"),
+        ("fabric orientation metric_near infinity", changed(fabric, {"orientation": {"metric_near": float("inf")}}),
+         "fabric.orientation.metric_near"),
+        ("fabric damping zero", changed(fabric, {"speed_control": {"damping": 0.0}}), "fabric.speed_control.damping"),
+        ("fabric execution energy 1e6", changed(fabric, {"speed_control": {"execution_energy": 1e6}}),
+         "fabric.speed_control.execution_energy"),
+        ("fabric execution energy exponent text", changed(fabric, {"speed_control": {"execution_energy": "1e-1"}}),
+         "fabric.speed_control.execution_energy"),
+        ("fabric steering weight negative", changed(fabric, {"steering": {"weight": -1.0}}), "fabric.steering.weight"),
+        ("fabric steering for an arm", changed(fabric, {"steering": {"lookahead": 0.4}}), "fabric.steering"),
+    ]
 
 
 def malformed_cases() -> list[tuple[str, bytes, str]]:

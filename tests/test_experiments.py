@@ -62,8 +62,10 @@ def test_series_runs_every_pair_and_writes_its_outputs(series: SeriesResult) -> 
     assert markdown.startswith(f"# {experiment.name}: ")
     for planner in experiment.planners:
         assert f"| {planner} | paper |" in markdown
+    timings = (out / "timings.md").read_text(encoding="utf-8")
     for figure in experiment.figures:
-        assert figure.text in markdown
+        assert figure.text in (timings if figure.quantity == "solver_time_ms" else markdown)
+    assert "solver time [ms]" not in markdown and "wall time per run" in timings
     summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
     assert summary["experiment"] == experiment.name and summary["seeds"] == list(range(RUNS))
     assert list(summary["planners"]) == list(experiment.planners)
@@ -202,7 +204,8 @@ def test_cli_runs_a_series_and_prints_its_summary(tmp_path: Path, capsys: pytest
     code = main(["experiment", "exp6", "--runs", "1", "--seed", "3", "--out", str(tmp_path), "--jobs", "1"])
     out, err = capsys.readouterr()
     assert code == 0
-    assert out == (tmp_path / "summary.md").read_text(encoding="utf-8")
+    assert out == ((tmp_path / "summary.md").read_text(encoding="utf-8") + "\n"
+                   + (tmp_path / "timings.md").read_text(encoding="utf-8"))
     assert "| static-fabric | paper | dynamic-fabric | paper |" in out
     assert "2 runs executed" in err
     assert sorted(p.name for p in (tmp_path / "scenarios").iterdir()) == [

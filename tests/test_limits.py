@@ -87,6 +87,8 @@ def _scenario_with_limits(tmp_path, limits) -> str:
     ({"jerk": [float("nan")] * 7}, "limits.jerk[0]: expected a finite number, got nan"),
     ({"acceleration": [1, 1, 1]}, "limits.acceleration: must have 7 values (one per velocity coordinate), got 3"),
     ({"torque": [1] * 7}, "limits"),
+    ({"headroom": 0.6}, "limits.headroom: must be at most 0.5"),
+    ({"headroom": -0.1}, "limits.headroom: must be >= 0, got -0.1"),
 ])
 def test_bad_scenario_limits_are_one_line_errors_with_exit_2(tmp_path, capsys, limits, message) -> None:
     from dynfab.cli import main
@@ -104,3 +106,20 @@ def test_scenario_limits_bound_the_run(tmp_path, capsys) -> None:
     assert metrics["max_acceleration_ratio"] <= 1.0 + 1e-9
     assert metrics["max_velocity_ratio"] <= 1.0 + 1e-9
     assert metrics["max_acceleration_ratio"] > 0.9   # the limit was binding
+
+
+def test_headroom_keeps_the_planner_below_the_limits_by_that_fraction(tmp_path, capsys) -> None:
+    import json
+    from dynfab.cli import main
+    assert main(["run", _scenario_with_limits(tmp_path, {"velocity": [0.3] * 7, "headroom": 0.2}), "--json"]) == 0
+    metrics = json.loads(capsys.readouterr().out)
+    assert 0.75 < metrics["max_velocity_ratio"] <= 0.8 + 1e-9   # binding at (1 - 0.2) of the full limit
+
+
+def test_headroom_defaults_to_zero_kinematic_and_to_the_physics_value_under_mujoco() -> None:
+    from dynfab.scenario.limits_schema import PHYSICS_HEADROOM, LimitsSpec
+    assert LimitsSpec().headroom_for("kinematic") == 0.0
+    assert LimitsSpec().headroom_for("mujoco") == PHYSICS_HEADROOM > 0.0
+    assert LimitsSpec(headroom=0.0).headroom_for("mujoco") == 0.0
+    robot = load_robot("panda")
+    np.testing.assert_allclose(robot.limits.with_headroom(0.1).velocity, 0.9 * robot.limits.velocity)

@@ -61,6 +61,19 @@ def test_base_follows_forward_speed_and_yaw_rate_through_its_wheels() -> None:
     assert run.record.q[-1, 2] == pytest.approx(0.25 + 0.5, abs=0.05)  # turning: 0.25 rad, then 0.5 rad/s
 
 
+def test_base_set_point_stops_at_the_velocity_limits_while_the_wheels_lag() -> None:
+    """Commanding past the limits (as no bounded planner does) must not wind the wheels'
+    set-point up beyond them: the measured speed settles at the limit, not above (the
+    transient overshoots by a few percent: the scenario's default headroom under MuJoCo)."""
+    robot = load_robot("boxer")
+    limit = robot.limits.velocity[:2]
+    run = simulate_mujoco(lambda t, q, u: np.array([5.0, 5.0]), build_scene(robot), np.zeros(3), np.zeros(2),
+                          0.01, 3.0)
+    settled = np.abs(run.record.qdot[-100:]).max(axis=0)
+    assert np.all(settled <= 1.01 * limit) and np.all(settled >= 0.95 * limit), settled
+    assert np.all(np.abs(run.record.qdot).max(axis=0) <= 1.1 * limit)
+
+
 def test_obstacle_in_the_way_is_reported_as_a_contact() -> None:
     goal = Q0.copy()
     goal[0] = -0.5  # swing the arm about its base, through the sphere

@@ -12,7 +12,10 @@ with a summary beside the paper's figures and plots.
 - ``summary.md``, ``summary.json``: per planner the success rate, collisions and
   deadlocks (goal not reached, no collision), and mean ± std of the metrics over the runs
   where every planner succeeded (as the paper compares them), beside the paper's figures
-  and ratios; the same metrics over each planner's own successful runs;
+  and ratios; the same metrics over each planner's own successful runs. Determined by the
+  seeds: byte-identical between executions, also after a kill and a resume;
+- ``timings.md``, ``timings.json``: solver time per call and wall time per run, with the
+  paper's timing figures and ratios (these differ between executions);
 - ``plots/metrics.png`` (box plots per planner over all runs), ``plots/outcomes.png`` (success,
   collision and deadlock counts) and ``plots/example_<seed>_<planner>.png``: one run of
   the experiment's first planner (its baseline, static fabrics in every experiment, and
@@ -41,7 +44,7 @@ from dynfab.experiments.cluster import Cluster, series_executor
 from dynfab.experiments.registry import Experiment
 from dynfab.experiments.series_plots import write_plots
 from dynfab.experiments.series_summary import (METRIC_KEYS, MetricValue, RunRecord, SeriesSummary, render_summary,
-                                               summarize, summary_dict)
+                                               render_timings, summarize, summary_dict, timings_dict)
 from dynfab.scenario.recording import Recording, run_recording, save_recording
 from dynfab.scenario.runner import run_scenario
 from dynfab.scenario.schema import scenario_from_dict
@@ -121,7 +124,7 @@ def run_series(experiment: Experiment, runs: int, seed: int, out_dir: str | Path
         log = out / "runs.jsonl"
         done = load_records(log, experiment.name)
         files = _write_scenarios(experiment, seeds, out, done)
-        pending = [pair for pair in files if pair not in done]
+        pending = sorted((pair for pair in files if pair not in done), key=_slow_first)
         bar = None if progress is None else _Progress(progress, experiment.name, len(files), len(files) - len(pending))
         recordings = out / "recordings" if record else None
         if recordings is not None:
@@ -134,6 +137,8 @@ def run_series(experiment: Experiment, runs: int, seed: int, out_dir: str | Path
         _write_csv(out / "runs.csv", records, experiment.name)
         (out / "summary.md").write_text(render_summary(summary), encoding="utf-8")
         (out / "summary.json").write_text(json.dumps(summary_dict(summary), indent=2) + "\n", encoding="utf-8")
+        (out / "timings.md").write_text(render_timings(summary), encoding="utf-8")
+        (out / "timings.json").write_text(json.dumps(timings_dict(summary), indent=2) + "\n", encoding="utf-8")
         baseline = [r for r in records if r.planner == experiment.planners[0]]
         example = next((r for r in baseline if not r.metrics["success"]), baseline[0])
         write_plots(out / "plots", summary, records, example, files[(example.seed, example.planner)])
@@ -206,6 +211,19 @@ def _write_scenarios(experiment: Experiment, seeds: Sequence[int], out: Path,
                 path.write_text(text, encoding="utf-8")
             files[(seed, planner)] = path
     return files
+
+
+#: Planners whose runs take far longer than a fabric's: the MPC solves a nonlinear program
+#: per step (IPOPT), 10-30x a fabric run.
+SLOW_PLANNERS = ("mpc",)
+
+
+def _slow_first(pair: Pair) -> tuple[bool, int]:
+    """Submission order: slow planners' runs first, then by seed (longest processing time
+    first keeps every worker busy to the end instead of leaving one MPC run alone at the
+    tail; the results do not depend on the order)."""
+    seed, planner = pair
+    return planner not in SLOW_PLANNERS, seed
 
 
 def _execute(experiment: str, pending: list[Pair], files: dict[Pair, Path], jobs: int, cluster: Cluster | None,

@@ -12,7 +12,7 @@ from matplotlib.ticker import MaxNLocator
 from dynfab.experiments.series_summary import METRICS, OUTCOMES, RunRecord, SeriesSummary
 from dynfab.scenario.runner import RunResult, run_scenario
 from dynfab.scenario.schema import load_scenario
-from dynfab.viz.plots import plot_run
+from dynfab.viz.result_plot import plot_result
 
 
 def write_plots(directory: Path, summary: SeriesSummary, records: Sequence[RunRecord], example: RunRecord,
@@ -71,17 +71,5 @@ def _plot_outcomes(path: Path, summary: SeriesSummary) -> None:
 
 
 def _plot_example(path: Path, result: RunResult, title: str) -> None:
-    """The replayed example run: the goal link's path, goal, obstacles and clearance."""
-    goal = result.scenario.goals[0]
-    target = result.goal_reference if goal.type == "path" else goal.position
-    obstacles = result.scenario.obstacles
-    spheres = [k for k, o in enumerate(obstacles) if o.type == "sphere"]
-    shapes = [(o.shape, o.orientation, result.obstacle_centers[:, k]) for k, o in enumerate(obstacles)
-              if o.type != "sphere"]
-    metrics = result.metrics
-    outcome = "success" if metrics.success else "collision" if metrics.collision else "deadlock"
-    plot_run(path, result.goal_positions, [(target, goal.tolerance)], result.obstacle_centers[:, spheres],
-             [obstacles[k].radius for k in spheres], result.robot.planar,
-             clearance_over_time=result.clearance if obstacles else None, times=result.record.t,
-             title=f"{title}: {outcome}", base_path=None if result.robot.base is None else result.record.q[:, :2],
-             shapes=shapes)
+    """The replayed example run, drawn as ``dynfab run --plot`` draws a run."""
+    plot_result(result, path, title)

@@ -1,5 +1,10 @@
 """A series' runs summarized per planner beside the paper's figures: outcomes, mean ± std
-of the metrics, ratios; as Markdown (``summary.md``) and JSON (``summary.json``)."""
+of the metrics, ratios; as Markdown (``summary.md``) and JSON (``summary.json``).
+
+The summary holds only what a seed determines, so that two executions of a series with the
+same seeds write byte-identical summaries (also after a kill and a resume). Timings (solver
+time per call, wall time per run) differ between any two executions, on any machine: they
+go to ``timings.md`` and ``timings.json`` with the paper's timing figures and ratios."""
 
 from __future__ import annotations
 
@@ -22,6 +27,10 @@ METRICS: dict[Quantity, str] = {
     "summed_error": "summed error [m]",
     "solver_time_ms": "solver time [ms]",
 }
+
+
+#: The metrics of :data:`METRICS` that are measured times: in ``timings.md``, not the summary.
+TIMINGS: tuple[Quantity, ...] = ("solver_time_ms",)
 
 
 #: Limit ratios summarized as their worst (largest) value over all runs, with their labels.
@@ -172,29 +181,61 @@ def render_summary(summary: SeriesSummary) -> str:
     for outcome in OUTCOMES:
         rows.append([outcome, *(cell for p in planners
                                 for cell in (_count(p.outcomes[outcome], p.runs), _paper(experiment, outcome, p.planner)))])
-    for metric, label in METRICS.items():
-        rows.append([label, *(cell for p in planners
-                              for cell in (_shown(p.metrics[metric]), _paper(experiment, metric, p.planner)))])
+    rows += _metric_rows(summary, _results())
     for ratio, label in LIMIT_RATIOS.items():
         worst = [p.worst_ratios.get(ratio) for p in planners]
         if any(value is not None for value in worst):
             rows.append([label, *(cell for value in worst for cell in ("–" if value is None else f"{value:.3g}", ""))])
-    rows.append(["wall time per run [s]", *(cell for p in planners for cell in (f"{p.wall_time_s:.3g}", ""))])
     lines = [f"# {experiment.name}: {experiment.description}", "",
              f"Seeds {summary.seeds[0]}..{summary.seeds[-1]} ({len(summary.seeds)} runs per planner). Outcomes "
              f"over all runs; metrics (mean ± std) over the {len(summary.common_seeds)} runs where every planner "
-             "succeeded, as the paper compares them; wall time over all runs.", "", *_table(rows)]
-    if any(p.outcomes["success"] != len(summary.common_seeds) for p in planners):
-        own = [["", *(f"{p.planner} ({p.outcomes['success']} runs)" for p in planners)]]
-        own += [[label, *(_shown(p.own_metrics[metric]) for p in planners)] for metric, label in METRICS.items()]
-        lines += ["", "The same metrics over each planner's own successful runs:", "", *_table(own)]
-    if summary.ratios:
-        lines += ["", "Ratios of the means (runs where every planner succeeded):", ""]
-        lines += [f"- {METRICS[r.paper.quantity]} {r.paper.numerator} / {r.paper.denominator}: ours "
-                  f"{'–' if r.ours is None else f'{r.ours:.3g}'}, paper {r.paper.text}" for r in summary.ratios]
+             "succeeded, as the paper compares them. Timings are in timings.md.", "", *_table(rows)]
+    lines += _own_and_ratio_lines(summary, _results())
     if experiment.notes:
         lines += ["", experiment.notes]
     return "\n".join(lines) + "\n"
+
+
+def render_timings(summary: SeriesSummary) -> str:
+    """The timings as Markdown: solver time per call beside the paper's, wall time per
+    run, and the paper's timing ratios; measured on the machine that ran the series."""
+    experiment, planners = summary.experiment, summary.planners
+    rows = [["", *(cell for p in planners for cell in (p.planner, "paper"))], *_metric_rows(summary, TIMINGS)]
+    rows.append(["wall time per run [s]", *(cell for p in planners for cell in (f"{p.wall_time_s:.3g}", ""))])
+    lines = [f"# {experiment.name}: timings", "",
+             f"Measured on the machine that ran the series; solver time (mean ± std of each run's mean time per "
+             f"controller call) over the {len(summary.common_seeds)} runs where every planner succeeded, wall time "
+             "(build, simulation, metrics) over all runs. These differ between executions; the results are in "
+             "summary.md.", "", *_table(rows)]
+    return "\n".join(lines + _own_and_ratio_lines(summary, TIMINGS)) + "\n"
+
+
+def _results() -> tuple[Quantity, ...]:
+    """The metrics of :data:`METRICS` that a seed determines (all but the timings)."""
+    return tuple(m for m in METRICS if m not in TIMINGS)
+
+
+def _metric_rows(summary: SeriesSummary, metrics: Sequence[Quantity]) -> list[list[str]]:
+    """One table row per metric: each planner's mean ± std over the common successes and the paper's figure."""
+    return [[METRICS[m], *(cell for p in summary.planners
+                           for cell in (_shown(p.metrics[m]), _paper(summary.experiment, m, p.planner)))]
+            for m in metrics]
+
+
+def _own_and_ratio_lines(summary: SeriesSummary, metrics: Sequence[Quantity]) -> list[str]:
+    """The ``metrics`` over each planner's own successes (when those differ from the
+    common ones), and the paper's ratios of those metrics with ours."""
+    planners, lines = summary.planners, []
+    if any(p.outcomes["success"] != len(summary.common_seeds) for p in planners):
+        own = [["", *(f"{p.planner} ({p.outcomes['success']} runs)" for p in planners)]]
+        own += [[METRICS[m], *(_shown(p.own_metrics[m]) for p in planners)] for m in metrics]
+        lines += ["", "The same metrics over each planner's own successful runs:", "", *_table(own)]
+    ratios = [r for r in summary.ratios if r.paper.quantity in metrics]
+    if ratios:
+        lines += ["", "Ratios of the means (runs where every planner succeeded):", ""]
+        lines += [f"- {METRICS[r.paper.quantity]} {r.paper.numerator} / {r.paper.denominator}: ours "
+                  f"{'–' if r.ours is None else f'{r.ours:.3g}'}, paper {r.paper.text}" for r in ratios]
+    return lines
 
 
 def _table(rows: list[list[str]]) -> list[str]:
@@ -216,24 +257,41 @@ def _shown(statistic: Statistic | None) -> str:
     return "–" if statistic is None else f"{statistic.mean:.3g} ± {statistic.std:.2g}"
 
 
-def _statistics_dict(statistics: dict[str, Statistic | None]) -> dict[str, dict[str, float] | None]:
-    return {m: None if s is None else dataclasses.asdict(s) for m, s in statistics.items()}
+def _statistics_dict(statistics: dict[str, Statistic | None],
+                     metrics: Sequence[Quantity]) -> dict[str, dict[str, float] | None]:
+    return {m: None if statistics[m] is None else dataclasses.asdict(statistics[m]) for m in metrics}
 
 
 def summary_dict(summary: SeriesSummary) -> dict[str, Any]:
-    """The summary as a JSON-ready mapping."""
-    experiment = summary.experiment
+    """The summary as a JSON-ready mapping (no timings: see :func:`timings_dict`)."""
+    experiment, results = summary.experiment, _results()
     return {
         "experiment": experiment.name,
         "description": experiment.description,
         "seeds": list(summary.seeds),
         "common_success_seeds": list(summary.common_seeds),
         "planners": {p.planner: {"runs": p.runs, **p.outcomes, "success_rate": p.outcomes["success"] / p.runs,
-                                 "metrics": _statistics_dict(p.metrics),
-                                 "own_success_metrics": _statistics_dict(p.own_metrics),
-                                 "wall_time_s": p.wall_time_s, **p.worst_ratios}
+                                 "metrics": _statistics_dict(p.metrics, results),
+                                 "own_success_metrics": _statistics_dict(p.own_metrics, results), **p.worst_ratios}
                      for p in summary.planners},
-        "paper": [dataclasses.asdict(f) for f in experiment.figures],
-        "ratios": [{**dataclasses.asdict(r.paper), "ours": r.ours} for r in summary.ratios],
+        "paper": [dataclasses.asdict(f) for f in experiment.figures if f.quantity not in TIMINGS],
+        "ratios": [{**dataclasses.asdict(r.paper), "ours": r.ours} for r in summary.ratios
+                   if r.paper.quantity not in TIMINGS],
         "notes": experiment.notes,
+    }
+
+
+def timings_dict(summary: SeriesSummary) -> dict[str, Any]:
+    """The timings as a JSON-ready mapping: per planner the solver time statistics and
+    the mean wall time per run [s], with the paper's timing figures and ratios."""
+    experiment = summary.experiment
+    return {
+        "experiment": experiment.name,
+        "planners": {p.planner: {"metrics": _statistics_dict(p.metrics, TIMINGS),
+                                 "own_success_metrics": _statistics_dict(p.own_metrics, TIMINGS),
+                                 "wall_time_s": p.wall_time_s}
+                     for p in summary.planners},
+        "paper": [dataclasses.asdict(f) for f in experiment.figures if f.quantity in TIMINGS],
+        "ratios": [{**dataclasses.asdict(r.paper), "ours": r.ours} for r in summary.ratios
+                   if r.paper.quantity in TIMINGS],
     }

@@ -84,6 +84,13 @@ class MotionLimits:
                    (("velocity", velocity), ("acceleration", acceleration), ("jerk", jerk)) if value is not None}
         return replace(self, **changes)
 
+    def with_headroom(self, fraction: float) -> MotionLimits:
+        """The limits a planner plans with when it keeps ``fraction`` (in [0, 1)) of every
+        velocity limit free for tracking error: velocity ``(1 - fraction) × limit``."""
+        if not 0.0 <= fraction < 1.0:
+            raise LimitsError(f"limits.headroom: must be in [0, 1), got {fraction}")
+        return replace(self, velocity=(1.0 - fraction) * self.velocity)
+
     def velocity_ratio(self, velocities: np.ndarray) -> float:
         """``max_t,i |u̇_i(t)| / velocity_i`` over rows of ``velocities`` (T, m); 0 if empty."""
         return _max_ratio(velocities, self.velocity)

@@ -8,6 +8,9 @@ obstacle references into the planner's runtime parameters before calling it.
 - ``dynamic-fabric``: goals and obstacles also pass their velocity and acceleration, which
   the dynamic pullback uses (paper section IV).
 
+The scenario's ``fabric:`` block (:mod:`dynfab.scenario.fabric_schema`) sets leaf and
+root parameters of the fabric planners; the MPC ignores it.
+
 Scenario goals become planner goals one to one, except a ``pose`` goal, which becomes two:
 the position of its point (first) and the orientation of its link, with the same weight.
 
@@ -82,6 +85,16 @@ class FabricController:
         self._write(t, self._moving_goals, self._moving_obstacles)
         return self.planner.compute(q, qdot)
 
+    def retarget(self, references: References, t: float) -> None:
+        """Follow ``references`` from now on (a goal or obstacle moved by hand in the viewer):
+        every goal and obstacle is written at time ``t`` [s] at once, and those that are not
+        at rest again every tick."""
+        self.references = references
+        self._moving_goals = tuple(i for i, goal in enumerate(references.goals) if not isinstance(goal, StaticPoint))
+        self._moving_obstacles = tuple(k for k, obstacle in enumerate(references.obstacles)
+                                       if not isinstance(obstacle, StaticPoint))
+        self._write_all(t)
+
     def _write_all(self, t: float) -> None:
         self._write(t, tuple(range(len(self.references.goals))), tuple(range(len(self.references.obstacles))))
 
@@ -114,11 +127,14 @@ def _finite_point(trajectory: Trajectory, t: float, what: str) -> TrajectoryPoin
 
 
 def make_controller(scenario: Scenario, robot: Robot, references: References) -> Controller:
-    """The controller of ``scenario.planner`` for ``robot``.
+    """The controller of ``scenario.planner`` for ``robot``, planning within the velocity
+    limits less the scenario's ``limits.headroom`` (scenario/limits_schema.py).
 
     Raises:
         ScenarioError: if the scenario asks for something this planner cannot do.
     """
+    headroom = scenario.limits.headroom_for(scenario.simulation.simulator)
+    robot = replace(robot, limits=robot.limits.with_headroom(headroom))  # what the planner plans with
     if scenario.planner == "mpc":
         return make_mpc_controller(scenario, robot, references)
     if scenario.planner not in _FABRIC_PLANNERS:
@@ -130,6 +146,7 @@ def make_controller(scenario: Scenario, robot: Robot, references: References) ->
     goals = tuple(config for goal in scenario.goals for config in _goal_configs(goal))
     config = replace(PlannerConfig.for_robot(robot, goals, kinds.count("sphere"), _FABRIC_PLANNERS[scenario.planner],
                                              shape_slots), control_period=scenario.dt, backend=scenario.backend)
+    config = scenario.fabric.configured(config)
     planner = FabricPlanner(robot, config)
     slots = _place_obstacles(scenario.obstacles, planner.parameters)
     references = planner_references(scenario, references)

@@ -9,6 +9,8 @@ model checks for self-collision; the others by their collision spheres and spher
 
 from __future__ import annotations
 
+import dataclasses
+
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
@@ -61,8 +63,12 @@ def run_mujoco(scenario: Scenario, robot: Robot, controller: Controller, centres
                  for k, o in enumerate(scenario.obstacles)]
     pairs = () if mesh_model is None else tuple((mesh_model.links[i], mesh_model.links[j])
                                                 for i, j in mesh_model.pairs)
+    # the base's drive stops its set-point where the planner plans to (less the headroom), as
+    # a drive's maximum speed is configured below the hardware's
+    driven = dataclasses.replace(robot, limits=robot.limits.with_headroom(
+        scenario.limits.headroom_for(scenario.simulation.simulator)))
     try:
-        scene = build_scene(robot, obstacles, pairs)
+        scene = build_scene(driven, obstacles, pairs)
     except (MujocoModelError, LinkMeshError) as error:
         raise ScenarioError("robot", str(error).splitlines()[0]) from None
     simulation = scenario.simulation

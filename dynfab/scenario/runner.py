@@ -31,6 +31,7 @@ from dynfab.scenario.schema import Scenario, ScenarioError, UrdfRobotSpec, valid
 from dynfab.sim import DifferentialDrive, DoubleIntegrator, Record, simulate
 
 if TYPE_CHECKING:
+    from dynfab.robots.mesh_collision import MeshCollisionModel
     from dynfab.sim.mujoco_sim import Contact, StepObserver
 
 #: integration sub-steps per control period for a differential-drive base (arcs)
@@ -53,7 +54,8 @@ class RunResult:
             no position target: its ``goal_positions``).
         obstacle_centers: obstacle centres over time (T, m, 3) (a plane: its point).
         clearance: minimum clearance at each sample (T,) [m] (inf without obstacles).
-        controller: the controller that ran (its planner, fallback count, ...).
+        controller: the controller that ran (its planner, fallback count, ...); None for
+            a replayed recording.
         mesh_sweep: the collision-mesh distances of the run (contacts, minima); None for
             robots measured by spheres (see scenario/exact_metrics.py).
         contacts: under MuJoCo, every contact that began (robot with an obstacle or with
@@ -70,7 +72,7 @@ class RunResult:
     goal_reference: np.ndarray
     obstacle_centers: np.ndarray
     clearance: np.ndarray
-    controller: Controller
+    controller: Controller | None
     mesh_sweep: MeshSweep | None = None
     contacts: tuple[Contact, ...] = ()
     stop_reason: str | None = None
@@ -162,6 +164,15 @@ def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None
         record = simulate(controller, state.q, state.qdot, scenario.dt, scenario.duration, substeps=substeps,
                           model=model, progress=progress)
         stop_reason = record.stop_reason
+    return measure_run(scenario, robot, references, record, controller, mesh_model, contacts, stop_reason)
+
+
+def measure_run(scenario: Scenario, robot: Robot, references: References, record: Record,
+                controller: Controller | None, mesh_model: MeshCollisionModel | None,
+                contacts: tuple[Contact, ...] = (), stop_reason: str | None = None) -> RunResult:
+    """The result of a run of ``scenario`` (validated for ``robot``) that produced
+    ``record``: goal and obstacle tracks, clearance and metrics (``controller`` None for a
+    replayed recording: no solver times)."""
     goal = scenario.goals[0]
     goal_positions = _goal_coordinates(robot, scenario, record.q)
     goal_reference = goal_positions if goal.type == "axis" else references.goals[0].sample(record.t)[0]
@@ -182,7 +193,7 @@ def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None
                               angle_tolerance=goal.angle_tolerance if goal.type in _ORIENTED else None)
     metrics = dataclasses.replace(metrics, max_velocity_ratio=robot.limits.velocity_ratio(record.qdot),
                                   max_acceleration_ratio=robot.limits.acceleration_ratio(record.qddot))
-    solve_times = getattr(controller, "solve_times", None)
+    solve_times = None if controller is None else getattr(controller, "solve_times", None)
     if solve_times:  # a planner that re-plans less often than it is called (MPC)
         metrics = dataclasses.replace(metrics, solver_time_ms=1e3 * float(np.mean(solve_times)))
     mesh_sweep = None

@@ -25,6 +25,7 @@ from pydantic import ValidationError, model_validator
 
 from dynfab.fabric.backends import BACKENDS
 from dynfab.scenario import fields
+from dynfab.scenario.fabric_schema import FabricMapping, FabricSpec
 from dynfab.scenario.fields import TRAJECTORY_TYPES, ScenarioError
 from dynfab.scenario.goal_schema import DEFAULT_ANGLE_TOLERANCE, GoalMapping, GoalSpec, GoalType, goal_spec
 from dynfab.scenario.joint_limits import check_within_limits
@@ -49,7 +50,7 @@ if TYPE_CHECKING:
     from dynfab.robots.robot import Robot
 
 __all__ = ["BUILTIN_ROBOTS", "DEFAULT_ANGLE_TOLERANCE", "OBSTACLE_TYPES", "PLANNERS", "TRAJECTORY_TYPES",
-           "CollisionSphereSpec", "GoalSpec", "GoalType", "InitialState", "ObstacleSpec", "ObstacleType",
+           "CollisionSphereSpec", "FabricSpec", "GoalSpec", "GoalType", "InitialState", "ObstacleSpec", "ObstacleType",
            "Scenario", "ScenarioDocument", "ScenarioError", "Simulation", "UrdfRobotSpec", "load_scenario",
            "scenario_from_dict", "validate_for_robot"]
 
@@ -93,6 +94,8 @@ class Scenario:
             (scenario/stall_recovery.py); ``recovery: false`` turns it off.
         backend: How a fabric planner is evaluated: ``"vm"`` (CasADi's virtual machine)
             or ``"c"`` (compiled C, cached; :mod:`dynfab.fabric.backends`).
+        fabric: Leaf and root parameters of a fabric planner (``fabric:``,
+            :mod:`dynfab.scenario.fabric_schema`); the planner's defaults where unset.
     """
 
     robot: str | UrdfRobotSpec
@@ -107,6 +110,7 @@ class Scenario:
     simulation: Simulation = Simulation()
     recovery: bool = True
     backend: str = "vm"
+    fabric: FabricSpec = FabricSpec()
 
 
 JointValues = Annotated[tuple[Annotated[float, Range(-MAX_JOINT_VALUE, MAX_JOINT_VALUE)], ...], Items(max_items=64)]
@@ -140,6 +144,7 @@ class ScenarioDocument(ScenarioModel):
     noise: Annotated[float, NOISE] = 0.0
     recovery: Annotated[bool, Flag()] = True
     backend: Annotated[str, Choice(BACKENDS)] = "vm"
+    fabric: FabricMapping = FabricMapping()
 
     @model_validator(mode="after")
     def _consistent(self) -> ScenarioDocument:
@@ -175,6 +180,7 @@ class ScenarioDocument(ScenarioModel):
             simulation=Simulation(self.simulator, self.control, self.delay, self.noise),
             recovery=self.recovery,
             backend=self.backend,
+            fabric=self.fabric.spec(),
         )
 
 

@@ -104,6 +104,8 @@ class MujocoScene:
         base_dof: qvel address of the base's free joint, or None.
         wheel_actuators: Velocity actuators of the (left, right) drive wheels, or None.
         base: The differential-drive base (wheel radius, track), or None.
+        base_speed_limit: The base's velocity limits ``(v_max, ω_max)`` [m/s, rad/s]
+            (``robot.limits.velocity``), or None without a base.
         mocap: Mocap index of each obstacle (None for a static one).
         robot_bodies: Body ids of the robot.
         obstacle_of_geom: Obstacle index of each obstacle geom id.
@@ -120,6 +122,7 @@ class MujocoScene:
     base_dof: int | None
     wheel_actuators: tuple[int, int] | None
     base: DifferentialDriveBase | None
+    base_speed_limit: np.ndarray | None
     mocap: tuple[int | None, ...]
     robot_bodies: frozenset[int]
     obstacle_of_geom: dict[int, int]
@@ -168,7 +171,9 @@ def _scene(model: mujoco.MjModel, robot: Robot, obstacles: Sequence[SceneObstacl
                        upper=kin.upper[kin.dof - len(names):],
                        base_qpos=None if base is None else int(base.qposadr[0]),
                        base_dof=None if base is None else int(base.dofadr[0]),
-                       wheel_actuators=wheels, base=robot.base, mocap=mocap, robot_bodies=robot_bodies, obstacle_of_geom=geoms)
+                       wheel_actuators=wheels, base=robot.base,
+                       base_speed_limit=None if base is None else np.array(robot.limits.velocity[:2], dtype=float),
+                       mocap=mocap, robot_bodies=robot_bodies, obstacle_of_geom=geoms)
 
 
 class _Builder:

@@ -11,7 +11,9 @@ the ``control`` mode's interface
 (:func:`~dynfab.sim.control_interfaces.interface_for`), whose command the joint
 controllers of :mod:`dynfab.sim.mujoco_drives` turn into torques. A differential-drive
 base follows (v, ω) integrated in the same way from the planner's (v̇, ω̇), through its
-wheels' velocity actuators, whatever the mode. Moving obstacles (mocap
+wheels' velocity actuators, whatever the mode; the integrated (v, ω) stops at the base's
+velocity limits, as a drive refuses set-points beyond them (while the wheels lag behind
+the set-point, e.g. at their torque limit, it would otherwise wind up past the limits). Moving obstacles (mocap
 bodies) are placed every physics step.
 
 A non-finite or wrongly sized command, or a state that is no longer finite, exceeds
@@ -237,7 +239,8 @@ class _Loop:
             self.setpoint = self.setpoints.advance()
             self.drive.apply(self.interface.command(self.setpoint, joint_q, joint_u), joint_q, joint_u)
             if base:
-                self.base_velocity += command[:2] * h
+                limit = scene.base_speed_limit
+                self.base_velocity = np.clip(self.base_velocity + command[:2] * h, -limit, limit)
                 data.ctrl[list(scene.wheel_actuators)] = scene.base.wheel_speeds(*self.base_velocity)
             mujoco.mj_step2(model, data)
             problem = self._diverged(times[i])

@@ -1,4 +1,5 @@
-"""Plots of a run: goal-link path, goals and obstacles, and clearance over time.
+"""Plots of a run: the robot's body at a few instants, goal-link path, goals and
+obstacles, and clearance over time.
 
 Figures are drawn on matplotlib's Agg canvas (no pyplot, no display, no global state).
 """
@@ -16,6 +17,8 @@ from mpl_toolkits.mplot3d import Axes3D
 from numpy.typing import ArrayLike, NDArray
 
 from dynfab.geometry.shapes import Shape
+from dynfab.viz.body_drawing import draw_body_3d, draw_body_projection, focus_box
+from dynfab.viz.robot_snapshots import RobotSnapshots
 from dynfab.viz.shape_outlines import shape_outline
 
 _PATH_COLOR = "C0"
@@ -43,6 +46,7 @@ def plot_run(
     title: str = "dynfab run",
     base_path: ArrayLike | None = None,
     shapes: Sequence[ShapeTrack] = (),
+    robot: RobotSnapshots | None = None,
 ) -> None:
     """Save a PNG of a run.
 
@@ -64,6 +68,8 @@ def plot_run(
         base_path: Positions (T, 2) of a mobile base [m], drawn in the top view.
         shapes: Box, cylinder, capsule and plane obstacles, drawn as wireframes at their
             end position (with the path of their origin if they move).
+        robot: The robot's skeleton and collision spheres at a few instants, drawn in
+            every view (the closest approach with the sphere obstacles where they were then).
     """
     positions = np.asarray(goal_link_positions, dtype=float)
     obstacles = np.asarray(obstacles_over_time, dtype=float)
@@ -79,6 +85,9 @@ def plot_run(
         top = figure.add_subplot(grid[0, 0])
         _draw_projection(top, (0, 1), positions, markers, obstacles, radii)
         _draw_shapes(top, (0, 1), tracks)
+        if robot is not None:
+            draw_body_projection(top, (0, 1), robot, obstacles, radii, _times(times))
+            _focus(top, (0, 1), focus_box(robot, _goal_points(markers, positions.shape[1])))
         _draw_base(top, base_path)
         top.legend(loc="best", fontsize="small")
         extra = [grid[0, k] for k in range(1, panels)]
@@ -86,11 +95,14 @@ def plot_run(
         figure = Figure(figsize=(16.0, 10.0), layout="constrained")
         grid = figure.add_gridspec(2, 3)
         view = figure.add_subplot(grid[0, 0], projection="3d")
-        _draw_3d(view, positions, markers, obstacles, radii, tracks)
+        _draw_3d(view, positions, markers, obstacles, radii, tracks, robot)
         for slot, axes in ((grid[0, 1], (0, 1)), (grid[0, 2], (1, 2)), (grid[1, 0], (0, 2))):
             ax = figure.add_subplot(slot)
             _draw_projection(ax, axes, positions, markers, obstacles, radii)
             _draw_shapes(ax, axes, tracks)
+            if robot is not None:
+                draw_body_projection(ax, axes, robot, obstacles, radii, _times(times))
+                _focus(ax, axes, focus_box(robot, _goal_points(markers, positions.shape[1])))
             if axes == (0, 1):
                 _draw_base(ax, base_path)
                 ax.legend(loc="best", fontsize="small")
@@ -101,6 +113,25 @@ def plot_run(
         _draw_tracking_error(figure.add_subplot(extra.pop(0)), positions, reference, markers[0][1], times)
     figure.suptitle(title)
     figure.savefig(Path(path), dpi=100)
+
+
+def _goal_points(markers: list[tuple[NDArray[np.float64], float]], dimension: int) -> NDArray[np.float64]:
+    """The goal points (k, 3) to keep in a focused view (zero-padded planar ones)."""
+    points = [goal if goal.ndim == 1 else goal[-1] for goal, _ in markers]
+    return np.array([np.pad(p[:3], (0, 3 - min(p.size, 3))) for p in points]).reshape(-1, 3)
+
+
+def _focus(ax: Axes, axes: tuple[int, int], box: tuple[NDArray[np.float64], NDArray[np.float64]]) -> None:
+    """Limit a projection to ``box`` (equal scales; what lies outside is cut)."""
+    (i, j), (low, high) = axes, box
+    centre, half = (low + high) / 2, max(high[i] - low[i], high[j] - low[j]) / 2
+    ax.set_xlim(centre[i] - half, centre[i] + half)
+    ax.set_ylim(centre[j] - half, centre[j] + half)
+    ax.set_aspect("equal", adjustable="box")
+
+
+def _times(times: ArrayLike | None) -> NDArray[np.float64] | None:
+    return None if times is None else np.asarray(times, dtype=float)
 
 
 def _draw_base(ax: Axes, base_path: ArrayLike | None) -> None:
@@ -187,9 +218,12 @@ def _draw_3d(
     obstacles: NDArray[np.float64],
     radii: NDArray[np.float64],
     tracks: list[tuple[Shape, Sequence[float], NDArray[np.float64]]],
+    robot: RobotSnapshots | None = None,
 ) -> None:
-    """Draw the path, goals (with tolerance spheres), obstacles and shapes in 3-D."""
+    """Draw the path, goals (with tolerance spheres), obstacles, shapes and the robot in 3-D."""
     extent = [positions]
+    if robot is not None:
+        extent += draw_body_3d(ax, robot)
     for shape, orientation, centres in tracks:
         ax.plot(*centres.T, ":", color=_OBSTACLE_COLOR, linewidth=1)
         for line in shape_outline(shape, orientation, centres[-1]):
@@ -213,6 +247,8 @@ def _draw_3d(
     ax.plot([positions[0, 0]], [positions[0, 1]], [positions[0, 2]], "o", color=_PATH_COLOR)
     points = np.vstack(extent)
     low, high = points.min(axis=0), points.max(axis=0)
+    if robot is not None:  # where the robot worked, not the far ends of obstacle tracks
+        low, high = focus_box(robot, _goal_points(goals, 3))
     ax.set_xlim(low[0], high[0])
     ax.set_ylim(low[1], high[1])
     ax.set_zlim(low[2], high[2])

@@ -1,0 +1,169 @@
+"""The viewer's 3-D scene in viser: robot meshes, collision spheres, obstacles, goals and
+reference paths, updated from a :class:`~dynfab.viz.view_world.SceneState`.
+
+Scene tree: ``/robot/L`` one frame per link L that carries meshes (its pose from the
+kinematics at ``q``); ``/spheres/i`` the collision spheres (hidden until asked for);
+``/obstacles/k`` and ``/goals/k`` (drag handles when ``draggable``, with the shape as a
+child, so that the browser moves the shape with the handle at once); ``/paths/...`` the
+reference paths of path goals and moving obstacles over the scenario's duration.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from dynfab.viz.robot_visuals import LinkPoses, RobotLook
+from dynfab.viz.shape_meshes import shape_mesh
+from dynfab.viz.view_world import SceneState, ViewWorld
+
+if TYPE_CHECKING:
+    import viser
+
+#: Colours (RGB 0..255).
+OBSTACLE_COLOR = (60, 110, 230)
+GOAL_COLOR = (40, 180, 70)
+SPHERE_COLOR = (230, 60, 60)
+PATH_SAMPLES = 200
+GOAL_MARKER_RADIUS = 0.03  # [m]
+HANDLE_SCALE = 0.2  # [m] length of a drag handle's arrows
+CAMERA_DIRECTION = np.array([1.0, -1.2, 0.8])  # from the scene's centre to the camera
+CAMERA_DISTANCE = 1.5  # times the scene's size
+GRID_SIZE = 4.0  # [m]
+
+Dragged = Callable[[int, np.ndarray], None]
+"""``(index, world point)``: called when the user drags a goal or obstacle handle."""
+
+
+class ViewScene:
+    """The viser scene of one scenario (module docstring).
+
+    Attributes:
+        goal_handles: per draggable goal index, its drag handle (live view only).
+        obstacle_handles: per obstacle index, its drag handle (live view only).
+    """
+
+    def __init__(self, server: viser.ViserServer, world: ViewWorld, look: RobotLook,
+                 goal_dragged: Dragged | None = None, obstacle_dragged: Dragged | None = None) -> None:
+        """Add everything to ``server``'s scene; handles call ``goal_dragged`` /
+        ``obstacle_dragged`` (without them: no handles, as in a replay)."""
+        self._server = server
+        self._world = world
+        scene = server.scene
+        links = tuple(dict.fromkeys(v.link for v in look.visuals))
+        self._poses = LinkPoses(world.robot, links)
+        self._link_frames = [scene.add_frame(f"/robot/{link}", show_axes=False) for link in links]
+        for j, visual in enumerate(look.visuals):
+            scene.add_mesh_simple(f"/robot/{visual.link}/mesh{j}", np.asarray(visual.mesh.vertices, dtype=np.float32),
+                                  np.asarray(visual.mesh.faces, dtype=np.uint32), color=_rgb255(visual.color))
+        spheres = world.robot.collision_spheres
+        self._sphere_links = LinkPoses(world.robot, tuple(s.link for s in spheres))
+        self._sphere_nodes = [scene.add_icosphere(f"/spheres/{i}", radius=s.radius, color=SPHERE_COLOR, opacity=0.5,
+                                                  visible=False) for i, s in enumerate(spheres)]
+        self.goal_handles: dict[int, viser.TransformControlsHandle] = {}
+        self.obstacle_handles: dict[int, viser.TransformControlsHandle] = {}
+        self._obstacle_nodes = [self._add_obstacle(k, obstacle_dragged) for k in range(len(world.scenario.obstacles))]
+        self._goal_nodes = {k: self._add_goal(k, goal_dragged) for k in range(len(world.scenario.goals))
+                            if world.draggable_goal(k)}
+        self.draw_paths()
+        self._frame_scene(world.state(0.0, np.asarray(world.scenario.initial_state.q)))
+
+    def set_spheres_visible(self, visible: bool) -> None:
+        for node in self._sphere_nodes:
+            node.visible = visible
+
+    def draw_paths(self) -> None:
+        """(Re)draw the reference paths over the scenario's duration, offsets included."""
+        times = np.linspace(0.0, self._world.scenario.duration, PATH_SAMPLES)
+        for k in range(len(self._world.scenario.goals)):
+            self._add_path(f"/paths/goal{k}", self._world.goal_path(k, times), GOAL_COLOR)
+        for k in range(len(self._world.scenario.obstacles)):
+            self._add_path(f"/paths/obstacle{k}", self._world.obstacle_path(k, times), OBSTACLE_COLOR)
+
+    def update(self, state: SceneState, moving_only: bool) -> None:
+        """Put the robot at ``state.q`` and goals and obstacles where ``state`` has them
+        (with ``moving_only`` only those the scenario moves, so as not to fight a handle
+        the user holds)."""
+        from viser import transforms
+
+        poses = self._poses(state.q)
+        sphere_frames = self._sphere_links(state.q)
+        with self._server.atomic():
+            for frame, pose in zip(self._link_frames, poses):
+                frame.position = pose[:3, 3]
+                frame.wxyz = transforms.SO3.from_matrix(pose[:3, :3]).wxyz
+            for node, sphere, pose in zip(self._sphere_nodes, self._world.robot.collision_spheres, sphere_frames):
+                node.position = pose[:3, :3] @ np.asarray(sphere.center) + pose[:3, 3]
+            for k, node in enumerate(self._obstacle_nodes):
+                if not moving_only or self._world.obstacle_moves(k):
+                    node.position = state.obstacle_centres[k]
+            for k, node in self._goal_nodes.items():
+                point = state.goal_points[k]
+                if point is not None and (not moving_only or self._world.goal_moves(k)):
+                    node.position = point
+
+    def _frame_scene(self, state: SceneState) -> None:
+        """A floor grid under the robot, goals and obstacles (twice the size of the box
+        around them, at least :data:`GRID_SIZE`), and the browser's camera looking at them
+        from the front right and above, from :data:`CAMERA_DISTANCE` times the box's size
+        (at least 1 m)."""
+        points = [pose[:3, 3] for pose in self._poses(state.q)]
+        points += [p for p in state.goal_points if p is not None] + list(state.obstacle_centres)
+        low, high = np.min(points, axis=0), np.max(points, axis=0)
+        centre = 0.5 * (low + high)
+        size = max(float(np.max(high - low)), 1.0)
+        grid = max(GRID_SIZE, 2.0 * np.ceil(size))
+        self._server.scene.add_grid("/grid", width=grid, height=grid, cell_size=0.25,
+                                    position=(float(np.round(centre[0])), float(np.round(centre[1])), 0.0))
+        camera = self._server.initial_camera
+        camera.look_at = centre
+        camera.position = centre + CAMERA_DISTANCE * size * CAMERA_DIRECTION / np.linalg.norm(CAMERA_DIRECTION)
+
+    def _add_obstacle(self, k: int, dragged: Dragged | None) -> viser.SceneNodeHandle:
+        obstacle = self._world.scenario.obstacles[k]
+        centre = self._world.obstacle_centres(0.0)[k]
+        planar = self._world.robot.planar and obstacle.type == "sphere"
+        name = f"/obstacles/{k}"
+        if dragged is None:
+            node = self._server.scene.add_frame(name, show_axes=False, position=centre)
+        else:
+            planar_axes = (True, True, not self._world.robot.planar)
+            node = self._server.scene.add_transform_controls(name, scale=HANDLE_SCALE, position=centre,
+                                                             disable_rotations=True, active_axes=planar_axes)
+            node.on_update(lambda event: dragged(k, np.array(event.target.position)))
+            self.obstacle_handles[k] = node
+        mesh = shape_mesh(obstacle.shape, planar)
+        opacity = 0.4 if obstacle.type == "plane" else 0.8
+        self._server.scene.add_mesh_simple(f"{name}/shape", np.asarray(mesh.vertices, dtype=np.float32),
+                                           np.asarray(mesh.faces, dtype=np.uint32), color=OBSTACLE_COLOR,
+                                           opacity=opacity, wxyz=np.asarray(obstacle.orientation))
+        return node
+
+    def _add_goal(self, k: int, dragged: Dragged | None) -> viser.SceneNodeHandle:
+        point = self._world.goal_point(k, 0.0)
+        name = f"/goals/{k}"
+        if dragged is None:
+            node = self._server.scene.add_frame(name, show_axes=False, position=point)
+        else:
+            planar_axes = (True, True, not self._world.robot.planar)
+            node = self._server.scene.add_transform_controls(name, scale=HANDLE_SCALE, position=point,
+                                                             disable_rotations=True, active_axes=planar_axes)
+            node.on_update(lambda event: dragged(k, np.array(event.target.position)))
+            self.goal_handles[k] = node
+        tolerance = self._world.scenario.goals[k].tolerance
+        self._server.scene.add_icosphere(f"{name}/marker", radius=max(GOAL_MARKER_RADIUS, tolerance),
+                                         color=GOAL_COLOR, opacity=0.6)
+        return node
+
+    def _add_path(self, name: str, points: np.ndarray | None, color: tuple[int, int, int]) -> None:
+        if points is None:
+            return
+        segments = np.stack([points[:-1], points[1:]], axis=1).astype(np.float32)
+        self._server.scene.add_line_segments(name, segments, color, thickness=0.005)
+
+
+def _rgb255(color: tuple[float, float, float]) -> tuple[int, int, int]:
+    r, g, b = (int(round(255 * min(max(c, 0.0), 1.0))) for c in color)
+    return (r, g, b)
