@@ -11,12 +11,12 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import math
 import sys
 from importlib.resources import files
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from dynfab.cli_arguments import at_least_one, positive_number
 from dynfab.fabric.backends import BACKENDS
 from dynfab.plot_command import add_plot_parser, plot_command
 from dynfab.scenario.recording import RecordingError, load_recording, run_recording, save_recording
@@ -63,11 +63,11 @@ def main(argv: list[str] | None = None) -> int:
     experiment = commands.add_parser("experiment", help="run one of the paper's experiments as a seeded series "
                                                         "(parallel, resumable) and summarize it beside the paper")
     experiment.add_argument("name", help="exp1, exp2a, exp2b, exp3, exp4, exp5, exp6 or arms")
-    experiment.add_argument("--runs", type=_at_least_one, default=50, help="number of seeds (default 50)")
+    experiment.add_argument("--runs", type=at_least_one, default=50, help="number of seeds (default 50)")
     experiment.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
     experiment.add_argument("--out", type=Path, help="output directory (default dynfab-experiments/NAME)")
-    experiment.add_argument("--jobs", type=_at_least_one, help="worker processes (default: the number of CPUs)")
-    experiment.add_argument("--workers", type=_at_least_one,
+    experiment.add_argument("--jobs", type=at_least_one, help="worker processes (default: the number of CPUs)")
+    experiment.add_argument("--workers", type=at_least_one,
                             help="run on Dask: an embedded LocalCluster of this many worker processes")
     experiment.add_argument("--scheduler", metavar="tcp://HOST:8786",
                             help="run on the existing Dask cluster of this scheduler (implies Dask)")
@@ -90,7 +90,7 @@ def main(argv: list[str] | None = None) -> int:
     spheres.add_argument("urdf", help="URDF file, or package://NAME/... (see the README)")
     spheres.add_argument("--out", type=Path, help="write collision_spheres and self_collision_pairs as YAML")
     spheres.add_argument("--plot", type=Path, help="write a PNG of meshes and spheres")
-    spheres.add_argument("--tolerance", type=_positive_number, default=0.01,
+    spheres.add_argument("--tolerance", type=positive_number, default=0.01,
                          help="largest distance of a mesh surface point outside all spheres [m] (default 0.01)")
     spheres.add_argument("--package-dir", type=Path, action="append", default=[],
                          help="folder where package:// URIs resolve (repeatable)")
@@ -159,24 +159,6 @@ def main(argv: list[str] | None = None) -> int:
         _plot(results[0], args.plot)
         print(f"dynfab: plot written to {args.plot}", file=sys.stderr)
     return 0
-
-
-def _at_least_one(text: str) -> int:
-    """An integer >= 1 from the command line."""
-    if not text.isdigit() or int(text) < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return int(text)
-
-
-def _positive_number(text: str) -> float:
-    """A positive finite number from the command line."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not (math.isfinite(value) and value > 0.0):
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
-    return value
 
 
 def _experiment(args: argparse.Namespace) -> int:

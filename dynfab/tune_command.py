@@ -17,6 +17,7 @@ from typing import Any
 
 import yaml
 
+from dynfab.cli_arguments import at_least_one
 from dynfab.experiments.tuning_objective import Evaluation
 
 __all__ = ["add_tune_parser", "comparison_table", "tune_command"]
@@ -27,20 +28,20 @@ def add_tune_parser(commands: Any) -> None:
     tune = commands.add_parser("tune", help="search the fabric: parameters of an experiment with Optuna "
                                             "(resumable) and write the best block")
     tune.add_argument("name", metavar="EXPERIMENT", help="exp1, exp2a, exp2b, exp3, exp4, exp5, exp6 or arms")
-    tune.add_argument("--trials", type=_count, default=30, help="finished trials the study should hold (default 30)")
+    tune.add_argument("--trials", type=at_least_one, default=30, help="finished trials the study should hold (default 30)")
     tune.add_argument("--out", type=Path, help="YAML file of the best block (default dynfab-tuning/NAME-fabric.yaml)")
     tune.add_argument("--study", type=Path, help="SQLite file of the Optuna study; rerunning continues it "
                                                  "(default dynfab-tuning/NAME.db)")
     tune.add_argument("--planner", help="the fabric planner tuned (default: the experiment's first)")
-    tune.add_argument("--train", type=_count, default=40, help="training scenarios (default 40)")
+    tune.add_argument("--train", type=at_least_one, default=40, help="training scenarios (default 40)")
     tune.add_argument("--train-seed", type=int, default=100_000, help="first training seed (default 100000)")
-    tune.add_argument("--held-out", type=_count, default=100, help="held-out scenarios (default 100)")
+    tune.add_argument("--held-out", type=at_least_one, default=100, help="held-out scenarios (default 100)")
     tune.add_argument("--held-out-seed", type=int, default=0,
                       help="first held-out seed (default 0: the seeds of dynfab experiment)")
     tune.add_argument("--duration", type=float, help="simulated time of every run [s] (default: the experiment's)")
     tune.add_argument("--seed", type=int, default=0, help="seed of the TPE sampler (default 0)")
-    tune.add_argument("--jobs", type=_count, default=2, help="worker processes for the runs (default 2)")
-    tune.add_argument("--workers", type=_count, help="run on Dask: an embedded LocalCluster of this many workers")
+    tune.add_argument("--jobs", type=at_least_one, default=2, help="worker processes for the runs (default 2)")
+    tune.add_argument("--workers", type=at_least_one, help="run on Dask: an embedded LocalCluster of this many workers")
     tune.add_argument("--scheduler", metavar="tcp://HOST:8786", help="run on the existing Dask cluster of this "
                                                                      "scheduler")
 
@@ -118,10 +119,3 @@ def _line(evaluation: Evaluation) -> str:
 def _error(message: str) -> int:
     print(f"dynfab: error: {message}", file=sys.stderr)
     return 2
-
-
-def _count(text: str) -> int:
-    """An integer >= 1 from the command line."""
-    if not text.isdigit() or int(text) < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return int(text)

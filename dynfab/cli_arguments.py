@@ -1,0 +1,24 @@
+"""Types of command-line arguments shared by the ``dynfab`` subcommands."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+
+def at_least_one(text: str) -> int:
+    """An integer >= 1 from the command line."""
+    if not text.isdigit() or int(text) < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return int(text)
+
+
+def positive_number(text: str) -> float:
+    """A positive finite number from the command line."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0.0):
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return value
