@@ -69,15 +69,16 @@ def _read_mesh(shape: MeshFile, link: str) -> trimesh.Trimesh:
         raise LinkMeshError(f"link '{link}': collision mesh '{shape.uri}' not found (give the folder "
                             "that holds its package in package_dirs or DYNFAB_PACKAGE_PATH)")
     try:
-        return _load(shape.path)
+        return load_mesh_file(shape.path)
     except Exception as exc:  # trimesh raises many kinds of errors on bad files
         raise LinkMeshError(f"link '{link}': collision mesh '{shape.uri}' cannot be read "
                             f"({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})") from None
 
 
 @functools.lru_cache(maxsize=256)
-def _load(path: str) -> trimesh.Trimesh:
-    """A mesh file as one triangle mesh (scenes are concatenated); cached per path."""
+def load_mesh_file(path: str) -> trimesh.Trimesh:
+    """A mesh file as one triangle mesh (scenes are concatenated); cached per path, so
+    callers that change it must copy it first."""
     loaded = trimesh.load(path, force="mesh", process=False)
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise ValueError("no triangles in the file")

@@ -15,7 +15,6 @@ sees them.
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,6 +23,7 @@ import numpy as np
 import trimesh
 import yourdfpy
 
+from dynfab.robots.link_meshes import load_mesh_file
 from dynfab.robots.mesh_paths import resolve_uri
 from dynfab.robots.robot import Robot
 
@@ -113,18 +113,9 @@ def mesh_file(uri: str, base_dir: Path | None, package_dirs: tuple[Path, ...] = 
     if path is None:
         return f"mesh '{uri}' not found"
     try:
-        return _load(str(path)).copy()
+        return load_mesh_file(str(path)).copy()
     except Exception as error:  # trimesh raises many kinds of errors on bad files
         return f"mesh '{uri}' cannot be read ({type(error).__name__})"
-
-
-@functools.lru_cache(maxsize=128)
-def _load(path: str) -> trimesh.Trimesh:
-    """A mesh file as one triangle mesh (scenes are concatenated); cached per path."""
-    loaded = trimesh.load(path, force="mesh", process=False)
-    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
-        raise ValueError("no triangles")
-    return loaded
 
 
 def _geometry_mesh(geometry: yourdfpy.Geometry, base_dir: Path,
