@@ -121,19 +121,26 @@ class ViewScene:
         camera.look_at = centre
         camera.position = centre + CAMERA_DISTANCE * size * CAMERA_DIRECTION / np.linalg.norm(CAMERA_DIRECTION)
 
+    def _anchor(self, name: str, position: np.ndarray, k: int, dragged: Dragged | None,
+                handles: dict[int, viser.TransformControlsHandle]) -> viser.SceneNodeHandle:
+        """The node item ``k`` hangs from: a plain frame, or with ``dragged`` a translation
+        handle (in the plane for planar robots) that reports its position and is kept in
+        ``handles``."""
+        if dragged is None:
+            return self._server.scene.add_frame(name, show_axes=False, position=position)
+        planar_axes = (True, True, not self._world.robot.planar)
+        node = self._server.scene.add_transform_controls(name, scale=HANDLE_SCALE, position=position,
+                                                         disable_rotations=True, active_axes=planar_axes)
+        node.on_update(lambda event: dragged(k, np.array(event.target.position)))
+        handles[k] = node
+        return node
+
     def _add_obstacle(self, k: int, dragged: Dragged | None) -> viser.SceneNodeHandle:
         obstacle = self._world.scenario.obstacles[k]
         centre = self._world.obstacle_centres(0.0)[k]
         planar = self._world.robot.planar and obstacle.type == "sphere"
         name = f"/obstacles/{k}"
-        if dragged is None:
-            node = self._server.scene.add_frame(name, show_axes=False, position=centre)
-        else:
-            planar_axes = (True, True, not self._world.robot.planar)
-            node = self._server.scene.add_transform_controls(name, scale=HANDLE_SCALE, position=centre,
-                                                             disable_rotations=True, active_axes=planar_axes)
-            node.on_update(lambda event: dragged(k, np.array(event.target.position)))
-            self.obstacle_handles[k] = node
+        node = self._anchor(name, centre, k, dragged, self.obstacle_handles)
         mesh = shape_mesh(obstacle.shape, planar)
         opacity = 0.4 if obstacle.type == "plane" else 0.8
         self._server.scene.add_mesh_simple(f"{name}/shape", np.asarray(mesh.vertices, dtype=np.float32),
@@ -144,14 +151,7 @@ class ViewScene:
     def _add_goal(self, k: int, dragged: Dragged | None) -> viser.SceneNodeHandle:
         point = self._world.goal_point(k, 0.0)
         name = f"/goals/{k}"
-        if dragged is None:
-            node = self._server.scene.add_frame(name, show_axes=False, position=point)
-        else:
-            planar_axes = (True, True, not self._world.robot.planar)
-            node = self._server.scene.add_transform_controls(name, scale=HANDLE_SCALE, position=point,
-                                                             disable_rotations=True, active_axes=planar_axes)
-            node.on_update(lambda event: dragged(k, np.array(event.target.position)))
-            self.goal_handles[k] = node
+        node = self._anchor(name, point, k, dragged, self.goal_handles)
         tolerance = self._world.scenario.goals[k].tolerance
         self._server.scene.add_icosphere(f"{name}/marker", radius=max(GOAL_MARKER_RADIUS, tolerance),
                                          color=GOAL_COLOR, opacity=0.6)
