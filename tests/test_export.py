@@ -76,6 +76,10 @@ def test_example_builds_strictly_runs_and_matches_python(scenario: str, tmp_path
     qdot = np.array(loaded.initial_state.qdot)
     qdot[0] += 0.1
     np.testing.assert_allclose(exported, planner.compute(np.array(loaded.initial_state.q), qdot), rtol=0, atol=1e-12)
+    subprocess.run(["make", "-B", "-C", str(out)], check=True, capture_output=True)  # the default flags
+    run = subprocess.run([str(out / "example")], check=True, capture_output=True, text=True)
+    default_build = dict(line.split(" ", 1) for line in run.stdout.splitlines())
+    np.testing.assert_allclose(np.array(default_build["qddot"].split(), dtype=float), exported, rtol=0, atol=1e-12)
 
 
 def test_named_fields_match_python_on_random_states(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
