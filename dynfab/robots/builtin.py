@@ -11,7 +11,7 @@ import numpy as np
 
 from .kinematics import Kinematics
 from .panda_spheres import PANDA_FITTED_PAIRS, PANDA_FITTED_SPHERES
-from .limits import FRANKA_ACCELERATION, MotionLimits
+from .limits import BOXER_ACCELERATION, FRANKA_ACCELERATION, MotionLimits
 from .robot import CollisionSphere, DifferentialDriveBase, Robot, default_limits
 from .urdf import load_urdf, parse_urdf
 
@@ -201,15 +201,19 @@ def panda_robot(sphere_model: str) -> Robot:
         pairs = tuple((labels.index(a), labels.index(b)) for a, b in _PANDA_SELF_COLLISION)
     return Robot(name="panda", kinematics=kinematics, goal_link="panda_hand", collision_spheres=spheres,
                  self_collision_pairs=pairs, planar=False, default_q=np.array(PANDA_DEFAULT_Q),
-                 limits=_franka_limits(kinematics, None))
+                 limits=_published_limits(kinematics, None))
 
 
-def _franka_limits(kinematics: Kinematics, base: DifferentialDriveBase | None) -> MotionLimits:
-    """The description's velocity and effort limits with Franka's published acceleration
-    limits on the arm joints (the base keeps the default)."""
+def _published_limits(kinematics: Kinematics, base: DifferentialDriveBase | None) -> MotionLimits:
+    """The description's velocity and effort limits with the published acceleration limits:
+    Clearpath's for a Boxer base (``v``, ``omega``), Franka's for the Panda's joints (the
+    last seven velocity coordinates of a robot with an arm)."""
     limits = default_limits(kinematics, base)
     acceleration = np.array(limits.acceleration)
-    acceleration[-len(FRANKA_ACCELERATION):] = FRANKA_ACCELERATION
+    if base is not None:
+        acceleration[:2] = BOXER_ACCELERATION
+    if limits.size > (2 if base is not None else 0):
+        acceleration[-len(FRANKA_ACCELERATION):] = FRANKA_ACCELERATION
     return limits.overridden(acceleration=acceleration)
 
 
@@ -225,10 +229,11 @@ def _boxer() -> Robot:
     """The Clearpath Boxer as a planar robot: six footprint discs, q = [x, y, yaw]."""
     spheres = tuple(CollisionSphere("chassis_link", center, BOXER_DISC_RADIUS)
                     for _, center in _BOXER_BODY)
-    return Robot(name="boxer", kinematics=_builtin_kinematics("boxer.urdf"),
+    kinematics = _builtin_kinematics("boxer.urdf")
+    return Robot(name="boxer", kinematics=kinematics,
                  goal_link="base_link", collision_spheres=spheres,
                  self_collision_pairs=(), planar=True, default_q=np.zeros(3),
-                 base=BOXER_BASE)
+                 base=BOXER_BASE, limits=_published_limits(kinematics, BOXER_BASE))
 
 
 def _boxer_panda() -> Robot:
@@ -251,7 +256,7 @@ def _boxer_panda() -> Robot:
                  goal_link="panda_hand", collision_spheres=spheres,
                  self_collision_pairs=pairs, planar=False,
                  default_q=np.array(BOXER_PANDA_DEFAULT_Q), base=BOXER_BASE,
-                 limits=_franka_limits(kinematics, BOXER_BASE))
+                 limits=_published_limits(kinematics, BOXER_BASE))
 
 
 #: Built-in robot names and their constructors.

@@ -13,7 +13,8 @@ Where the numbers come from:
   :data:`DEFAULT_ACCELERATION` and no jerk limit, and a velocity without data gets
   :data:`DEFAULT_VELOCITY`; a scenario's ``limits:`` block overrides all of them;
 - the built-in Panda carries Franka's published limits (:data:`FRANKA_ACCELERATION`,
-  :data:`FRANKA_JERK`, the velocities and efforts of its URDF).
+  :data:`FRANKA_JERK`, the velocities and efforts of its URDF), the built-in Boxer base
+  Clearpath's (:data:`BOXER_ACCELERATION`, the speeds of ``BOXER_BASE``).
 """
 
 from __future__ import annotations
@@ -34,6 +35,15 @@ DEFAULT_ACCELERATION = 10.0
 FRANKA_ACCELERATION = (15.0, 7.5, 10.0, 12.5, 15.0, 20.0, 20.0)
 #: ... and jerk limits [rad/s³] (not applied unless a scenario asks: see MotionLimits.jerk)
 FRANKA_JERK = (7500.0, 3750.0, 5000.0, 6250.0, 7500.0, 10000.0, 10000.0)
+#: Clearpath Boxer, acceleration limits ``(v̇ [m/s²], ω̇ [rad/s²])`` from traction: the
+#: drive wheels carry 627 of the base's 981 N (the rest rests on the casters), so at
+#: friction 1 they push at most 6.3 m/s²; 5 keeps 20 % margin, and 5 rad/s² is where the
+#: base stops skidding in yaw under MuJoCo (Experiment 4, seed 33: 1.007x its yaw-rate
+#: limit at 10 rad/s², 0.98x at 5). Clearpath's drive controller ships with 2 and 2
+#: (boxer_control/config/control.yaml), a conservative setting: with it, the static
+#: fabric's bounded command brakes too late in Experiment 4 (seed 3 hits a disc), since
+#: the barriers do not know the limit (see README "Limits").
+BOXER_ACCELERATION = (5.0, 5.0)
 
 
 class LimitsError(ValueError):
