@@ -328,6 +328,23 @@ def test_boxer_reaches_a_goal_behind_it() -> None:
     assert controller.failures == 0
 
 
+def test_commands_keep_the_next_velocity_within_its_limits() -> None:
+    """At (and beyond) the velocity limit, a plan that asks for more speed is clipped so that
+    ``u + u̇ Δt`` stays within ``±u_max`` (IPOPT's bounds hold to 1e-8 only), and a state
+    beyond the limit brakes at most at ``a_max``."""
+    controller = controller_for(BLOCKED_LINE, MpcConfig())
+    assert controller.control_period == 0.01
+    speed = controller.problem.model.velocity_limits
+    peak = controller.problem.model.acceleration_limits
+    for qdot in (np.array([speed[0], 0.0]), np.array([speed[0] * 1.5, -speed[1] * 1.5])):
+        command = controller(0.0, np.array([-1.5, 0.0]), qdot)
+        assert (np.abs(command) <= peak).all()
+        next_speed = np.abs(qdot + 0.01 * command)
+        assert ((next_speed <= speed) | (np.abs(command) == peak) & (next_speed < np.abs(qdot))).all()
+    with pytest.raises(ValueError, match="control_period"):
+        MpcController(controller.problem, controller.references, controller.obstacle_radii, control_period=0.0)
+
+
 def test_experiment4_seed0_runs_end_to_end() -> None:
     """Experiment 4 run 0 with ``planner: mpc`` through ``run_scenario`` (cut from 40 s to
     6 s: the goal is reached at 4.13 s and held).
@@ -351,6 +368,7 @@ def test_experiment4_seed0_runs_end_to_end() -> None:
     u = result.record.qdot
     assert u.shape[1] == 2 and np.isfinite(result.record.qddot).all()
     assert np.abs(u[:, 0]).max() <= 1.9 + LIMIT_TOLERANCE and np.abs(u[:, 1]).max() <= 2.0 + LIMIT_TOLERANCE
+    assert metrics.max_velocity_ratio <= 1.0 + 1e-15 and metrics.max_acceleration_ratio <= 1.0 + 1e-15
 
 
 def test_collision_margin_keeps_experiment4_seed0_clear_between_stages() -> None:

@@ -15,6 +15,12 @@ Safe action when a solve fails (the solver did not converge or returned non-fini
 numbers): keep executing the last successful plan, i.e. that plan shifted to the current
 time; once the time runs past its horizon, or if there never was one, brake:
 ``u̇ = −k_b u`` (``k_b = MpcConfig.braking_gain`` [1/s]). Failures are counted.
+
+Every command is within the robot's limits: ``|u̇| ≤ a_max``, and, given the control
+period ``Δt``, ``|u + u̇ Δt| ≤ u_max`` where the current velocity allows it (else the
+command brakes at ``a_max``). A plan keeps these by its bounds up to the solver's
+tolerance (IPOPT relaxes bounds by 1e-8 relative, which put the Boxer's speed at
+1.00000001 times its limit); the final clip per coordinate removes that.
 """
 
 from __future__ import annotations
@@ -41,17 +47,23 @@ class MpcController:
         problem: the NLP, built once.
         references: goal and obstacle trajectories of the scenario.
         obstacle_radii: radius of each obstacle, shape (m,) [m].
+        control_period: ``Δt`` between calls [s] (the scenario's ``dt``), used to keep the
+            next velocity within its limits; ``None``: only the acceleration is bounded.
         solve_times: wall time of each solve, including the parameter packing [s].
         iterations: solver iterations of each solve.
         failures: number of solves that failed.
     """
 
-    def __init__(self, problem: MpcProblem, references: References, obstacle_radii: np.ndarray) -> None:
+    def __init__(self, problem: MpcProblem, references: References, obstacle_radii: np.ndarray,
+                 control_period: float | None = None) -> None:
         if len(references.obstacles) != problem.obstacles or len(references.goals) != len(problem.goals):
             raise ValueError("MpcController: references do not match the problem's goals and obstacles")
         self.problem = problem
         self.references = references
         self.obstacle_radii = np.asarray(obstacle_radii, dtype=float)
+        if control_period is not None and not (math.isfinite(control_period) and control_period > 0):
+            raise ValueError(f"MpcController: control_period must be a positive number of seconds, got {control_period}")
+        self.control_period = control_period
         self.solve_times: list[float] = []
         self.iterations: list[int] = []
         self.failures = 0
@@ -114,12 +126,15 @@ class MpcController:
             self.failures += 1
 
     def _command(self, t: float, qdot: np.ndarray) -> np.ndarray:
-        """The executed plan's acceleration ``u̇`` at ``t``, or the braking action ``−k_b u``
-        within the acceleration limits (a plan keeps them by its bounds, up to the solver's
-        tolerance, which the clip removes)."""
-        peak = self.problem.model.acceleration_limits
+        """The executed plan's acceleration ``u̇`` at ``t``, or the braking action ``−k_b u``,
+        clipped to the limits (module docstring)."""
+        command = -self.config.braking_gain * qdot
         if self._plan is not None:
             stage = math.floor((t - self._plan_time) / self.config.stage_length + _TIME_TOLERANCE)
             if 0 <= stage < self.config.stages:
-                return np.clip(self._plan.qddot[stage], -peak, peak)
-        return np.clip(-self.config.braking_gain * qdot, -peak, peak)
+                command = self._plan.qddot[stage]
+        if self.control_period is not None:
+            speed = self.problem.model.velocity_limits
+            command = np.clip(command, (-speed - qdot) / self.control_period, (speed - qdot) / self.control_period)
+        peak = self.problem.model.acceleration_limits
+        return np.clip(command, -peak, peak)

@@ -215,7 +215,7 @@ def make_mpc_controller(scenario: Scenario, robot: Robot, references: References
     goals = tuple(term for goal in scenario.goals for term in _goal_terms(goal, robot))
     problem = MpcProblem(robot, goals, len(scenario.obstacles), config or MpcConfig())
     return MpcController(problem, planner_references(scenario, references),
-                         np.array([o.radius for o in scenario.obstacles]))
+                         np.array([o.radius for o in scenario.obstacles]), control_period=scenario.dt)
 
 
 def _goal_terms(goal: GoalSpec, robot: Robot) -> tuple[GoalTerm, ...]:

@@ -133,7 +133,7 @@ class ViewSession:
         for name, controller in self._controllers.items():
             if isinstance(controller, MpcController):  # its plan belongs to the old times
                 self._controllers[name] = MpcController(controller.problem, controller.references,
-                                                        controller.obstacle_radii)
+                                                        controller.obstacle_radii, controller.control_period)
         self._retarget()
 
     def switch_planner(self, name: str) -> None:
