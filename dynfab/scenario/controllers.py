@@ -133,8 +133,7 @@ def make_controller(scenario: Scenario, robot: Robot, references: References) ->
     Raises:
         ScenarioError: if the scenario asks for something this planner cannot do.
     """
-    headroom = scenario.limits.headroom_for(scenario.simulation.simulator)
-    robot = replace(robot, limits=robot.limits.with_headroom(headroom))  # what the planner plans with
+    robot = replace(robot, limits=scenario.planning_limits(robot.limits))
     if scenario.planner == "mpc":
         return make_mpc_controller(scenario, robot, references)
     if scenario.planner not in _FABRIC_PLANNERS:

@@ -65,8 +65,7 @@ def run_mujoco(scenario: Scenario, robot: Robot, controller: Controller, centres
                                                 for i, j in mesh_model.pairs)
     # the base's drive stops its set-point where the planner plans to (less the headroom), as
     # a drive's maximum speed is configured below the hardware's
-    driven = dataclasses.replace(robot, limits=robot.limits.with_headroom(
-        scenario.limits.headroom_for(scenario.simulation.simulator)))
+    driven = dataclasses.replace(robot, limits=scenario.planning_limits(robot.limits))
     try:
         scene = build_scene(driven, obstacles, pairs)
     except (MujocoModelError, LinkMeshError) as error:

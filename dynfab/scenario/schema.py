@@ -47,6 +47,7 @@ from dynfab.scenario.simulation_schema import CONTROL, DELAY, NOISE, SIMULATOR, 
 from dynfab.scenario.yaml_loader import load_yaml_file
 
 if TYPE_CHECKING:
+    from dynfab.robots.limits import MotionLimits
     from dynfab.robots.robot import Robot
 
 __all__ = ["BUILTIN_ROBOTS", "DEFAULT_ANGLE_TOLERANCE", "OBSTACLE_TYPES", "PLANNERS", "TRAJECTORY_TYPES",
@@ -111,6 +112,12 @@ class Scenario:
     recovery: bool = True
     backend: str = "vm"
     fabric: FabricSpec = FabricSpec()
+
+    def planning_limits(self, limits: MotionLimits) -> MotionLimits:
+        """``limits`` as a planner (and a base's wheel drive) works with them here: every
+        velocity limit less the headroom under this scenario's simulator
+        (:mod:`dynfab.scenario.limits_schema`)."""
+        return limits.with_headroom(self.limits.headroom_for(self.simulation.simulator))
 
 
 JointValues = Annotated[tuple[Annotated[float, Range(-MAX_JOINT_VALUE, MAX_JOINT_VALUE)], ...], Items(max_items=64)]
