@@ -57,6 +57,9 @@ def view_command(args: argparse.Namespace) -> int:
     if note is not None:
         print(f"dynfab: {note}", file=sys.stderr)
     print(f"dynfab: view of {args.file.name} at {view.url} (Ctrl-C stops)", flush=True)
+    # Ctrl-C (SIGINT) and SIGTERM stop the view, also when it was started with SIGINT
+    # ignored (a background job of a non-interactive shell inherits that)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGTERM, _interrupt)
     view.start()
     try:
