@@ -8,7 +8,8 @@ import pytest
 from dynfab.robots import LimitsError, MotionLimits, load_robot, robot_from_urdf
 from robot_files import arm_urdf
 
-from dynfab.robots.limits import DEFAULT_ACCELERATION, DEFAULT_VELOCITY, FRANKA_ACCELERATION, limits_from_joints
+from dynfab.robots.limits import (BOXER_ACCELERATION, DEFAULT_ACCELERATION, DEFAULT_VELOCITY, FRANKA_ACCELERATION,
+                                  limits_from_joints)
 
 
 def test_builtin_panda_carries_frankas_published_limits():
@@ -27,6 +28,14 @@ def test_base_limits_are_on_forward_speed_and_yaw_rate():
     assert robot.limits.velocity[1] == pytest.approx(2.0)
     np.testing.assert_allclose(robot.limits.acceleration[2:], FRANKA_ACCELERATION)
     assert robot.position_index == (None, None) + tuple(range(3, 10))
+
+
+def test_boxer_bases_carry_traction_acceleration_limits():
+    """Below what the drive wheels can push at friction 1 (about 6.3 m/s²)."""
+    for name in ("boxer", "boxer-panda"):
+        limits = load_robot(name).limits
+        np.testing.assert_allclose(limits.acceleration[:2], BOXER_ACCELERATION)
+    assert BOXER_ACCELERATION[0] < 6.3
 
 
 def test_urdf_robot_reads_velocity_limits_and_defaults_acceleration():

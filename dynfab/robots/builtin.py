@@ -201,13 +201,14 @@ def panda_robot(sphere_model: str) -> Robot:
         pairs = tuple((labels.index(a), labels.index(b)) for a, b in _PANDA_SELF_COLLISION)
     return Robot(name="panda", kinematics=kinematics, goal_link="panda_hand", collision_spheres=spheres,
                  self_collision_pairs=pairs, planar=False, default_q=np.array(PANDA_DEFAULT_Q),
-                 limits=_published_limits(kinematics, None))
+                 limits=_known_limits(kinematics, None))
 
 
-def _published_limits(kinematics: Kinematics, base: DifferentialDriveBase | None) -> MotionLimits:
-    """The description's velocity and effort limits with the published acceleration limits:
-    Clearpath's for a Boxer base (``v``, ``omega``), Franka's for the Panda's joints (the
-    last seven velocity coordinates of a robot with an arm)."""
+def _known_limits(kinematics: Kinematics, base: DifferentialDriveBase | None) -> MotionLimits:
+    """The description's velocity and effort limits with known acceleration limits: the
+    Boxer's from traction for a base (``v``, ``omega``: :data:`BOXER_ACCELERATION`), and
+    Franka's published ones for the Panda's joints (the last seven velocity coordinates of
+    a robot with an arm)."""
     limits = default_limits(kinematics, base)
     acceleration = np.array(limits.acceleration)
     if base is not None:
@@ -233,7 +234,7 @@ def _boxer() -> Robot:
     return Robot(name="boxer", kinematics=kinematics,
                  goal_link="base_link", collision_spheres=spheres,
                  self_collision_pairs=(), planar=True, default_q=np.zeros(3),
-                 base=BOXER_BASE, limits=_published_limits(kinematics, BOXER_BASE))
+                 base=BOXER_BASE, limits=_known_limits(kinematics, BOXER_BASE))
 
 
 def _boxer_panda() -> Robot:
@@ -256,7 +257,7 @@ def _boxer_panda() -> Robot:
                  goal_link="panda_hand", collision_spheres=spheres,
                  self_collision_pairs=pairs, planar=False,
                  default_q=np.array(BOXER_PANDA_DEFAULT_Q), base=BOXER_BASE,
-                 limits=_published_limits(kinematics, BOXER_BASE))
+                 limits=_known_limits(kinematics, BOXER_BASE))
 
 
 #: Built-in robot names and their constructors.
