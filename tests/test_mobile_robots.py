@@ -12,7 +12,7 @@ import pytest
 
 from dynfab.robots import Kinematics, Robot, UnknownRobotError, load_robot, parse_urdf
 from dynfab.robots.builtin import (BOXER_BASE, BOXER_DISC_RADIUS, BOXER_SPHERE_RADIUS,
-                                   PANDA_DEFAULT_Q, panda_robot)
+                                   PANDA_DEFAULT_Q)
 from dynfab.robots.robot import BASE_JOINTS, DifferentialDriveBase
 from test_kinematics import to_pinocchio_q
 
@@ -83,7 +83,7 @@ def test_load_boxer_panda(boxer_panda: Robot) -> None:
     assert robot.goal_link == "panda_hand" and not robot.planar
     assert robot.base == BOXER_BASE
     np.testing.assert_array_equal(robot.default_q, (0.0, 0.0, 0.0) + PANDA_DEFAULT_Q)
-    panda = panda_robot("hand-written")  # boxer-panda keeps the hand-written spheres
+    panda = load_robot("panda")
     np.testing.assert_array_equal(robot.kinematics.lower[3:], panda.kinematics.lower)
     np.testing.assert_array_equal(robot.kinematics.upper[3:], panda.kinematics.upper)
     np.testing.assert_array_equal(robot.kinematics.velocity_limits[3:],
@@ -258,18 +258,20 @@ def test_self_collision_pairs_apart_at_default(boxer_panda: Robot) -> None:
         clearance = (np.linalg.norm(centers[a] - centers[b])
                      - spheres[a].radius - spheres[b].radius)
         assert clearance > 0.05, f"pair ({a}, {b}) in contact at default_q"
-    # the (hand-written) Panda's own pairs are all there
-    panda = panda_robot("hand-written")
+    # the Panda's own pairs are all there
+    panda = load_robot("panda")
     offset = len(spheres) - len(panda.collision_spheres)
     assert {(a + offset, b + offset) for a, b in panda.self_collision_pairs} <= set(pairs)
-    # the rest are arm spheres against the base body
+    # the rest are arm spheres from the elbow on against the base body
     for a, b in set(pairs) - {(a + offset, b + offset) for a, b in panda.self_collision_pairs}:
         assert spheres[a].link == "chassis_link"
-        assert spheres[b].link in ("panda_link5", "panda_link6", "panda_link7", "panda_hand")
+        assert spheres[b].link in ("panda_link4", "panda_link5", "panda_link6", "panda_link7")
 
 
-def test_arm_body_pairs_can_meet(boxer_panda: Robot) -> None:
-    """Each arm-vs-body pair comes into contact somewhere within the arm's limits."""
+def test_arm_body_pairs_are_those_that_can_come_close(boxer_panda: Robot) -> None:
+    """An arm sphere and a body sphere are a pair exactly when they come within 2 cm of
+    each other somewhere within the arm's limits (on these samples: within 2.5 cm for
+    pairs, at least 2 cm apart for the rest; the selection used 100,000 samples)."""
     kin = boxer_panda.kinematics
     spheres = boxer_panda.collision_spheres
     count = 20000
@@ -280,13 +282,17 @@ def test_arm_body_pairs_can_meet(boxer_panda: Robot) -> None:
     centers = ca.Function("c", [q], [boxer_panda.sphere_centers(q)]).map(count)
     all_centers = np.array(centers(samples.T)).reshape(len(spheres), count, 3)
     radii = boxer_panda.sphere_radii
-    body_pairs = [(a, b) for a, b in boxer_panda.self_collision_pairs
-                  if spheres[a].link == "chassis_link"]
-    assert len(body_pairs) == 6 * 7
-    for a, b in body_pairs:
-        clearance = (np.linalg.norm(all_centers[a] - all_centers[b], axis=1)
-                     - radii[a] - radii[b])
-        assert clearance.min() < 0.0, f"pair ({a}, {b}) never meets"
+    body = [i for i, s in enumerate(spheres) if s.link == "chassis_link"]
+    arm = [i for i, s in enumerate(spheres) if s.link not in ("chassis_link", "panda_link0")]
+    pairs = set(boxer_panda.self_collision_pairs)
+    assert sum(a in body for a, _ in pairs) == 6 * 10 + 4
+    for a in body:
+        for b in arm:
+            closest = (np.linalg.norm(all_centers[a] - all_centers[b], axis=1) - radii[a] - radii[b]).min()
+            if (a, b) in pairs:
+                assert closest < 0.025, f"pair ({a}, {b}) never comes close: {closest:.3f} m"
+            else:
+                assert closest > 0.02, f"({a}, {b}) comes within {closest:.3f} m but is not a pair"
 
 
 def test_default_q_is_collision_free(boxer_panda: Robot) -> None:

@@ -53,9 +53,9 @@ _PANDA_SPHERES: tuple[tuple[str, str, tuple[float, float, float], float], ...] =
 #: outside them, and 30 pairs chosen on the meshes) or ``"hand-written"`` (the table above,
 #: the default until 2026-11: it leaves 29 % of the mesh surface more than 1 cm and 12 %
 #: more than 3 cm outside, up to 8.3 cm at PANDA_DEFAULT_Q, and its pairs let the meshes
-#: touch themselves in 11 of 50 Experiment-1 runs). ``panda_robot("hand-written")`` keeps the old model for comparisons
-#: with results made with it; ``boxer-panda`` still uses the hand-written table (its pairs
-#: are named by its labels).
+#: touch themselves in 11 of 50 Experiment-1 runs). ``panda_robot("hand-written")`` keeps
+#: the old model for comparisons with results made with it; ``boxer-panda`` uses the fitted
+#: spheres too.
 PANDA_SPHERE_MODEL = "fitted"
 
 # Sphere pairs >= 3 joints apart that can touch within the joint limits (found by
@@ -97,12 +97,15 @@ BOXER_DISC_RADIUS = 0.19
 #: Radius of the Boxer's body spheres (3-D ``boxer-panda``) [m].
 BOXER_SPHERE_RADIUS = 0.24
 
-# Arm spheres that can reach the Boxer's body spheres within the joint limits: from the
-# closest of 100,000 random arm configurations, every body sphere can be penetrated by
-# each of these (clearance -0.06 to -0.31 m), while the elbow and the upper arm stay at
-# least 0.02 m away and are left out. At BOXER_PANDA_DEFAULT_Q all these pairs are
-# more than 0.3 m apart.
-_ARM_VS_BODY = ("forearm_low", "forearm_high", "wrist", "flange") + _PANDA_TIP
+# Arm spheres that can reach the Boxer's body spheres: indices into PANDA_FITTED_SPHERES
+# (panda_link4's two, then panda_link5 to panda_link7) that come within 2 cm of a body
+# sphere (indices into _BOXER_BODY) in the closest of 100,000 uniform random arm
+# configurations within the joint limits (measured 2026-11-23; the other arm-body sphere
+# pairs stay at least 2.3 cm apart, panda_link0 sits on the plate and is left out). At
+# BOXER_PANDA_DEFAULT_Q all these pairs are more than 0.4 m apart.
+_ALL_BODY = tuple(range(len(_BOXER_BODY)))
+_ARM_NEAR_BODY: tuple[tuple[int, tuple[int, ...]], ...] = (
+    (11, _ALL_BODY), (12, (0, 1, 2, 3))) + tuple((arm, _ALL_BODY) for arm in range(13, 22))
 
 
 def load_robot(name: str) -> Robot:
@@ -238,23 +241,19 @@ def _boxer() -> Robot:
 
 
 def _boxer_panda() -> Robot:
-    """The Panda on a Boxer: six body spheres, then the Panda's spheres.
+    """The Panda on a Boxer: six body spheres, then the Panda's fitted spheres.
 
-    Self-collision pairs: the Panda's own, plus its forearm, wrist and hand spheres
-    against every body sphere.
+    Self-collision pairs: the Panda's own, plus the arm spheres that can reach the body
+    against the body spheres they can reach (``_ARM_NEAR_BODY``).
     """
-    body = [(label, "chassis_link", center, BOXER_SPHERE_RADIUS)
-            for label, center in _BOXER_BODY]
-    table = body + list(_PANDA_SPHERES)
-    labels = [label for label, *_ in table]
-    spheres = tuple(CollisionSphere(link, center, radius)
-                    for _, link, center, radius in table)
-    named = list(_PANDA_SELF_COLLISION) + [(label, arm) for label, _ in _BOXER_BODY
-                                           for arm in _ARM_VS_BODY]
-    pairs = tuple((labels.index(a), labels.index(b)) for a, b in named)
+    body = tuple(CollisionSphere("chassis_link", center, BOXER_SPHERE_RADIUS) for _, center in _BOXER_BODY)
+    arm = tuple(CollisionSphere(link, center, radius) for link, center, radius in PANDA_FITTED_SPHERES)
+    offset = len(body)
+    pairs = tuple((a + offset, b + offset) for a, b in PANDA_FITTED_PAIRS) + tuple(
+        (b, a + offset) for a, near in _ARM_NEAR_BODY for b in near)
     kinematics = _builtin_kinematics("boxer_panda.urdf")
     return Robot(name="boxer-panda", kinematics=kinematics,
-                 goal_link="panda_hand", collision_spheres=spheres,
+                 goal_link="panda_hand", collision_spheres=body + arm,
                  self_collision_pairs=pairs, planar=False,
                  default_q=np.array(BOXER_PANDA_DEFAULT_Q), base=BOXER_BASE,
                  limits=_known_limits(kinematics, BOXER_BASE))
