@@ -92,6 +92,11 @@ def main(argv: list[str] | None = None) -> int:
     spheres.add_argument("--plot", type=Path, help="write a PNG of meshes and spheres")
     spheres.add_argument("--tolerance", type=positive_number, default=0.01,
                          help="largest distance of a mesh surface point outside all spheres [m] (default 0.01)")
+    spheres.add_argument("--max-bulge", type=positive_number, default=0.02,
+                         help="largest distance a sphere reaches out of the body [m] (default 0.02)")
+    spheres.add_argument("--fewest", action="store_true",
+                         help="the fewest spheres that meet the tolerance (an integer program, 1-2 s per "
+                              "link) instead of the greedy cover (about 1.3 times as many on arm links)")
     spheres.add_argument("--package-dir", type=Path, action="append", default=[],
                          help="folder where package:// URIs resolve (repeatable)")
     spheres.add_argument("--joints", nargs="+", help="active joints (default: every movable, non-mimic joint)")
@@ -111,9 +116,15 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "view":
         return view_command(args)
     if args.command == "spheres":
+        from dynfab.geometry.sphere_fitting import SphereFitParameters
         from dynfab.spheres_command import spheres_command
 
-        return spheres_command(args.urdf, args.out, args.plot, args.tolerance, args.package_dir, args.joints)
+        try:
+            parameters = SphereFitParameters(tolerance=args.tolerance, max_bulge=args.max_bulge, fewest=args.fewest)
+        except ValueError as error:
+            print(f"dynfab: error: {error}", file=sys.stderr)
+            return 2
+        return spheres_command(args.urdf, args.out, args.plot, parameters, args.package_dir, args.joints)
     if args.command == "experiment":
         return _experiment(args)
     if args.command == "plot":

@@ -27,24 +27,26 @@ __all__ = ["coverage_table", "scenario_yaml", "spheres_command"]
 _STEP = 1e-4
 
 
-def spheres_command(urdf_name: str, out: Path | None, plot: Path | None, tolerance: float,
+def spheres_command(urdf_name: str, out: Path | None, plot: Path | None, parameters: SphereFitParameters,
                     package_dirs: Sequence[Path], joints: Sequence[str] | None) -> int:
-    """Run the command for a URDF path or ``package://`` URI; 0 on success, 2 on invalid
-    input (one line on stderr)."""
+    """Run the command for a URDF path or ``package://`` URI with the fit's ``parameters``
+    (tolerance, largest bulge, greedy or fewest spheres); 0 on success, 2 on invalid input
+    (one line on stderr)."""
     urdf = resolve_uri(urdf_name, Path.cwd(), package_dirs)
     if urdf is None:
         print(f"dynfab: error: URDF not found: {urdf_name}", file=sys.stderr)
         return 2
     try:
         model = auto_collision_model(urdf, joints=joints, package_dirs=package_dirs,
-                                     parameters=SphereFitParameters(tolerance=tolerance))
+                                     parameters=parameters)
     except (OSError, ValueError) as error:  # UrdfError, LinkMeshError and bad joints are ValueErrors
         print(f"dynfab: error: {str(error).splitlines()[0]}", file=sys.stderr)
         return 2
-    print(coverage_table(model, tolerance))
+    print(coverage_table(model, parameters.tolerance))
     if out is not None:
-        out.write_text(scenario_yaml(model, f"dynfab spheres {urdf.name} --tolerance {tolerance:g}"),
-                       encoding="utf-8")
+        flags = f"--tolerance {parameters.tolerance:g} --max-bulge {parameters.max_bulge:g}"
+        command = f"dynfab spheres {urdf.name} {flags}{' --fewest' if parameters.fewest else ''}"
+        out.write_text(scenario_yaml(model, command), encoding="utf-8")
         print(f"dynfab: spheres written to {out}", file=sys.stderr)
     if plot is not None:
         _plot(urdf, package_dirs, joints, model, plot)
