@@ -16,7 +16,7 @@ from importlib.resources import files
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from dynfab.cli_arguments import at_least_one, positive_number
+from dynfab.cli_arguments import at_least_one, positive_number, requested_cluster
 from dynfab.fabric.backends import BACKENDS
 from dynfab.plot_command import add_plot_parser, plot_command
 from dynfab.scenario.recording import RecordingError, load_recording, run_recording, save_recording
@@ -26,7 +26,6 @@ from dynfab.tune_command import add_tune_parser, tune_command
 from dynfab.view_command import add_view_parser, view_command
 
 if TYPE_CHECKING:
-    from dynfab.experiments.cluster import Cluster
     from dynfab.viz.mujoco_video import VideoRecorder
 
 #: ``dynfab demo NAME``: the bundled scenario, and whether the demo also runs the static
@@ -202,7 +201,7 @@ def _experiment(args: argparse.Namespace) -> int:
         out = Path("dynfab-experiments") / (name + suffix)
     try:
         result = run_series(experiment, runs, seed, out, jobs, progress=sys.stderr, record=record,
-                            cluster=_cluster(args.workers, args.scheduler))
+                            cluster=requested_cluster(args.workers, args.scheduler))
     except (SeriesError, ClusterError) as error:
         print(f"dynfab: error: {error}", file=sys.stderr)
         return 2
@@ -218,15 +217,6 @@ def _experiment(args: argparse.Namespace) -> int:
     print(f"dynfab: {result.executed} runs executed; wrote {out}/runs.jsonl, runs.csv, summary.md, summary.json, "
           f"timings.md, timings.json, scenarios/ and plots/", file=sys.stderr)
     return 0
-
-
-def _cluster(workers: int | None, scheduler: str | None) -> Cluster | None:
-    """The Dask cluster ``--workers`` / ``--scheduler`` ask for, or ``None`` (local processes)."""
-    if workers is None and scheduler is None:
-        return None
-    from dynfab.experiments.cluster import Cluster
-
-    return Cluster(workers=workers or 1, scheduler=scheduler)
 
 
 def _record(result: RunResult, path: Path) -> None:

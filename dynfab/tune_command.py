@@ -17,7 +17,7 @@ from typing import Any
 
 import yaml
 
-from dynfab.cli_arguments import at_least_one
+from dynfab.cli_arguments import at_least_one, requested_cluster
 from dynfab.experiments.tuning_objective import Evaluation
 
 __all__ = ["add_tune_parser", "comparison_table", "tune_command"]
@@ -48,7 +48,7 @@ def add_tune_parser(commands: Any) -> None:
 
 def tune_command(args: argparse.Namespace) -> int:
     """Run ``dynfab tune`` (module docstring for the exit codes)."""
-    from dynfab.experiments.cluster import Cluster, ClusterError
+    from dynfab.experiments.cluster import ClusterError
     from dynfab.experiments.registry import EXPERIMENTS
     from dynfab.experiments.series import RunError
     from dynfab.experiments.tuning import TuningError, TuningSetup, tune
@@ -63,7 +63,7 @@ def tune_command(args: argparse.Namespace) -> int:
         return _error(f"--duration: expected a number of seconds in (0, 10000], got {args.duration:g}")
     if args.out is not None and not out.parent.is_dir():
         return _error(f"--out: folder {out.parent} does not exist")
-    cluster = None if args.workers is None and args.scheduler is None else Cluster(args.workers or 1, args.scheduler)
+    cluster = requested_cluster(args.workers, args.scheduler)
     try:
         setup = TuningSetup(experiment, args.planner or fabric[0], args.train, args.train_seed, args.held_out,
                             args.held_out_seed, args.duration, args.seed)
