@@ -9,7 +9,7 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 from malformed_scenarios import VALID
 
@@ -43,6 +43,7 @@ PATHS = _paths(VALID)[1:]
 
 @settings(max_examples=300, deadline=2000, suppress_health_check=[HealthCheck.too_slow])
 @given(path=st.sampled_from(PATHS), value=YAML_VALUES)
+@example(path=("robot",), value={"\n": None})  # a key with a newline: the message escapes it
 def test_a_mutated_scenario_is_accepted_or_refused_with_a_scenario_error(path: tuple, value: Any) -> None:
     document = copy.deepcopy(VALID)
     target = document

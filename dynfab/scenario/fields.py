@@ -23,7 +23,13 @@ class ScenarioError(ValueError):
     def __init__(self, field: str, problem: str) -> None:
         self.field = field
         self.problem = problem
-        super().__init__(f"{field}: {problem}")
+        super().__init__(f"{_printable(field)}: {_printable(problem)}")
+
+
+def _printable(text: str) -> str:
+    """``text`` with control characters (a newline in a key of the file, say) written as
+    escapes, so that the message stays one line."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 TRAJECTORY_TYPES: tuple[str, ...] = ("linear", "circle", "polynomial", "expression", "spline", "rrt")
