@@ -153,4 +153,3 @@ def test_a_tolerance_finer_than_the_coverage_check_is_refused(capsys: pytest.Cap
     assert main(["spheres", str(THREE_LINKS), "--tolerance", "0.001"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "check_edge" in err[0]
-

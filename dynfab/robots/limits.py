@@ -14,7 +14,8 @@ Where the numbers come from:
   :data:`DEFAULT_VELOCITY`; a scenario's ``limits:`` block overrides all of them;
 - the built-in Panda carries Franka's published limits (:data:`FRANKA_ACCELERATION`,
   :data:`FRANKA_JERK`, the velocities and efforts of its URDF), the built-in Boxer base
-  Clearpath's (:data:`BOXER_ACCELERATION`, the speeds of ``BOXER_BASE``).
+  Clearpath's speeds (``BOXER_BASE``) and acceleration limits from its traction
+  (:data:`BOXER_ACCELERATION`).
 """
 
 from __future__ import annotations
