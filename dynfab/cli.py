@@ -16,6 +16,7 @@ from importlib.resources import files
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from dynfab.benchmark_command import add_benchmark_parser, benchmark_command
 from dynfab.cli_arguments import at_least_one, positive_number, requested_cluster
 from dynfab.fabric.backends import BACKENDS
 from dynfab.plot_command import add_plot_parser, plot_command
@@ -104,7 +105,10 @@ def main(argv: list[str] | None = None) -> int:
     commands.add_parser("schema", help="print the JSON Schema of scenario files (for editor completion, see the "
                                        "README)")
     add_tune_parser(commands)
+    add_benchmark_parser(commands)
     args = parser.parse_args(argv)
+    if args.command == "benchmark":
+        return benchmark_command(args)
     if args.command == "tune":
         return tune_command(args)
     if args.command == "schema":

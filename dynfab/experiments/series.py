@@ -119,13 +119,13 @@ def run_series(experiment: Experiment, runs: int, seed: int, out_dir: str | Path
         raise ValueError(f"runs and jobs must be >= 1, got {runs} and {jobs}")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    with _exclusive(out):
+    with exclusive(out):
         seeds = tuple(range(seed, seed + runs))
         log = out / "runs.jsonl"
         done = load_records(log, experiment.name)
         files = _write_scenarios(experiment, seeds, out, done)
         pending = sorted((pair for pair in files if pair not in done), key=_slow_first)
-        bar = None if progress is None else _Progress(progress, experiment.name, len(files), len(files) - len(pending))
+        bar = None if progress is None else Progress(progress, experiment.name, len(files), len(files) - len(pending))
         recordings = out / "recordings" if record else None
         if recordings is not None:
             recordings.mkdir(exist_ok=True)
@@ -146,8 +146,9 @@ def run_series(experiment: Experiment, runs: int, seed: int, out_dir: str | Path
 
 
 @contextmanager
-def _exclusive(out: Path) -> Iterator[None]:
-    """Hold an exclusive lock on ``out/.lock`` (two series must not append to one log).
+def exclusive(out: Path) -> Iterator[None]:
+    """Hold an exclusive lock on ``out/.lock`` (two series, or benchmarks, must not append
+    to one log).
 
     Raises:
         SeriesError: another process holds it.
@@ -168,15 +169,8 @@ def load_records(log: Path, experiment: str) -> dict[Pair, RunRecord]:
     Raises:
         SeriesError: a line is not a run record, or belongs to another experiment.
     """
-    if not log.exists():
-        return {}
-    text = log.read_text(encoding="utf-8")
-    if text and not text.endswith("\n"):
-        text = text[: text.rfind("\n") + 1]
-        with log.open("r+", encoding="utf-8") as file:
-            file.truncate(len(text.encode("utf-8")))
     records: dict[Pair, RunRecord] = {}
-    for number, line in enumerate(text.splitlines(), 1):
+    for number, line in enumerate(log_lines(log), 1):
         try:
             data = json.loads(line)
             record = RunRecord(int(data["seed"]), str(data["planner"]), dict(data["metrics"]),
@@ -191,6 +185,19 @@ def load_records(log: Path, experiment: str) -> dict[Pair, RunRecord]:
             raise SeriesError(f"{log} holds runs of {name}, not {experiment}: use another output directory")
         records.setdefault((record.seed, record.planner), record)
     return records
+
+
+def log_lines(log: Path) -> list[str]:
+    """The complete lines of an append-only log (none if it does not exist); a last line
+    without its newline (a write cut short) is removed from the file."""
+    if not log.exists():
+        return []
+    text = log.read_text(encoding="utf-8")
+    if text and not text.endswith("\n"):
+        text = text[: text.rfind("\n") + 1]
+        with log.open("r+", encoding="utf-8") as file:
+            file.truncate(len(text.encode("utf-8")))
+    return text.splitlines()
 
 
 def _write_scenarios(experiment: Experiment, seeds: Sequence[int], out: Path,
@@ -227,7 +234,7 @@ def _slow_first(pair: Pair) -> tuple[bool, int]:
 
 
 def _execute(experiment: str, pending: list[Pair], files: dict[Pair, Path], jobs: int, cluster: Cluster | None,
-             log: Path, bar: _Progress | None, recordings: Path | None) -> Iterator[RunRecord]:
+             log: Path, bar: Progress | None, recordings: Path | None) -> Iterator[RunRecord]:
     """Run the pending pairs over ``jobs`` processes or the cluster; append and yield each
     as it finishes (writing its recording into ``recordings`` if given)."""
     if not pending:
@@ -275,9 +282,10 @@ def run_scenario_text(text: str, base_dir: str, record: bool) -> RunOutcome:
     return result.metrics.to_dict(), time.perf_counter() - start, recording
 
 
-class _Progress:
-    """A progress bar on a stream: done/total runs, rate and ETA (over this session's
-    runs). Redrawn in place on a terminal; otherwise one line per tenth of the series."""
+class Progress:
+    """A progress bar on a stream (shared with ``dynfab benchmark``): done/total runs, rate
+    and ETA (over this session's runs). Redrawn in place on a terminal; otherwise one line
+    per tenth of the series."""
 
     def __init__(self, stream: IO[str], label: str, total: int, done: int) -> None:
         self._stream = stream

@@ -1,0 +1,89 @@
+"""``dynfab benchmark mbm``: run MotionBenchMaker's Panda problems (dynfab/benchmarks/mbm)
+and print the per-type table.
+
+Exit codes: 0 the benchmark finished (whatever its success rate), 2 invalid options, an
+output directory of other results or an unusable cluster, 1 a run raised, 130 on Ctrl-C
+(rerun the same command to resume).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from dynfab.cli_arguments import at_least_one, requested_cluster
+
+__all__ = ["add_benchmark_parser", "benchmark_command"]
+
+
+def add_benchmark_parser(commands: Any) -> None:
+    """Register ``benchmark`` on the ``dynfab`` subcommands."""
+    from dynfab.benchmarks.mbm.problems import PROBLEM_TYPES
+    from dynfab.benchmarks.mbm.variants import VARIANTS
+    from dynfab.scenario.schema import PLANNERS
+
+    parser = commands.add_parser("benchmark", help="run a standard benchmark (mbm: MotionBenchMaker's Panda problems) "
+                                                   "in parallel, resumable, and write per-type tables")
+    parser.add_argument("name", choices=["mbm"], help="mbm: MotionBenchMaker (Chamzas et al., RA-L 2022)")
+    parser.add_argument("--variant", choices=VARIANTS, default="as-posed",
+                        help="as-posed (default); object-removed: the object to grasp removed; moving-sphere: "
+                             "object removed and a sphere crossing the hand's path")
+    parser.add_argument("--types", type=_types, default=PROBLEM_TYPES, metavar="T1,T2",
+                        help=f"problem types, comma-separated (default all: {','.join(PROBLEM_TYPES)})")
+    parser.add_argument("--problems", type=at_least_one, metavar="N", help="the first N problems of each type")
+    parser.add_argument("--planner", choices=[p for p in PLANNERS if p != "mpc"], default="dynamic-fabric",
+                        help="the scenarios' planner (default dynamic-fabric)")
+    parser.add_argument("--guidance", action=argparse.BooleanOptionalAction,
+                        help="set the scenarios' guidance key (default: the schema's default)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the moving spheres (default 0)")
+    parser.add_argument("--out", type=Path, help="output directory (default dynfab-benchmarks/mbm-VARIANT)")
+    parser.add_argument("--jobs", type=at_least_one, help="worker processes (default: the number of CPUs)")
+    parser.add_argument("--workers", type=at_least_one,
+                        help="run on Dask: an embedded LocalCluster of this many worker processes")
+    parser.add_argument("--scheduler", metavar="tcp://HOST:8786",
+                        help="run on the existing Dask cluster of this scheduler (implies Dask)")
+
+
+def benchmark_command(args: argparse.Namespace) -> int:
+    """Run the benchmark ``args`` ask for; print its table (module doc for exit codes)."""
+    from dynfab.benchmarks.mbm.benchmark import BenchmarkError, BenchmarkSettings, guidance_supported, run_benchmark
+    from dynfab.benchmarks.mbm.moveit import ProblemError
+    from dynfab.experiments.cluster import ClusterError
+    from dynfab.experiments.series import RunError
+    from dynfab.scenario.schema import ScenarioError
+
+    if args.guidance is not None and not guidance_supported():
+        print("dynfab: --guidance/--no-guidance ignored: scenarios have no guidance key in this version",
+              file=sys.stderr)
+    out = args.out or Path("dynfab-benchmarks") / f"mbm-{args.variant}"
+    settings = BenchmarkSettings(args.variant, args.types, args.problems, args.planner, args.guidance, args.seed)
+    try:
+        records = run_benchmark(settings, out, args.jobs, requested_cluster(args.workers, args.scheduler), sys.stderr)
+    except (BenchmarkError, ClusterError, ProblemError, ScenarioError) as error:
+        print(f"dynfab: error: {error}", file=sys.stderr)
+        return 2
+    except RunError as error:
+        print(f"dynfab: run failed: {error}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"\ndynfab: interrupted; finished runs are in {out / 'runs.jsonl'}, rerun the same command to resume",
+              file=sys.stderr)
+        return 130
+    print((out / "summary.md").read_text(encoding="utf-8"), end="")
+    print(f"dynfab: {len(records)} problems; wrote {out}/runs.jsonl, runs.csv, summary.md, summary.json and "
+          f"scenarios/", file=sys.stderr)
+    return 0
+
+
+def _types(text: str) -> tuple[str, ...]:
+    """``--types``: comma-separated problem types."""
+    from dynfab.benchmarks.mbm.problems import PROBLEM_TYPES
+
+    names = tuple(name.strip() for name in text.split(",") if name.strip())
+    unknown = [name for name in names if name not in PROBLEM_TYPES]
+    if unknown or not names:
+        raise argparse.ArgumentTypeError(f"unknown problem type {unknown[0] if unknown else text!r} "
+                                         f"(expected some of {', '.join(PROBLEM_TYPES)})")
+    return names

@@ -1,0 +1,1 @@
+"""Standard motion-planning benchmarks run through dynfab's scenarios."""

@@ -1,0 +1,192 @@
+"""``dynfab benchmark mbm``: the MBM problems of one variant, in parallel (local processes
+or Dask, :mod:`dynfab.experiments.cluster`), resumable, with per-type tables.
+
+:func:`run_benchmark` writes into ``out_dir``:
+
+- ``scenarios/<type>_<NNNN>.yaml``: every valid case's scenario (``dynfab run FILE``
+  replays it);
+- ``runs.jsonl``: one JSON line per case, appended as it finishes (invalid cases at
+  once): ``{"benchmark", "variant", "problem", "type", "number", "digest", "removed",
+  "invalid", "metrics", "check", "refused", "wall_time_s"}`` (``digest``: of the
+  scenario mapping). On start, the cases already in it with the same digest are skipped,
+  so an interrupted benchmark resumes; a case recorded from another scenario is an error;
+- ``runs.csv``, ``summary.md``, ``summary.json``: :mod:`dynfab.benchmarks.mbm.tables`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+from collections.abc import Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, wait
+from dataclasses import dataclass
+from pathlib import Path
+from typing import IO, Any
+
+import yaml
+
+from dynfab.benchmarks.mbm.conversion import PLANNER
+from dynfab.benchmarks.mbm.franka import franka
+from dynfab.benchmarks.mbm.problem_run import run_case
+from dynfab.benchmarks.mbm.problems import PROBLEM_TYPES, load_problems
+from dynfab.benchmarks.mbm.tables import write_tables
+from dynfab.benchmarks.mbm.variants import Case, prepare_case
+from dynfab.experiments.cluster import Cluster, series_executor
+from dynfab.experiments.series import Progress, RunError, SeriesError, exclusive, log_lines
+from dynfab.scenario.schema import ScenarioDocument
+
+__all__ = ["BenchmarkError", "BenchmarkSettings", "guidance_supported", "run_benchmark"]
+
+
+class BenchmarkError(ValueError):
+    """``out_dir`` holds results of another benchmark, variant or scenario."""
+
+
+@dataclass(frozen=True)
+class BenchmarkSettings:
+    """What to run.
+
+    Attributes:
+        variant: ``as-posed``, ``object-removed`` or ``moving-sphere``.
+        types: Problem types, in report order.
+        per_type: The first this many problems of each type; None: all.
+        planner: The scenario's planner.
+        guidance: The scenario's ``guidance`` key; None leaves it out (the schema's default).
+        seed: Seed of the moving spheres.
+    """
+
+    variant: str = "as-posed"
+    types: tuple[str, ...] = PROBLEM_TYPES
+    per_type: int | None = None
+    planner: str = PLANNER
+    guidance: bool | None = None
+    seed: int = 0
+
+
+def run_benchmark(settings: BenchmarkSettings, out_dir: str | Path, jobs: int | None = None,
+                  cluster: Cluster | None = None, progress: IO[str] | None = None) -> list[dict[str, Any]]:
+    """Prepare every case, run the valid ones not yet in ``runs.jsonl``, write the tables
+    (module doc); the records, in problem order.
+
+    Raises:
+        BenchmarkError: ``out_dir`` holds other results, or another run holds its lock.
+        RunError: A run raised (the finished ones stay recorded).
+        ClusterError: The Dask cluster cannot be used.
+        ProblemError, ScenarioError, ValueError: A problem or setting that cannot be converted.
+    """
+    jobs = (os.cpu_count() or 1) if jobs is None else jobs
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    robot = franka()
+    cases = [prepare_case(problem, settings.variant, robot, settings.planner, settings.seed)
+             for problem in load_problems(settings.types, settings.per_type)]
+    if settings.guidance is not None and guidance_supported():
+        cases = [dataclasses.replace(case, mapping={**case.mapping, "guidance": settings.guidance}) for case in cases]
+    log = out / "runs.jsonl"
+    try:
+        with exclusive(out):
+            done = _load_records(log, settings.variant)
+            records = {case.problem.name: _fresh(case, done) for case in cases}
+            pending = [case for case in cases if records[case.problem.name] is None and case.invalid is None]
+            _write_scenarios(out / "scenarios", pending)
+            with log.open("a", encoding="utf-8") as file:
+                for case in cases:
+                    if case.invalid is not None and records[case.problem.name] is None:
+                        records[case.problem.name] = _append(file, _record(case, None))
+                bar = None if progress is None else Progress(progress, f"mbm {settings.variant}", len(cases),
+                                                             len(cases) - len(pending))
+                for case, outcome in _execute(pending, min(jobs, max(len(pending), 1)), cluster, bar):
+                    records[case.problem.name] = _append(file, _record(case, outcome))
+            ordered = [records[case.problem.name] for case in cases]
+            write_tables(out, settings.variant, settings.types, ordered)
+    except SeriesError as error:
+        raise BenchmarkError(str(error)) from None
+    return ordered
+
+
+def guidance_supported() -> bool:
+    """Whether scenario files have the ``guidance`` key (global guidance is being added)."""
+    return "guidance" in ScenarioDocument.model_fields
+
+
+def _digest(mapping: dict[str, Any]) -> str:
+    return hashlib.sha256(json.dumps(mapping, sort_keys=True).encode()).hexdigest()[:16]
+
+
+def _record(case: Case, outcome: dict[str, Any] | None) -> dict[str, Any]:
+    problem = case.problem
+    ran = outcome or {"metrics": None, "check": None, "refused": None, "wall_time_s": None}
+    return {"benchmark": "mbm", "variant": case.variant, "problem": problem.name, "type": problem.type,
+            "number": problem.number, "digest": _digest(case.mapping), "removed": case.removed,
+            "invalid": case.invalid, **ran}
+
+
+def _fresh(case: Case, done: dict[str, dict[str, Any]]) -> dict[str, Any] | None:
+    """The recorded run of ``case``, or None if it has none.
+
+    Raises:
+        BenchmarkError: It was recorded from another scenario.
+    """
+    record = done.get(case.problem.name)
+    if record is not None and record["digest"] != _digest(case.mapping):
+        raise BenchmarkError(f"{case.problem.name} was recorded from another scenario (other options, or another "
+                             f"dynfab version): use another output directory")
+    return record
+
+
+def _load_records(log: Path, variant: str) -> dict[str, dict[str, Any]]:
+    records = {}
+    for number, line in enumerate(log_lines(log), 1):
+        try:
+            record = json.loads(line)
+            name, kind, recorded, _ = record["problem"], record["benchmark"], record["variant"], record["digest"]
+        except (ValueError, KeyError, TypeError) as error:
+            raise BenchmarkError(f"{log}:{number}: not a benchmark record ({error})") from None
+        if (kind, recorded) != ("mbm", variant):
+            raise BenchmarkError(f"{log} holds runs of {kind} {recorded}, not mbm {variant}: use another "
+                                 f"output directory")
+        records.setdefault(name, record)
+    return records
+
+
+def _append(file: IO[str], record: dict[str, Any]) -> dict[str, Any]:
+    file.write(json.dumps(record) + "\n")
+    file.flush()
+    os.fsync(file.fileno())
+    return record
+
+
+def _write_scenarios(folder: Path, cases: Sequence[Case]) -> None:
+    folder.mkdir(parents=True, exist_ok=True)
+    for case in cases:
+        header = (f"# MotionBenchMaker {case.problem.name}, {case.variant}"
+                  f"{'' if case.removed is None else f' ({case.removed} removed)'}; obstacles: "
+                  f"{', '.join(case.obstacle_names)}\n")
+        path = folder / f"{case.problem.type}_{case.problem.number:04d}.yaml"
+        path.write_text(header + yaml.safe_dump(case.mapping, sort_keys=False, default_flow_style=None),
+                        encoding="utf-8")
+
+
+def _execute(cases: Sequence[Case], jobs: int, cluster: Cluster | None,
+             bar: Progress | None) -> Iterator[tuple[Case, dict[str, Any]]]:
+    """Run ``cases`` over ``jobs`` processes or the cluster; yield ``(case, outcome)`` as each finishes."""
+    if bar is not None:
+        bar.start()
+    if not cases:
+        return
+    with series_executor(jobs, cluster) as executor:
+        futures: dict[Future[dict[str, Any]], Case] = {executor.submit(run_case, case.mapping): case for case in cases}
+        remaining = set(futures)
+        while remaining:
+            finished, remaining = wait(remaining, return_when=FIRST_COMPLETED)
+            for future in finished:
+                case = futures[future]
+                try:
+                    outcome = future.result()
+                except Exception as error:
+                    raise RunError(f"{case.problem.name}: {type(error).__name__}: {error}") from error
+                if bar is not None:
+                    bar.advance()
+                yield case, outcome

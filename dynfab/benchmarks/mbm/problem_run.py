@@ -1,0 +1,37 @@
+"""One benchmark run, in a worker process: the scenario on dynfab's built-in Panda, then
+its recording checked on Franka's meshes as ``dynfab check`` checks URDF robots
+(:func:`dynfab.scenario.recording_check.check_recording`: collisions, self-collisions,
+joint limits at every sample).
+
+The run's outcome travels back as a JSON-ready mapping:
+``{"metrics": Metrics.to_dict() | None, "check": CheckReport.to_dict() | None,
+"refused": str | None, "wall_time_s": float}``; ``refused`` is the one-line reason when
+dynfab refused the scenario (``ScenarioError``: e.g. its collision spheres find the start
+in collision where the meshes do not).
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+from dynfab.benchmarks.mbm.franka import franka_robot_mapping
+from dynfab.scenario.recording import run_recording
+from dynfab.scenario.recording_check import check_recording
+from dynfab.scenario.runner import run_scenario
+from dynfab.scenario.schema import ScenarioError, scenario_from_dict
+
+__all__ = ["run_case"]
+
+
+def run_case(mapping: dict[str, Any]) -> dict[str, Any]:
+    """Run the scenario ``mapping`` and check it on Franka's meshes (module doc)."""
+    start = time.perf_counter()
+    try:
+        result = run_scenario(scenario_from_dict(mapping))
+    except ScenarioError as error:
+        return {"metrics": None, "check": None, "refused": str(error), "wall_time_s": time.perf_counter() - start}
+    recording = run_recording(result.robot, result.record, result.scenario.dt)
+    check = check_recording(scenario_from_dict({**mapping, "robot": franka_robot_mapping()}), recording)
+    return {"metrics": result.metrics.to_dict(), "check": check.to_dict(), "refused": None,
+            "wall_time_s": time.perf_counter() - start}

@@ -1,0 +1,70 @@
+"""MotionBenchMaker variants: the grasped object removed, invalid problems found on
+Franka's meshes, and the moving sphere crossing the hand's straight path."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from dynfab.benchmarks.mbm.franka import franka
+from dynfab.benchmarks.mbm.moveit import SceneObject
+from dynfab.benchmarks.mbm.moving_sphere import CROSSING_TIMES, RADII, SPEEDS
+from dynfab.benchmarks.mbm.problems import Problem, load_problems
+from dynfab.benchmarks.mbm.variants import GRASPABLE_PREFIXES, prepare_case
+
+
+@pytest.fixture(scope="module")
+def table_pick() -> Problem:
+    """table_pick/0009: a can to grasp among other graspable objects on a table."""
+    return load_problems(["table_pick"], per_type=1)[0]
+
+
+def test_object_removed_removes_exactly_the_object_to_grasp(table_pick: Problem) -> None:
+    graspable = [o.id for o in table_pick.objects if o.id.startswith(GRASPABLE_PREFIXES)]
+    assert len(graspable) > 1
+    case = prepare_case(table_pick, "object-removed", franka())
+    assert case.removed == "Can1"  # 10 mm from the open fingers at the goal; the others are >= 15 mm away
+    names = [o.id for o in table_pick.objects]
+    names.remove("Can1")
+    assert list(case.obstacle_names) == names
+    assert len(case.mapping["obstacles"]) == len(table_pick.objects) - 1
+    assert case.invalid is None
+    assert prepare_case(table_pick, "as-posed", franka()).removed is None
+
+
+def test_invalid_problems_are_found(table_pick: Problem) -> None:
+    robot = franka()
+    beyond = dataclasses.replace(table_pick, goal=table_pick.goal[:3] + (-0.043,) + table_pick.goal[4:])
+    expected = "goal: panda_joint4 = -0.043 is outside [-3.0718, -0.0698]"
+    assert prepare_case(beyond, "as-posed", robot).invalid == expected
+    rounded = dataclasses.replace(table_pick, goal=table_pick.goal[:3] + (-0.0698 + 5e-7,) + table_pick.goal[4:])
+    case = prepare_case(rounded, "as-posed", robot)
+    assert case.invalid is None and case.mapping["goal"][0]["position"][3] == -0.0698  # at the limit, clipped
+    hand = robot.tcp(table_pick.start)
+    block = SceneObject("block", "box", (0.15, 0.15, 0.15), tuple(hand), (1.0, 0.0, 0.0, 0.0))
+    blocked = dataclasses.replace(table_pick, objects=table_pick.objects + (block,))
+    invalid = prepare_case(blocked, "object-removed", robot).invalid
+    assert invalid is not None and invalid.startswith("start: ") and "touches block" in invalid
+
+
+def test_the_moving_sphere_crosses_the_hands_straight_path(table_pick: Problem) -> None:
+    robot = franka()
+    case = prepare_case(table_pick, "moving-sphere", robot, seed=3)
+    sphere = case.mapping["obstacles"][-1]
+    assert case.obstacle_names[-1] == "moving-sphere" and sphere["trajectory"]["type"] == "linear"
+    assert RADII[0] <= sphere["radius"] <= RADII[1]
+    start, velocity = np.array(sphere["trajectory"]["start"]), np.array(sphere["trajectory"]["velocity"])
+    assert SPEEDS[0] <= np.linalg.norm(velocity) <= SPEEDS[1]
+    a, b = robot.tcp(table_pick.start), robot.tcp(table_pick.goal)
+    times = np.linspace(0.0, 10.0, 10001)
+    centres = start + times[:, None] * velocity
+    along = np.clip((centres - a) @ (b - a) / np.dot(b - a, b - a), 0.0, 1.0)
+    distances = np.linalg.norm(centres - (a + along[:, None] * (b - a)), axis=1)
+    closest = int(np.argmin(distances))
+    assert distances[closest] < 1e-3  # through the line, not beside it
+    assert CROSSING_TIMES[0] - 0.01 <= times[closest] <= CROSSING_TIMES[1] + 0.01
+    assert 0.3 < along[closest] < 0.7  # around the middle
+    assert prepare_case(table_pick, "moving-sphere", robot, seed=3).mapping == case.mapping  # seeded
+    assert prepare_case(table_pick, "moving-sphere", robot, seed=4).mapping != case.mapping
