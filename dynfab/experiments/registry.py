@@ -92,8 +92,9 @@ def with_keys(sampler: Sampler, keys: tuple[tuple[str, Any], ...], seed: int, pl
     return {**sampler(seed, planner), **dict(keys)}
 
 
-#: The setting of the paper's runs: no stall recovery (``dynfab experiment NAME --recovery``).
-PAPER_SETTING: tuple[tuple[str, Any], ...] = (("recovery", False),)
+#: The setting of the paper's runs: the fabric alone, without global guidance and without stall
+#: recovery (``dynfab experiment NAME --recovery`` turns recovery on).
+PAPER_SETTING: tuple[tuple[str, Any], ...] = (("recovery", False), ("guidance", False))
 
 
 EXPERIMENTS: dict[str, Experiment] = {e.name: replace(e, sampler=partial(with_keys, e.sampler, PAPER_SETTING)) for e in (

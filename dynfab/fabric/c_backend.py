@@ -141,7 +141,7 @@ def compile_planner(function: ca.Function, compiler: Compiler, inputs_key: str |
         if loaded is None:
             raise RuntimeError(f"planner library {key[:12]} does not verify right after compiling it")
     if inputs_key is not None:
-        _write_atomic(folder / f"planner-inputs-{inputs_key}.json", json.dumps(
+        write_atomic(folder / f"planner-inputs-{inputs_key}.json", json.dumps(
             {"format": _FORMAT, "library_key": key, "n_instructions": function.n_instructions()}).encode())
     return CompiledPlanner(loaded, key, function.n_instructions(), compile_s)
 
@@ -159,20 +159,30 @@ def library_key(code: str, compiler: Compiler) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-def _compile_into_cache(code: str, key: str, compiler: Compiler, folder: Path) -> None:
-    folder.mkdir(parents=True, exist_ok=True)
-    source = code + f'\nCASADI_SYMBOL_EXPORT const char* dynfab_library_key(void) {{ return "{key}"; }}\n'
+def compile_shared_library(source: str, compiler: Compiler, flags: tuple[str, ...] = COMPILE_FLAGS,
+                           what: str = "planner") -> bytes:
+    """The bytes of the shared library ``compiler`` builds from the C ``source`` with ``flags``.
+
+    Raises:
+        RuntimeError: if the compiler fails (its last output line is in the message).
+    """
     with tempfile.TemporaryDirectory(prefix="dynfab-cc-") as work:
-        c_file, so_file = Path(work) / "planner.c", Path(work) / "planner.so"
+        c_file, so_file = Path(work) / f"{what}.c", Path(work) / f"{what}.so"
         c_file.write_text(source, encoding="utf-8")
-        result = subprocess.run([compiler.path, *COMPILE_FLAGS, str(c_file), "-o", str(so_file), "-lm"],
+        result = subprocess.run([compiler.path, *flags, str(c_file), "-o", str(so_file), "-lm"],
                                 capture_output=True, text=True)
         if result.returncode != 0:
             last = (result.stderr.strip().splitlines() or ["(no output)"])[-1]
-            raise RuntimeError(f"{compiler.path} failed on the planner code: {last}")
-        library = so_file.read_bytes()
-    _write_atomic(folder / f"planner-{key}.so", library)
-    _write_atomic(folder / f"planner-{key}.json", json.dumps(
+            raise RuntimeError(f"{compiler.path} failed on the {what} code: {last}")
+        return so_file.read_bytes()
+
+
+def _compile_into_cache(code: str, key: str, compiler: Compiler, folder: Path) -> None:
+    folder.mkdir(parents=True, exist_ok=True)
+    source = code + f'\nCASADI_SYMBOL_EXPORT const char* dynfab_library_key(void) {{ return "{key}"; }}\n'
+    library = compile_shared_library(source, compiler)
+    write_atomic(folder / f"planner-{key}.so", library)
+    write_atomic(folder / f"planner-{key}.json", json.dumps(
         {"format": _FORMAT, "library_key": key, "library_sha256": hashlib.sha256(library).hexdigest(),
          "compiler": compiler.path, "compiler_version": compiler.version, "flags": list(COMPILE_FLAGS)}).encode())
 
@@ -202,7 +212,7 @@ def _read_json(path: Path) -> dict | None:
     return value if isinstance(value, dict) else None
 
 
-def _write_atomic(path: Path, data: bytes) -> None:
+def write_atomic(path: Path, data: bytes) -> None:
     """Write ``data`` to ``path`` through a temporary file in the same folder."""
     path.parent.mkdir(parents=True, exist_ok=True)
     handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")

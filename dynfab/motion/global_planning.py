@@ -27,6 +27,8 @@ from ompl import base as ob
 from ompl import geometric as og
 from ompl import util as ou
 
+from dynfab.motion.ompl_problem import solve_in_box
+
 DEFAULT_MARGIN = 0.1
 """Default clearance [m] between the point and each sphere's surface.
 
@@ -282,35 +284,11 @@ def _solve(
     Raises:
         GlobalPlanningError: No exact solution within the time limit.
     """
-    dim = start.size
-    space = ob.RealVectorStateSpace(dim)
-    bounds = ob.RealVectorBounds(dim)
-    for axis in range(dim):
-        bounds.setLow(axis, float(low[axis]))
-        bounds.setHigh(axis, float(high[axis]))
-    space.setBounds(bounds)
-
-    setup = og.SimpleSetup(space)
-    setup.setStateValidityChecker(checker)
-    information = setup.getSpaceInformation()
-    information.setStateValidityCheckingResolution(VALIDITY_RESOLUTION)
-    setup.setStartAndGoalStates(_to_state(space, start), _to_state(space, goal))
-    setup.setPlanner(_PLANNERS[planner](information))
-
-    status = setup.solve(time_limit)
-    if not setup.haveExactSolutionPath():
+    waypoints, status = solve_in_box(checker, start, goal, low, high, VALIDITY_RESOLUTION, _PLANNERS[planner],
+                                     time_limit)
+    if waypoints is None:
         raise GlobalPlanningError(
             f"no collision-free path from {start.tolist()} to {goal.tolist()} found "
-            f"within {time_limit} s ({planner}: {status.asString()})"
+            f"within {time_limit} s ({planner}: {status})"
         )
-    setup.simplifySolution()
-    states = setup.getSolutionPath().getStates()
-    return np.array([state[0:dim] for state in states], dtype=float)
-
-
-def _to_state(space: ob.RealVectorStateSpace, point: NDArray[np.float64]) -> ob.State:
-    """Allocates an OMPL state of ``space`` holding ``point``."""
-    state = space.allocState()
-    for axis, value in enumerate(point):
-        state[axis] = float(value)
-    return state
+    return waypoints

@@ -139,22 +139,28 @@ def make_controller(scenario: Scenario, robot: Robot, references: References) ->
     if scenario.planner not in _FABRIC_PLANNERS:
         raise ScenarioError("planner", f"{scenario.planner!r} is not available yet; use static-fabric, dynamic-fabric "
                             "or mpc")
-    kinds = [obstacle.type for obstacle in scenario.obstacles]
-    shape_slots = ShapeSlots(box=kinds.count("box"), cylinder=kinds.count("cylinder"),
-                             capsule=kinds.count("capsule"), plane=kinds.count("plane"))
+    spheres = sum(obstacle.type == "sphere" for obstacle in scenario.obstacles)
     goals = tuple(config for goal in scenario.goals for config in _goal_configs(goal))
-    config = replace(PlannerConfig.for_robot(robot, goals, kinds.count("sphere"), _FABRIC_PLANNERS[scenario.planner],
-                                             shape_slots), control_period=scenario.dt, backend=scenario.backend)
+    config = replace(PlannerConfig.for_robot(robot, goals, spheres, _FABRIC_PLANNERS[scenario.planner],
+                                             shape_slots_of(scenario.obstacles)),
+                     control_period=scenario.dt, backend=scenario.backend)
     config = scenario.fabric.configured(config)
     planner = FabricPlanner(robot, config)
-    slots = _place_obstacles(scenario.obstacles, planner.parameters)
+    slots = place_obstacles(scenario.obstacles, planner.parameters)
     references = planner_references(scenario, references)
     moving_goals = tuple(i for i, goal in enumerate(references.goals) if not isinstance(goal, StaticPoint))
     moving_obstacles = tuple(k for k, obstacle in enumerate(scenario.obstacles) if obstacle.trajectory is not None)
     return FabricController(planner, references, moving_goals, moving_obstacles, slots)
 
 
-def _place_obstacles(obstacles: tuple[ObstacleSpec, ...], params: RuntimeParameters) -> tuple[ObstacleSlot, ...]:
+def shape_slots_of(obstacles: tuple[ObstacleSpec, ...]) -> ShapeSlots:
+    """One planner slot per box, cylinder, capsule and plane of ``obstacles``."""
+    kinds = [obstacle.type for obstacle in obstacles]
+    return ShapeSlots(box=kinds.count("box"), cylinder=kinds.count("cylinder"), capsule=kinds.count("capsule"),
+                      plane=kinds.count("plane"))
+
+
+def place_obstacles(obstacles: tuple[ObstacleSpec, ...], params: RuntimeParameters) -> tuple[ObstacleSlot, ...]:
     """Give each obstacle the next slot of its kind and write its radius, or its
     orientation and sizes; returns where each one's centre goes."""
     used = dict.fromkeys(("sphere", "box", "cylinder", "capsule", "plane"), 0)

@@ -50,6 +50,21 @@ class Metrics:
         contacts: Under MuJoCo, how many contacts began (robot with an obstacle or two
             non-adjacent robot bodies); any counts as a collision. None for the kinematic
             simulator.
+        guided: A global joint-space plan was followed (scenario/guided_controller.py);
+            None for planners without guidance (MPC).
+        plans: Global plans made (guidance's first plan and replans, or stall-recovery paths).
+        plan_time_ms: Wall time of the first global plan [ms]; None without one.
+        recovered: Replans of guidance (blocked reference, stalled progress) or
+            stall-recovery paths of the fabric alone.
+        fallbacks: Safe actions taken: fabric outputs replaced by braking, plus one if
+            guidance could not plan and the fabric alone took over.
+        failure: Why the run failed, None on success: a guidance reason
+            (``goal_outside_limits``, ``no_ik_solution``, ``start_in_collision``,
+            ``goal_in_collision``, ``no_path``) when guidance could not plan, else
+            ``collision``, ``self_collision``, or ``stalled`` (the goal not reached:
+            ``final_distance`` says how far).
+        final_distance: Distance of the primary goal's coordinates from the goal at the
+            end of the run [m] (joint goals: [rad]).
     """
 
     success: bool
@@ -68,6 +83,13 @@ class Metrics:
     max_velocity_ratio: float | None = None
     max_acceleration_ratio: float | None = None
     contacts: int | None = None
+    guided: bool | None = None
+    plans: int | None = None
+    plan_time_ms: float | None = None
+    recovered: int | None = None
+    fallbacks: int | None = None
+    failure: str | None = None
+    final_distance: float | None = None
 
     def to_dict(self) -> dict[str, bool | int | float | None]:
         """The metrics as a JSON-ready dict with the keys of DESIGN.md section 5."""

@@ -13,8 +13,9 @@ import numpy as np
 from dynfab.geometry.orientation import direction_angle, rotation_angle
 from dynfab.motion.references import References
 from dynfab.robots.mesh_sweep import MeshSweep, sweep_meshes
-from dynfab.scenario.controllers import Controller, FabricController, make_controller
-from dynfab.scenario.recovering_controller import with_recovery
+from dynfab.scenario.controllers import Controller
+from dynfab.scenario.guided_controller import make_scenario_controller
+from dynfab.scenario.outcome import with_outcome
 from dynfab.scenario.exact_metrics import mesh_model_for, obstacle_shapes, with_mesh_metrics
 from dynfab.scenario.references import goal_axes, scenario_references
 from dynfab.scenario.metrics import (Metrics, clearance_over_time, compute_metrics, shape_clearance_over_time,
@@ -147,9 +148,7 @@ def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None
     mesh_model = mesh_model_for(robot)
     start_centres = obstacle_centres(references, np.zeros(1))
     check_start_collisions(state.q, robot, mesh_model, obstacle_shapes(scenario.obstacles, start_centres))
-    controller = make_controller(scenario, robot, references)
-    if isinstance(controller, FabricController):
-        controller = with_recovery(controller, scenario, robot, references)
+    controller = make_scenario_controller(scenario, robot, references)
     contacts: tuple[Contact, ...] = ()
     stop_reason = None
     if scenario.simulation.simulator == "mujoco":
@@ -202,6 +201,7 @@ def measure_run(scenario: Scenario, robot: Robot, references: References, record
         metrics = with_mesh_metrics(metrics, mesh_sweep)
     if scenario.simulation.simulator == "mujoco":
         metrics = with_contacts(metrics, contacts)
+    metrics = with_outcome(metrics, controller, goal_positions, goal_reference)
     clearance = np.minimum(clearance_over_time(centres, radii, sphere_centres, sphere_radii, planar=robot.planar),
                            shape_clearance)
     return RunResult(scenario, robot, record, metrics, goal_positions, goal_reference, obstacle_centers, clearance,

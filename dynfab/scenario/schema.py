@@ -92,7 +92,10 @@ class Scenario:
         simulation: The simulator (kinematic or MuJoCo) and, under MuJoCo, the control
             mode, observation delay and noise.
         recovery: Recover from stalls by following a global path
-            (scenario/stall_recovery.py); ``recovery: false`` turns it off.
+            (scenario/stall_recovery.py) where guidance does not apply or failed;
+            ``recovery: false`` turns it off.
+        guidance: Plan a global joint-space reference that a dynamic fabric tracks
+            (scenario/guided_controller.py); ``guidance: false`` runs the fabric alone.
         backend: How a fabric planner is evaluated: ``"vm"`` (CasADi's virtual machine)
             or ``"c"`` (compiled C, cached; :mod:`dynfab.fabric.backends`).
         fabric: Leaf and root parameters of a fabric planner (``fabric:``,
@@ -112,6 +115,7 @@ class Scenario:
     recovery: bool = True
     backend: str = "vm"
     fabric: FabricSpec = FabricSpec()
+    guidance: bool = True
 
     def planning_limits(self, limits: MotionLimits) -> MotionLimits:
         """``limits`` as a planner (and a base's wheel drive) works with them here: every
@@ -150,6 +154,7 @@ class ScenarioDocument(ScenarioModel):
     delay: Annotated[float, DELAY] = 0.0
     noise: Annotated[float, NOISE] = 0.0
     recovery: Annotated[bool, Flag()] = True
+    guidance: Annotated[bool, Flag()] = True
     backend: Annotated[str, Choice(BACKENDS)] = "vm"
     fabric: FabricMapping = FabricMapping()
 
@@ -186,6 +191,7 @@ class ScenarioDocument(ScenarioModel):
             limits=self.limits.spec(),
             simulation=Simulation(self.simulator, self.control, self.delay, self.noise),
             recovery=self.recovery,
+            guidance=self.guidance,
             backend=self.backend,
             fabric=self.fabric.spec(),
         )

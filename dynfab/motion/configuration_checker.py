@@ -1,0 +1,164 @@
+"""Is a robot configuration free? Its collision spheres against obstacle shapes and against
+each other: the global planner's validity check.
+
+For a configuration ``q`` the checker gives
+
+    c_obs(q)  = min_{i, k} d_k(R_kᵀ (p_i(q) − c_k)) − r_i               [m]
+    c_self(q) = min_{(a, b) ∈ pairs} ‖p_a(q) − p_b(q)‖ − r_a − r_b       [m]
+
+over the robot's collision spheres ``(p_i, r_i)``, the obstacles ``k`` (centre ``c_k``,
+rotation ``R_k``, the exact signed distance ``d_k`` of a sphere, box, cylinder, capsule or
+plane in its own frame, :mod:`dynfab.geometry.distance`) and the robot's self-collision
+pairs: the same spheres, shapes and pairs the fabric's leaves avoid, so a path the
+checker accepts is one the fabric can follow. ``inf`` where there is nothing to check.
+
+It runs compiled (``checker_kernel.c``, built per robot and cached: a broad phase by
+bounding spheres and an early exit when only validity is asked), or, without a C
+compiler, as numpy over the CasADi forward kinematics (the same numbers, slower).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+from numpy.typing import NDArray
+
+from dynfab.geometry.distance import placed_distance
+from dynfab.geometry.shapes import Box, Capsule, Cylinder, Placement, Plane, Shape, Sphere
+from dynfab.motion.checker_library import as_pointer, load_checker_library
+from dynfab.robots.robot import Robot
+
+__all__ = ["ConfigurationChecker", "PlacedObstacle"]
+
+_KIND: dict[type, int] = {Sphere: 0, Box: 1, Cylinder: 2, Capsule: 3, Plane: 4}
+_ROW = 17
+
+
+@dataclass(frozen=True)
+class PlacedObstacle:
+    """An obstacle at one instant.
+
+    Attributes:
+        shape: its shape.
+        placement: where its frame is (a plane: its point, and its normal as the frame's z).
+    """
+
+    shape: Shape
+    placement: Placement
+
+
+class ConfigurationChecker:
+    """``q ↦ (c_obs, c_self)`` of the module docstring, with obstacles set at run time.
+
+    Attributes:
+        robot: the robot.
+        compiled: whether the compiled kernel is in use.
+    """
+
+    def __init__(self, robot: Robot, obstacles: Sequence[PlacedObstacle] = ()) -> None:
+        self.robot = robot
+        self._library = load_checker_library(robot)
+        self.compiled = self._library is not None
+        self._n = robot.dof
+        self._q = np.zeros(self._n)
+        self._q_pointer = as_pointer(self._q)
+        self._out = np.zeros(2)
+        self._out_pointer = as_pointer(self._out)
+        q = ca.SX.sym("q", self._n)
+        self._centres = ca.Function("centres", [q], [robot.sphere_centers(q)])
+        self.set_obstacles(obstacles)
+
+    @property
+    def obstacles(self) -> tuple[PlacedObstacle, ...]:
+        """The obstacles checked against."""
+        return self._obstacles
+
+    def set_obstacles(self, obstacles: Sequence[PlacedObstacle]) -> None:
+        """Check against ``obstacles`` from now on."""
+        self._obstacles = tuple(obstacles)
+        self._rows = np.ascontiguousarray(np.array([_row(o) for o in self._obstacles]).reshape(-1, _ROW))
+        self._rows_pointer = as_pointer(self._rows)
+
+    def clearances(self, q: NDArray[np.float64]) -> tuple[float, float]:
+        """``(c_obs, c_self)`` at one configuration [m]."""
+        if self._library is None:
+            obstacle, itself = self._numpy(np.asarray(q, dtype=float)[None])[0]
+            return float(obstacle), float(itself)
+        self._q[:] = q
+        self._library.clearances(self._q_pointer, 1, self._rows_pointer, len(self._obstacles), self._out_pointer)
+        return float(self._out[0]), float(self._out[1])
+
+    def batch(self, qs: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``(c_obs, c_self)`` at every row of ``qs`` (N, n), shape (N, 2)."""
+        qs = np.ascontiguousarray(qs, dtype=float).reshape(-1, self._n)
+        if self._library is None:
+            return self._numpy(qs)
+        out = np.empty((qs.shape[0], 2))
+        self._library.clearances(as_pointer(qs), qs.shape[0], self._rows_pointer, len(self._obstacles),
+                                 as_pointer(out))
+        return out
+
+    def free(self, q: NDArray[np.float64], margin: float, self_margin: float) -> bool:
+        """Whether ``c_obs(q) ≥ margin`` and ``c_self(q) ≥ self_margin`` (stops at the first
+        clearance below its margin)."""
+        if self._library is None:
+            obstacle, itself = self.clearances(q)
+            return obstacle >= margin and itself >= self_margin
+        self._q[:] = q
+        return self._library.first_blocked(self._q_pointer, 1, self._rows_pointer, len(self._obstacles),
+                                           margin, self_margin) < 0
+
+    def first_blocked(self, qs: NDArray[np.float64], margin: float, self_margin: float) -> int:
+        """Index of the first row of ``qs`` (N, n) with ``c_obs < margin`` or
+        ``c_self < self_margin``, or -1 if every row is free (stops at the first)."""
+        qs = np.ascontiguousarray(qs, dtype=float).reshape(-1, self._n)
+        if self._library is None:
+            values = self._numpy(qs)
+            blocked = np.flatnonzero((values[:, 0] < margin) | (values[:, 1] < self_margin))
+            return int(blocked[0]) if blocked.size else -1
+        return int(self._library.first_blocked(as_pointer(qs), qs.shape[0], self._rows_pointer,
+                                               len(self._obstacles), margin, self_margin))
+
+    def _numpy(self, qs: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The clearances from the CasADi forward kinematics and numpy distances."""
+        radii = self.robot.sphere_radii
+        out = np.full((qs.shape[0], 2), math.inf)
+        pairs = np.array(self.robot.self_collision_pairs, dtype=int).reshape(-1, 2)
+        for row, q in enumerate(qs):
+            centres = np.asarray(self._centres(q))
+            for obstacle in self._obstacles:
+                distance = placed_distance(obstacle.shape, obstacle.placement, centres) - radii
+                out[row, 0] = min(out[row, 0], float(distance.min(initial=math.inf)))
+            if len(pairs):
+                gaps = np.linalg.norm(centres[pairs[:, 0]] - centres[pairs[:, 1]], axis=1)
+                out[row, 1] = float((gaps - radii[pairs[:, 0]] - radii[pairs[:, 1]]).min())
+        return out
+
+
+def _row(obstacle: PlacedObstacle) -> NDArray[np.float64]:
+    """The kernel's 17 numbers: kind, centre, rotation (row-major), dimensions, bounding radius."""
+    row = np.zeros(_ROW)
+    row[0] = _KIND[type(obstacle.shape)]
+    row[1:4] = obstacle.placement.position
+    row[4:13] = obstacle.placement.rotation.reshape(-1)
+    dimensions = obstacle.shape.dimensions
+    row[13:13 + len(dimensions)] = dimensions
+    row[16] = _bounding_radius(obstacle.shape)
+    return row
+
+
+def _bounding_radius(shape: Shape) -> float:
+    """Radius [m] of a ball about the shape's origin that holds it (a plane: 0, unused)."""
+    if isinstance(shape, Sphere):
+        return shape.radius
+    if isinstance(shape, Box):
+        return 0.5 * float(np.linalg.norm(shape.size))
+    if isinstance(shape, Cylinder):
+        return math.hypot(shape.radius, 0.5 * shape.length)
+    if isinstance(shape, Capsule):
+        return shape.radius + 0.5 * shape.length
+    return 0.0

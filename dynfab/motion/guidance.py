@@ -1,0 +1,198 @@
+"""Global joint-space guidance: plan a free joint-space path to a goal and time it, the
+reference ``q_r(t), q̇_r(t), q̈_r(t)`` a dynamic fabric tracks (paper section IV, its
+experiment 2b, applied in joint space).
+
+A goal is a configuration (:class:`JointTarget`) or task targets
+(:class:`~dynfab.motion.inverse_kinematics.PointTarget`,
+:class:`~dynfab.motion.inverse_kinematics.AxisTarget`), which collision-free inverse
+kinematics turns into the configuration nearest the current one. The path is planned
+with OMPL among the obstacles given (:mod:`dynfab.motion.joint_planning`), against the
+same spheres, shapes and self-collision pairs the fabric avoids, and timed within
+``speed`` times the robot's velocity and acceleration limits
+(:mod:`dynfab.motion.joint_trajectory`): the rest of the limits is the fabric's, to track
+and to avoid what was not in the plan. A plan that fails is retried with the next seed
+(``attempts``); :class:`GuidanceError` names why the last one failed.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
+from dynfab.motion.inverse_kinematics import AxisTarget, IkSettings, PointTarget, solve_ik
+from dynfab.motion.joint_planning import JointPlannerSettings, NoPathError, plan_joint_path
+from dynfab.motion.joint_trajectory import JointTrajectory, TimingError, TimingSettings, time_path
+from dynfab.robots.robot import Robot
+
+__all__ = ["GuidanceError", "GuidanceSettings", "JointGuidance", "JointTarget", "Plan"]
+
+#: a value within this of a joint limit counts as at the limit [rad or m]
+LIMIT_SLACK = 1e-6
+
+
+@dataclass(frozen=True)
+class JointTarget:
+    """A goal configuration (n,) [rad or m]."""
+
+    q: tuple[float, ...]
+
+
+GoalTargets = JointTarget | Sequence[PointTarget | AxisTarget]
+
+
+@dataclass(frozen=True)
+class GuidanceSettings:
+    """How guidance plans and how its reference is followed.
+
+    Attributes:
+        path: the joint-space planner (OMPL planner, time limit, resolution, margins).
+        ik: inverse kinematics of task goals.
+        timing: how the path is timed.
+        speed: fraction of the velocity and acceleration limits the reference uses [-].
+        attempts: plans tried per request, each with the next seed [-].
+        replans: plans at most in one run after the first [-].
+        lag_slow: tracking error ``‖q − q_r‖`` at which the reference clock starts to slow [rad].
+        lag_stop: tracking error at which it stops (the reference waits for the robot) [rad].
+        check_period: how often the reference ahead is checked against what moves [s].
+        check_horizon: how far ahead it is checked [s].
+        stall_window: time without progress after which the run has stalled [s].
+        stall_progress: progress expected within ``stall_window``, as a fraction of the
+            goal's initial joint-space distance (at least ``stall_floor``) [-].
+        stall_floor: smallest progress expected within ``stall_window`` [rad].
+    """
+
+    path: JointPlannerSettings = field(default_factory=JointPlannerSettings)
+    ik: IkSettings = field(default_factory=IkSettings)
+    timing: TimingSettings = field(default_factory=TimingSettings)
+    speed: float = 0.5
+    attempts: int = 3
+    replans: int = 4
+    lag_slow: float = 0.1
+    lag_stop: float = 0.3
+    check_period: float = 0.1
+    check_horizon: float = 1.0
+    stall_window: float = 2.0
+    stall_progress: float = 0.05
+    stall_floor: float = 0.02
+
+
+class GuidanceError(RuntimeError):
+    """No plan: ``reason`` is ``goal_outside_limits``, ``no_ik_solution``,
+    ``start_in_collision``, ``goal_in_collision``, ``no_path`` or ``timing``."""
+
+    def __init__(self, reason: str, message: str) -> None:
+        super().__init__(message)
+        self.reason = reason
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A timed reference to a goal configuration.
+
+    Attributes:
+        trajectory: ``q_r`` from its start at time 0 (rest at both ends).
+        goal: the goal configuration [rad].
+        time_s: wall time of inverse kinematics, planning and timing [s].
+        checks: configurations checked [-].
+    """
+
+    trajectory: JointTrajectory
+    goal: NDArray[np.float64]
+    time_s: float
+    checks: int
+
+
+class JointGuidance:
+    """Plans joint-space references for ``robot`` (module docstring).
+
+    Attributes:
+        robot: the robot (fixed base).
+        settings: the guidance settings.
+        checker: the configuration checker with the obstacles of the last plan.
+    """
+
+    def __init__(self, robot: Robot, settings: GuidanceSettings = GuidanceSettings()) -> None:
+        if robot.base is not None or robot.planar:
+            raise ValueError(f"robot '{robot.name}': joint-space guidance needs a fixed-base robot in space")
+        self.robot = robot
+        self.settings = settings
+        self.checker = ConfigurationChecker(robot)
+        kin = robot.kinematics
+        self._lower = np.where(np.isfinite(kin.lower), kin.lower, -np.pi)
+        self._upper = np.where(np.isfinite(kin.upper), kin.upper, np.pi)
+
+    def goal_configuration(self, goal: GoalTargets, q: NDArray[np.float64], seed: int = 0) -> NDArray[np.float64]:
+        """The configuration to plan to: a joint goal (clipped into the limits when within
+        :data:`LIMIT_SLACK`), or the collision-free IK solution nearest ``q``.
+
+        Raises:
+            GuidanceError: ``goal_outside_limits`` or ``no_ik_solution``.
+        """
+        if isinstance(goal, JointTarget):
+            target = np.asarray(goal.q, dtype=float)
+            outside = np.flatnonzero((target < self._lower - LIMIT_SLACK) | (target > self._upper + LIMIT_SLACK))
+            if outside.size:
+                names = self.robot.kinematics.joint_names
+                j = int(outside[0])
+                raise GuidanceError("goal_outside_limits", f"the goal puts {names[j]} at {target[j]:.6g}, outside "
+                                    f"its limits [{self._lower[j]:.6g}, {self._upper[j]:.6g}]")
+            return np.clip(target, self._lower, self._upper)
+        margin, self_margin = self.settings.path.margin, self.settings.path.self_margin
+        result = solve_ik(self.robot, list(goal), q, lambda x: self.checker.free(x, margin, self_margin),
+                          self._ik_settings(seed), self._lower, self._upper)
+        if result.q is None:
+            found = (f"{result.converged} solutions within the limits, all in collision" if result.converged
+                     else "no solution within the joint limits")
+            raise GuidanceError("no_ik_solution", f"inverse kinematics: {found} ({result.seeds} seeds)")
+        return result.q
+
+    def plan(self, q: NDArray[np.float64], goal: GoalTargets, obstacles: Sequence[PlacedObstacle],
+             seed: int = 0) -> Plan:
+        """A timed free reference from ``q`` (at rest) to ``goal`` among ``obstacles``.
+
+        Raises:
+            GuidanceError: if every attempt failed (the last one's reason).
+        """
+        began = time.perf_counter()
+        self.checker.set_obstacles(obstacles)
+        start = np.clip(np.asarray(q, dtype=float), self._lower, self._upper)
+        target = self.goal_configuration(goal, start, seed)
+        error: GuidanceError | None = None
+        checks = 0
+        for attempt in range(self.settings.attempts):
+            try:
+                path = plan_joint_path(self.checker, start, target, self._lower, self._upper, self.settings.path,
+                                       seed + attempt)
+            except NoPathError as failure:
+                error = GuidanceError(failure.reason, str(failure))
+                if failure.reason != "no_path":
+                    break
+                continue
+            checks += path.checks
+            limits = self.robot.limits
+            try:
+                trajectory = time_path(path.waypoints, self.settings.speed * limits.velocity,
+                                       self.settings.speed * limits.acceleration, self.settings.timing)
+            except TimingError as failure:
+                raise GuidanceError("timing", str(failure)) from None
+            return Plan(trajectory, target, time.perf_counter() - began, checks)
+        assert error is not None
+        raise error
+
+    def blocked_ahead(self, plan: Plan, tau: float, obstacles: Sequence[PlacedObstacle]) -> bool:
+        """Whether the reference within ``check_horizon`` after its time ``tau`` [s] meets
+        ``obstacles`` (things that moved since the plan) closer than touching."""
+        if not obstacles:
+            return False
+        self.checker.set_obstacles(obstacles)
+        times = np.linspace(tau, tau + self.settings.check_horizon, 11)
+        positions = plan.trajectory.sample(times)[0]
+        return self.checker.first_blocked(positions, 0.0, -np.inf) >= 0
+
+    def _ik_settings(self, seed: int) -> IkSettings:
+        return replace(self.settings.ik, seed=seed)

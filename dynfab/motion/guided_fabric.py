@@ -1,0 +1,206 @@
+"""A dynamic fabric that tracks global joint-space guidance: the library's class for
+reaching goals in cluttered scenes (issue 19).
+
+``GuidedFabric(fabric)`` takes a dynamic :class:`~dynfab.fabric.planner.FabricPlanner` whose
+first goal is a joint-space goal on every joint (:func:`guided_goal_config`). On
+:meth:`GuidedFabric.set_goal` it plans a free, timed joint-space reference
+(:class:`~dynfab.motion.guidance.JointGuidance`); every tick :meth:`GuidedFabric.update`
+writes ``q_r, q̇_r, q̈_r`` into that goal, where the dynamic pullback and energization of
+the fabric (paper section IV) track it, while the fabric's obstacle, limit and
+self-collision leaves keep acting on everything the user writes into its slots.
+
+The reference runs on its own clock ``τ``, which slows while the robot lags behind it
+(a moving obstacle in the way):
+
+    ρ = clip((e_stop − e) / (e_stop − e_slow), 0, 1),   e = ‖q − q_r(τ)‖,
+    τ ← τ + ρ Δt,   q̇_r ← ρ q̇_r(τ),   q̈_r ← ρ² q̈_r(τ).
+
+It replans from where the robot is (at most ``replans`` times) when
+
+- the reference within ``check_horizon`` ahead meets an obstacle given as moving
+  (checked every ``check_period``), or
+- the run stalls: the joint-space distance to the goal configuration has not come
+  ``max(stall_floor, stall_progress · d₀)`` below its best for ``stall_window`` seconds
+  (``d₀``: its distance when the goal was set, so the test scales with the motion asked for).
+
+Replans plan among the static obstacles and the moving ones where they are now. If no
+plan can be made the reference holds the configuration the robot had (the fabric then
+brakes and keeps avoiding), and :attr:`GuidedFabric.status` says why.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from dynfab.fabric.planner import FabricPlanner, GoalConfig
+from dynfab.motion.configuration_checker import PlacedObstacle
+from dynfab.motion.guidance import GoalTargets, GuidanceError, GuidanceSettings, JointGuidance, Plan
+
+__all__ = ["GuidanceStatus", "GuidedFabric", "guided_goal_config"]
+
+
+def guided_goal_config(weight: float = 1.0) -> GoalConfig:
+    """The joint-space goal a guided fabric's planner must have first (every joint)."""
+    return GoalConfig(link=None, weight=weight)
+
+
+@dataclass(frozen=True)
+class GuidanceStatus:
+    """What guidance did so far.
+
+    Attributes:
+        guided: a plan was made and is being followed.
+        plans: plans made (the first included) [-].
+        plan_time_ms: wall time of the first plan [ms]; None before it.
+        plan_times_ms: wall time of every plan [ms].
+        replans_blocked: replans because the reference ahead was blocked [-].
+        replans_stalled: replans because progress stalled [-].
+        failure: why the last plan failed (:class:`~dynfab.motion.guidance.GuidanceError`
+            reasons); None if it did not.
+    """
+
+    guided: bool = False
+    plans: int = 0
+    plan_time_ms: float | None = None
+    plan_times_ms: tuple[float, ...] = ()
+    replans_blocked: int = 0
+    replans_stalled: int = 0
+    failure: str | None = None
+
+
+class GuidedFabric:
+    """A dynamic fabric tracking global joint-space guidance (module docstring).
+
+    Attributes:
+        fabric: the dynamic fabric planner (its first goal: :func:`guided_goal_config`).
+        guidance: the planner of references.
+        status: what guidance did so far.
+        failure_message: the message of the last failed plan, or None.
+    """
+
+    def __init__(self, fabric: FabricPlanner, settings: GuidanceSettings = GuidanceSettings()) -> None:
+        goal = fabric.config.goals[0]
+        if not fabric.config.dynamic or not isinstance(goal, GoalConfig) or goal.link is not None or (
+                goal.joints is not None and tuple(goal.joints) != tuple(range(fabric.robot.dof))):
+            raise ValueError("GuidedFabric needs a dynamic FabricPlanner whose first goal is "
+                             "guided_goal_config() (a joint goal on every joint)")
+        self.fabric = fabric
+        self.guidance = JointGuidance(fabric.robot, settings)
+        self.status = GuidanceStatus()
+        self.failure_message: str | None = None
+        self._settings = settings
+        self._static: tuple[PlacedObstacle, ...] = ()
+        self._goal: GoalTargets | None = None
+        self._plan: Plan | None = None
+        self._tau = 0.0
+        self._last_t: float | None = None
+        self._next_check = 0.0
+        self._best = np.inf
+        self._best_time = 0.0
+        self._progress_needed = settings.stall_floor
+        self._seed = 0
+
+    @property
+    def plan(self) -> Plan | None:
+        """The reference being followed."""
+        return self._plan
+
+    def set_obstacles(self, obstacles: Sequence[PlacedObstacle]) -> None:
+        """The obstacles plans avoid (those that do not move; moving ones go to :meth:`update`)."""
+        self._static = tuple(obstacles)
+
+    def set_goal(self, goal: GoalTargets, t: float, q: NDArray[np.float64],
+                 moving: Sequence[PlacedObstacle] = ()) -> None:
+        """Plan to ``goal`` from ``q`` at time ``t`` [s] now; on failure hold ``q`` (see :attr:`status`)."""
+        self._goal = goal
+        self._seed = 0
+        self._replan(t, q, moving, first=True)
+        self._progress_needed = self._settings.stall_floor
+        if self._plan is not None:
+            distance = float(np.linalg.norm(np.asarray(q) - self._plan.goal))
+            self._progress_needed = max(self._settings.stall_floor, self._settings.stall_progress * distance)
+
+    def update(self, t: float, q: NDArray[np.float64], moving: Sequence[PlacedObstacle] = ()) -> None:
+        """Advance the reference to time ``t`` [s] for the robot at ``q`` and write it into
+        the fabric's first goal; replan if it is blocked ahead or progress stalled."""
+        if self._plan is None:
+            return
+        settings = self._settings
+        if self.status.plans <= settings.replans and self._needs_replan(t, q, moving):
+            self._replan(t, q, moving, first=False)
+            if self._plan is None:
+                return
+        dt = 0.0 if self._last_t is None else max(0.0, t - self._last_t)
+        self._last_t = t
+        point = self._plan.trajectory.evaluate(self._tau)
+        lag = float(np.linalg.norm(q - point.position))
+        rate = float(np.clip((settings.lag_stop - lag) / (settings.lag_stop - settings.lag_slow), 0.0, 1.0))
+        self._tau += rate * dt
+        point = self._plan.trajectory.evaluate(self._tau)
+        params = self.fabric.parameters
+        params.goal_position[0][:] = point.position
+        params.goal_velocity[0][:] = rate * point.velocity
+        params.goal_acceleration[0][:] = rate**2 * point.acceleration
+
+    def compute(self, t: float, q: NDArray[np.float64], qdot: NDArray[np.float64],
+                moving: Sequence[PlacedObstacle] = ()) -> NDArray[np.float64]:
+        """:meth:`update`, then the fabric's command (always finite, within the limits)."""
+        self.update(t, q, moving)
+        return self.fabric.compute(q, qdot)
+
+    def _needs_replan(self, t: float, q: NDArray[np.float64], moving: Sequence[PlacedObstacle]) -> bool:
+        """Whether the reference is blocked ahead by something moving, or progress stalled."""
+        assert self._plan is not None
+        settings = self._settings
+        distance = float(np.linalg.norm(q - self._plan.goal))
+        if distance < self._best - self._progress_needed:
+            self._best, self._best_time = distance, t
+        if distance > settings.stall_floor and t - self._best_time > settings.stall_window:
+            self.status = replace(self.status, replans_stalled=self.status.replans_stalled + 1)
+            return True
+        if moving and t >= self._next_check:
+            self._next_check = t + settings.check_period
+            if self.guidance.blocked_ahead(self._plan, self._tau, moving):
+                self.status = replace(self.status, replans_blocked=self.status.replans_blocked + 1)
+                return True
+        return False
+
+    def _replan(self, t: float, q: NDArray[np.float64], moving: Sequence[PlacedObstacle], first: bool) -> None:
+        assert self._goal is not None
+        q = np.asarray(q, dtype=float)
+        obstacles = self._static if first else self._static + tuple(moving)
+        began = time.perf_counter()
+        try:
+            plan = self.guidance.plan(q, self._goal, obstacles, seed=self._seed)
+            failure, message = None, None
+        except GuidanceError as error:
+            plan, failure, message = None, error.reason, str(error)
+        elapsed_ms = 1e3 * (time.perf_counter() - began)
+        self._seed += self._settings.attempts
+        status = self.status
+        self.status = replace(status, guided=plan is not None or (status.guided and not first),
+                              plans=status.plans + 1,
+                              plan_time_ms=elapsed_ms if status.plan_time_ms is None else status.plan_time_ms,
+                              plan_times_ms=status.plan_times_ms + (elapsed_ms,), failure=failure)
+        self.failure_message = message
+        self._best, self._best_time = np.inf, t
+        self._next_check = t
+        if plan is None:
+            if first:
+                self._plan = None
+                self._hold(q)
+            return  # a failed replan keeps following the old reference
+        self._plan = plan
+        self._tau = 0.0
+        self._last_t = t
+
+    def _hold(self, q: NDArray[np.float64]) -> None:
+        params = self.fabric.parameters
+        params.goal_position[0][:] = q
+        params.goal_velocity[0][:] = 0.0
+        params.goal_acceleration[0][:] = 0.0

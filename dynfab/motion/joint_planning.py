@@ -1,0 +1,192 @@
+"""Collision-free joint-space paths with OMPL (global guidance, issue 19).
+
+A configuration is *free* when the checker (:mod:`dynfab.motion.configuration_checker`)
+gives ``c_obs ≥ margin`` and ``c_self ≥ self_margin``, and it lies within the joint
+limits (the state space's bounds). OMPL's planner (RRT-Connect by default) connects the
+start to the goal through free configurations, checking straight motions every
+``resolution`` radians (joint-space Euclidean), and its simplifier shortens the result
+(vertex reduction and shortcuts). The finished polyline is checked again every
+``resolution / 2`` as a whole, in one batched call.
+
+Endpoints that are not free (a start pressed against an object, a grasp goal a few
+millimetres from it, where the spheres already overlap what the meshes clear) are
+handled as manipulation planners handle grasps: the nearest free configuration within
+``escape_radius`` (random samples of growing radius) becomes the planned endpoint, and the
+short straight segment to the real endpoint is appended unchecked; the fabric, whose
+leaves keep the spheres from penetrating further, tracks it.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from ompl import base as ob
+from ompl import geometric as og
+from ompl import util as ou
+
+from dynfab.motion.ompl_problem import solve_in_box
+from dynfab.motion.configuration_checker import ConfigurationChecker
+
+__all__ = ["JointPath", "JointPlannerSettings", "NoPathError", "plan_joint_path"]
+
+PlannerName = Literal["RRTConnect", "RRT", "KPIECE1", "BKPIECE1", "PRM"]
+_PLANNERS: dict[str, type] = {"RRTConnect": og.RRTConnect, "RRT": og.RRT, "KPIECE1": og.KPIECE1,
+                              "BKPIECE1": og.BKPIECE1, "PRM": og.PRM}
+_MAX_SEED = 2**31 - 2
+
+
+@dataclass(frozen=True)
+class JointPlannerSettings:
+    """How joint-space paths are planned.
+
+    Attributes:
+        planner: OMPL geometric planner.
+        time_limit: planning time per attempt [s].
+        resolution: longest joint-space step between checked configurations [rad].
+        margin: clearance kept between the robot's spheres and obstacles [m].
+        self_margin: clearance kept between the spheres of self-collision pairs [m].
+        simplify_time: time given to OMPL's path simplifier [s].
+        escape_radius: farthest a free endpoint is looked for around a blocked one [rad].
+        escape_samples: samples tried per endpoint [-].
+    """
+
+    planner: PlannerName = "RRTConnect"
+    time_limit: float = 1.0
+    resolution: float = 0.03
+    margin: float = 0.01
+    self_margin: float = 0.0
+    simplify_time: float = 0.05
+    escape_radius: float = 0.4
+    escape_samples: int = 400
+
+
+@dataclass(frozen=True)
+class JointPath:
+    """A planned joint-space polyline.
+
+    Attributes:
+        waypoints: configurations (k, n) from the start to the goal [rad].
+        planning_time_s: wall time of planning and simplifying [s].
+        checks: configurations checked [-].
+        escaped_start: the start was blocked; ``waypoints[1]`` is the free one near it.
+        escaped_goal: the goal was blocked; ``waypoints[-2]`` is the free one near it.
+    """
+
+    waypoints: NDArray[np.float64]
+    planning_time_s: float
+    checks: int
+    escaped_start: bool
+    escaped_goal: bool
+
+
+class NoPathError(RuntimeError):
+    """No path was found; ``reason`` is ``start_in_collision``, ``goal_in_collision`` or
+    ``no_path``."""
+
+    def __init__(self, reason: str, message: str) -> None:
+        super().__init__(message)
+        self.reason = reason
+
+
+class _Validity:
+    """OMPL's state validity callback, counting checks."""
+
+    def __init__(self, checker: ConfigurationChecker, settings: JointPlannerSettings, n: int) -> None:
+        self._checker = checker
+        self._margin = settings.margin
+        self._self_margin = settings.self_margin
+        self._n = n
+        self.count = 0
+
+    def free(self, q: NDArray[np.float64]) -> bool:
+        self.count += 1
+        return self._checker.free(q, self._margin, self._self_margin)
+
+    def __call__(self, state: ob.State) -> bool:
+        self.count += 1
+        return self._checker.free(state[0:self._n], self._margin, self._self_margin)
+
+
+def plan_joint_path(checker: ConfigurationChecker, start: NDArray[np.float64], goal: NDArray[np.float64],
+                    lower: NDArray[np.float64], upper: NDArray[np.float64],
+                    settings: JointPlannerSettings = JointPlannerSettings(), seed: int = 0) -> JointPath:
+    """A free polyline from ``start`` to ``goal`` (module docstring).
+
+    Args:
+        checker: the configuration checker with the obstacles set.
+        start, goal: configurations (n,) within ``[lower, upper]`` [rad].
+        lower, upper: joint bounds (n,) [rad].
+        settings: planner, time limit, resolution, margins.
+        seed: random seed (OMPL's sampler and the endpoint escape).
+
+    Raises:
+        NoPathError: an endpoint is blocked with no free configuration near it, or no
+            path was found in time.
+    """
+    began = time.perf_counter()
+    n = start.size
+    validity = _Validity(checker, settings, n)
+    rng = np.random.default_rng(seed)
+    planned_start = _free_near(start, validity, lower, upper, settings, rng, "start")
+    planned_goal = _free_near(goal, validity, lower, upper, settings, rng, "goal")
+    if np.linalg.norm(planned_goal - planned_start) < 1e-9:
+        middle = np.array([planned_start])
+    else:
+        middle = _ompl_path(validity, planned_start, planned_goal, lower, upper, settings, seed)
+    waypoints = [middle]
+    if planned_start is not start:
+        waypoints.insert(0, start[None])
+    if planned_goal is not goal:
+        waypoints.append(goal[None])
+    return JointPath(np.vstack(waypoints), time.perf_counter() - began, validity.count,
+                     planned_start is not start, planned_goal is not goal)
+
+
+def polyline_samples(waypoints: NDArray[np.float64], step: float) -> NDArray[np.float64]:
+    """Configurations along a polyline no farther than ``step`` apart [rad], both ends included."""
+    samples = [waypoints[:1]]
+    for a, b in zip(waypoints[:-1], waypoints[1:]):
+        count = max(1, int(np.ceil(np.linalg.norm(b - a) / step)))
+        fractions = np.arange(1, count + 1)[:, None] / count
+        samples.append(a + fractions * (b - a))
+    return np.vstack(samples)
+
+
+def _free_near(q: NDArray[np.float64], validity: _Validity, lower: NDArray[np.float64], upper: NDArray[np.float64],
+               settings: JointPlannerSettings, rng: np.random.Generator, name: str) -> NDArray[np.float64]:
+    """``q`` itself if free, else the free sample nearest it within ``escape_radius``."""
+    if validity.free(q):
+        return q
+    count = settings.escape_samples
+    radii = settings.escape_radius * (np.arange(1, count + 1) / count)
+    directions = rng.normal(size=(count, q.size))
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    candidates = np.clip(q + radii[:, None] * directions, lower, upper)
+    for candidate in candidates:  # nearest first: radii grow
+        if validity.free(candidate):
+            return candidate
+    reason = f"{name}_in_collision"
+    raise NoPathError(reason, f"the {name} is in collision on the collision spheres and no free configuration "
+                              f"lies within {settings.escape_radius} rad of it")
+
+
+def _ompl_path(validity: _Validity, start: NDArray[np.float64], goal: NDArray[np.float64],
+               lower: NDArray[np.float64], upper: NDArray[np.float64], settings: JointPlannerSettings,
+               seed: int) -> NDArray[np.float64]:
+    extent = float(np.linalg.norm(upper - lower))
+    previous_log_level = ou.getLogLevel()
+    ou.setLogLevel(ou.LOG_NONE)  # reseeding after the first sample logs an error; the seed still takes
+    try:
+        ou.RNG.setSeed(seed % _MAX_SEED + 1)
+        waypoints, status = solve_in_box(validity, start, goal, lower, upper, settings.resolution / extent,
+                                         _PLANNERS[settings.planner], settings.time_limit, settings.simplify_time)
+    finally:
+        ou.setLogLevel(previous_log_level)
+    if waypoints is None:
+        raise NoPathError("no_path", f"no collision-free joint-space path found within {settings.time_limit} s "
+                                     f"({settings.planner}: {status}, {validity.count} configurations checked)")
+    return waypoints

@@ -1,0 +1,155 @@
+"""A joint-space path timed within velocity and acceleration limits (toppra).
+
+The polyline from the global planner is resampled every ``spacing`` radians, a cubic
+spline ``q(s)`` through the samples (natural end conditions) is timed with
+TOPP-RA (Pham & Pham 2018, the ``toppra`` package) under
+
+    |q̇_i(t)| ≤ v_i,   |q̈_i(t)| ≤ a_i,
+
+starting and ending at rest, and the result is :class:`JointTrajectory`, the reference
+``q_r(t), q̇_r(t), q̈_r(t)`` the dynamic fabric tracks (resting at the end). The spline
+stays near the polyline only if the samples are dense at its corners: it is checked
+against the polyline every few milliseconds of path and resampled twice as densely
+while it strays more than ``deviation`` radians.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import toppra
+import toppra.algorithm as algorithm
+import toppra.constraint as constraint
+from numpy.typing import NDArray
+
+from dynfab.motion.joint_planning import polyline_samples
+from dynfab.motion.trajectories import Samples, Trajectory
+
+__all__ = ["JointTrajectory", "TimingError", "time_path"]
+
+toppra.setup_logging("WARNING")
+
+
+class TimingError(RuntimeError):
+    """TOPP-RA found no timing (it should not for limits > 0 and a path at rest at its ends)."""
+
+
+class JointTrajectory(Trajectory):
+    """A timed joint-space path; before 0 it is at its start, after ``duration`` at rest at its end.
+
+    Attributes:
+        duration: time of the motion [s].
+        waypoints: the polyline it was timed along (k, n) [rad].
+    """
+
+    def __init__(self, timed: object, waypoints: NDArray[np.float64]) -> None:
+        self._timed = timed
+        self.duration = float(timed.duration)
+        self.waypoints = waypoints
+        self._end = np.asarray(timed(self.duration), dtype=float)
+        self._n = waypoints.shape[1]
+
+    @property
+    def dimension(self) -> int:
+        return self._n
+
+    @property
+    def end(self) -> NDArray[np.float64]:
+        """The final configuration [rad]."""
+        return self._end.copy()
+
+    def _sample(self, times: np.ndarray) -> Samples:
+        clipped = np.clip(times, 0.0, self.duration)
+        position = np.atleast_2d(self._timed(clipped))
+        velocity = np.atleast_2d(self._timed(clipped, 1))
+        acceleration = np.atleast_2d(self._timed(clipped, 2))
+        outside = (times < 0.0) | (times > self.duration)
+        velocity[outside] = 0.0
+        acceleration[outside] = 0.0
+        return position, velocity, acceleration
+
+
+@dataclass(frozen=True)
+class TimingSettings:
+    """How a path is timed.
+
+    Attributes:
+        spacing: first resampling distance of the polyline [rad].
+        deviation: largest distance of the spline from the polyline [rad].
+        refinements: halvings of ``spacing`` tried at most [-].
+        gridpoints: TOPP-RA grid points per unit of path length [-] (at least 100).
+    """
+
+    spacing: float = 0.1
+    deviation: float = 0.01
+    refinements: int = 3
+    gridpoints: float = 20.0
+
+
+def time_path(waypoints: NDArray[np.float64], velocity: NDArray[np.float64], acceleration: NDArray[np.float64],
+              settings: TimingSettings = TimingSettings()) -> JointTrajectory:
+    """The time-optimal timing (within the limits) of a spline near ``waypoints`` (module docstring).
+
+    Args:
+        waypoints: the polyline (k, n) [rad], k ≥ 1.
+        velocity: velocity limits (n,) [rad/s].
+        acceleration: acceleration limits (n,) [rad/s²].
+        settings: resampling and deviation.
+
+    Raises:
+        TimingError: if TOPP-RA fails.
+    """
+    waypoints = np.atleast_2d(np.asarray(waypoints, dtype=float))
+    if len(waypoints) == 1 or np.linalg.norm(waypoints[-1] - waypoints[0]) + _length(waypoints) < 1e-9:
+        waypoints = np.vstack([waypoints[:1], waypoints[:1] + 1e-9])
+    spacing = settings.spacing
+    for _ in range(settings.refinements + 1):
+        samples = polyline_samples(waypoints, spacing)
+        path = _spline(samples)
+        if _deviation(path, waypoints) <= settings.deviation:
+            break
+        spacing /= 2
+    return JointTrajectory(_timed(path, velocity, acceleration, settings), waypoints)
+
+
+def _length(waypoints: NDArray[np.float64]) -> float:
+    return float(np.linalg.norm(np.diff(waypoints, axis=0), axis=1).sum())
+
+
+def _spline(samples: NDArray[np.float64]) -> toppra.SplineInterpolator:
+    """The clamped cubic spline through ``samples`` over their normalised chord length."""
+    chords = np.linalg.norm(np.diff(samples, axis=0), axis=1)
+    keep = np.concatenate([[True], chords > 1e-12])
+    samples, chords = samples[keep], np.concatenate([[0.0], chords])[keep]
+    s = np.cumsum(chords)
+    return toppra.SplineInterpolator(s / s[-1] * max(s[-1], 1e-9), samples, bc_type="natural")
+
+
+def _deviation(path: toppra.SplineInterpolator, waypoints: NDArray[np.float64]) -> float:
+    """Largest distance [rad] of the spline (sampled finely) from the polyline."""
+    low, high = path.path_interval
+    points = path(np.linspace(low, high, max(200, int(200 * (high - low)))))
+    a, b = waypoints[:-1], waypoints[1:]
+    ab = b - a
+    lengths = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-18)
+    fraction = np.clip((points @ ab.T - np.einsum("ij,ij->i", a, ab)) / lengths, 0.0, 1.0)  # (P, S)
+    nearest = a[None] + fraction[:, :, None] * ab[None]
+    return float(np.sqrt(np.min(np.sum((nearest - points[:, None]) ** 2, axis=2), axis=1)).max())
+
+
+def _timed(path: toppra.SplineInterpolator, velocity: NDArray[np.float64], acceleration: NDArray[np.float64],
+           settings: TimingSettings) -> object:
+    low, high = path.path_interval
+    count = max(100, int(settings.gridpoints * (high - low)))
+    constraints = [
+        constraint.JointVelocityConstraint(np.column_stack([-velocity, velocity])),
+        constraint.JointAccelerationConstraint(np.column_stack([-acceleration, acceleration]),
+                                               discretization_scheme=constraint.DiscretizationType.Interpolation),
+    ]
+    instance = algorithm.TOPPRA(constraints, path, gridpoints=np.linspace(low, high, count + 1),
+                                parametrizer="ParametrizeConstAccel")
+    timed = instance.compute_trajectory(0.0, 0.0)
+    if timed is None:
+        raise TimingError("TOPP-RA found no timing of the planned path within the limits")
+    return timed

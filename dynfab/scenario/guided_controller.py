@@ -1,0 +1,181 @@
+"""A scenario's controller with global joint-space guidance (the default of fabric
+planners; ``guidance: false`` turns it off).
+
+Guidance applies to fixed-base robots in space whose goals are all static (joint,
+position, pose, axis goals at rest). Its fabric is always the dynamic one, since tracking
+a reference needs its velocity and acceleration; the scenario's obstacles fill its slots
+as in :mod:`dynfab.scenario.controllers` (moving ones with their velocity). The first
+call plans to the goals (a joint goal, or collision-free inverse kinematics of the
+others) among the static obstacles; moving obstacles are avoided by the fabric and
+trigger a replan when they block the reference ahead
+(:class:`~dynfab.motion.guided_fabric.GuidedFabric`). If no plan can be made the run goes
+on with the scenario's own fabric (``planner:``) and stall recovery, and the metrics say
+so (``guided: false``, ``failure``).
+
+Anything else (MPC, mobile bases, planar robots, path goals, moving goals) runs as before:
+:func:`make_scenario_controller` returns the plain controller with stall recovery.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+
+import numpy as np
+
+from dynfab.fabric.planner import FabricPlanner, PlannerConfig
+from dynfab.geometry.shapes import quaternion_matrix
+from dynfab.motion.configuration_checker import PlacedObstacle
+from dynfab.motion.guidance import GoalTargets, GuidanceSettings, JointTarget
+from dynfab.motion.guided_fabric import GuidanceStatus, GuidedFabric, guided_goal_config
+from dynfab.motion.inverse_kinematics import AxisTarget, PointTarget
+from dynfab.motion.references import References
+from dynfab.motion.trajectories import StaticPoint
+from dynfab.robots.robot import Robot
+from dynfab.scenario.controllers import (Controller, FabricController, make_controller, place_obstacles,
+                                         shape_slots_of)
+from dynfab.scenario.exact_metrics import obstacle_shapes
+from dynfab.scenario.recovering_controller import with_recovery
+from dynfab.scenario.references import goal_axes
+from dynfab.scenario.schema import GoalSpec, Scenario
+
+__all__ = ["GuidedController", "guidance_refusal", "make_scenario_controller"]
+
+
+class GuidedController:
+    """Guidance (:class:`GuidedFabric`) feeding the fabric's goal, the scenario's obstacles
+    feeding its slots; the plain fabric takes over if no plan can be made.
+
+    Attributes:
+        inner: writes the obstacles and calls the guided fabric's planner.
+        guided: the guided fabric.
+        fallback: the scenario's own controller once guidance failed; None before.
+    """
+
+    def __init__(self, inner: FabricController, guided: GuidedFabric, goal: GoalTargets,
+                 moving: Callable[[float], tuple[PlacedObstacle, ...]], fallback: Callable[[], Controller]) -> None:
+        self.inner = inner
+        self.guided = guided
+        self.fallback: Controller | None = None
+        self._goal = goal
+        self._moving = moving
+        self._make_fallback = fallback
+        self._started = False
+
+    @property
+    def planner(self) -> FabricPlanner:
+        """The fabric in use: the guided one, or the fallback's."""
+        return self.inner.planner if self.fallback is None else self.fallback.planner  # type: ignore[attr-defined]
+
+    @property
+    def status(self) -> GuidanceStatus:
+        """What guidance did."""
+        return self.guided.status
+
+    @property
+    def fallback_count(self) -> int:
+        """Non-finite fabric outputs replaced by the safe action, in both fabrics."""
+        count = self.inner.planner.fallback_count
+        if self.fallback is not None:
+            count += self.fallback.planner.fallback_count  # type: ignore[attr-defined]
+        return count
+
+    @property
+    def recovery_times(self) -> list[float]:
+        """Stall-recovery paths of the fallback controller [s]."""
+        return list(getattr(self.fallback, "recovery_times", []))
+
+    def __call__(self, t: float, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
+        if self.fallback is not None:
+            return self.fallback(t, q, qdot)
+        moving = self._moving(t)
+        if not self._started:
+            self._started = True
+            self.guided.set_goal(self._goal, t, q, moving)
+            if self.guided.plan is None:
+                self.fallback = self._make_fallback()
+                return self.fallback(t, q, qdot)
+        self.guided.update(t, q, moving)
+        return self.inner(t, q, qdot)
+
+
+def guidance_refusal(scenario: Scenario, robot: Robot) -> str | None:
+    """Why guidance does not apply to ``scenario`` (validated for ``robot``), or None if it does."""
+    if not scenario.guidance:
+        return "guidance: false"
+    if scenario.planner == "mpc":
+        return "the mpc planner"
+    if robot.base is not None or robot.planar:
+        return "a mobile or planar robot"
+    for goal in scenario.goals:
+        if goal.type == "path" or (goal.type == "axis" and goal.angular_velocity is not None):
+            return "a moving goal"
+    return None
+
+
+def make_scenario_controller(scenario: Scenario, robot: Robot, references: References,
+                             settings: GuidanceSettings = GuidanceSettings()) -> Controller:
+    """The controller of a run: guided (module docstring) where guidance applies, else the
+    scenario's planner (fabrics with stall recovery)."""
+
+    def plain() -> Controller:
+        controller = make_controller(scenario, robot, references)
+        if isinstance(controller, FabricController):
+            return with_recovery(controller, scenario, robot, references)
+        return controller
+
+    if guidance_refusal(scenario, robot) is not None:
+        return plain()
+    planning_robot = replace(robot, limits=scenario.planning_limits(robot.limits))
+    kinds = [obstacle.type for obstacle in scenario.obstacles]
+    config = replace(PlannerConfig.for_robot(planning_robot, (guided_goal_config(),), kinds.count("sphere"), True,
+                                             shape_slots_of(scenario.obstacles)),
+                     control_period=scenario.dt, backend=scenario.backend)
+    fabric = FabricPlanner(planning_robot, scenario.fabric.configured(config))
+    slots = place_obstacles(scenario.obstacles, fabric.parameters)
+    moving_indices = tuple(k for k, obstacle in enumerate(scenario.obstacles) if obstacle.trajectory is not None)
+    inner = FabricController(fabric, References((StaticPoint(tuple(scenario.initial_state.q)),), references.obstacles),
+                             (), moving_indices, slots)
+    guided = GuidedFabric(fabric, settings)
+    guided.set_obstacles(_placed(scenario, references, 0.0, static=True))
+    return GuidedController(inner, guided, goal_targets(scenario, robot),
+                            lambda t: _placed(scenario, references, t, static=False), plain)
+
+
+def goal_targets(scenario: Scenario, robot: Robot) -> GoalTargets:
+    """What guidance plans to: a joint goal's configuration, or the task targets of every
+    static goal (a pose: its point and its three frame axes)."""
+    joint = next((goal for goal in scenario.goals if goal.type == "joint"), None)
+    if joint is not None:
+        return JointTarget(tuple(joint.position))
+    targets: list[PointTarget | AxisTarget] = []
+    for goal in scenario.goals:
+        targets.extend(_task_targets(goal, robot))
+    return targets
+
+
+def _task_targets(goal: GoalSpec, robot: Robot) -> list[PointTarget | AxisTarget]:
+    link = goal.link or robot.goal_link
+    if goal.type == "axis":
+        return [AxisTarget(link, tuple(goal.axis), tuple(goal.direction))]
+    targets: list[PointTarget | AxisTarget] = [PointTarget(link, tuple(goal.position), tuple(goal.offset),
+                                                           tuple(goal_axes(goal, robot)), goal.parent_link)]
+    if goal.type == "pose":
+        rotation = quaternion_matrix(goal.orientation)
+        for axis in range(3):
+            unit = tuple(float(v) for v in np.eye(3)[axis])
+            targets.append(AxisTarget(link, unit, tuple(float(v) for v in rotation[:, axis])))
+    return targets
+
+
+def _placed(scenario: Scenario, references: References, t: float, static: bool) -> tuple[PlacedObstacle, ...]:
+    """The scenario's static (or moving) obstacles where they are at time ``t`` [s]."""
+    indices = [k for k, obstacle in enumerate(scenario.obstacles) if (obstacle.trajectory is None) == static]
+    if not indices:
+        return ()
+    centres = np.zeros((1, len(indices), 3))
+    for column, k in enumerate(indices):
+        position = references.obstacles[k].evaluate(t).position
+        centres[0, column, : position.size] = position
+    shapes = obstacle_shapes([scenario.obstacles[k] for k in indices], centres)
+    return tuple(PlacedObstacle(shape.shape, shape.placements[0]) for shape in shapes)

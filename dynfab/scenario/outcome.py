@@ -1,0 +1,48 @@
+"""How a run went, in its metrics: guidance, recovery, fallbacks and, for a failure, why
+(DESIGN.md section 5c: ``guided``, ``plans``, ``plan_time_ms``, ``recovered``, ``fallbacks``,
+``failure``)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from dynfab.scenario.controllers import Controller
+from dynfab.scenario.guided_controller import GuidedController
+from dynfab.scenario.metrics import Metrics
+
+__all__ = ["with_outcome"]
+
+
+def with_outcome(metrics: Metrics, controller: Controller | None, goal_positions: np.ndarray,
+                 goal_reference: np.ndarray) -> Metrics:
+    """``metrics`` with the outcome fields of the run's controller (None for a replayed
+    recording) and ``final_distance`` from the primary goal's coordinates (T, d) and its
+    reference (T, d)."""
+    final = float(np.linalg.norm(goal_positions[-1] - goal_reference[-1])) if len(goal_positions) else None
+    outcome: dict[str, object] = {"final_distance": final, "failure": _failure(metrics)}
+    if isinstance(controller, GuidedController):
+        status = controller.status
+        recoveries = len(controller.recovery_times)
+        outcome.update(guided=status.guided and controller.fallback is None,
+                       plans=status.plans + recoveries, plan_time_ms=status.plan_time_ms,
+                       recovered=status.replans_blocked + status.replans_stalled + recoveries,
+                       fallbacks=controller.fallback_count + (controller.fallback is not None))
+        if controller.fallback is not None and not metrics.success:
+            outcome["failure"] = status.failure
+    elif controller is not None and hasattr(controller, "planner"):
+        recoveries = len(getattr(controller, "recovery_times", []))
+        outcome.update(guided=False, plans=recoveries, recovered=recoveries,
+                       fallbacks=int(getattr(controller.planner, "fallback_count", 0)))
+    return dataclasses.replace(metrics, **outcome)
+
+
+def _failure(metrics: Metrics) -> str | None:
+    if metrics.success:
+        return None
+    if metrics.collision:
+        return "collision"
+    if metrics.self_collision:
+        return "self_collision"
+    return "stalled"
