@@ -1,0 +1,62 @@
+"""``dynfab benchmark mbm`` end to end on three cage problems (one invalid), resumed; and
+the tables' reading of run records (with and without the metrics global guidance adds)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from dynfab.benchmarks.mbm.tables import case_outcome, type_rows
+from dynfab.cli import main
+
+
+def test_the_command_runs_reports_and_resumes(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    arguments = ["benchmark", "mbm", "--types", "cage", "--problems", "3", "--jobs", "2", "--out", str(tmp_path)]
+    assert main(arguments) == 0
+    table = capsys.readouterr()
+    assert "| cage | 3 | 1 |" in table.out and "mbm as-posed [" in table.err
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    cage, total = summary["rows"]
+    assert (cage["type"], cage["problems"], cage["invalid"], cage["valid"]) == ("cage", 3, 1, 2)
+    assert cage["success"] + sum(cage["failures"].values()) == 2
+    assert total["type"] == "all" and total["problems"] == 3
+    assert list(summary["invalid"]) == ["cage/0011"]  # the open fingers 14 mm into the cube
+    assert summary["invalid"]["cage/0011"].startswith("goal: panda_")
+    assert sorted(p.name for p in (tmp_path / "scenarios").iterdir()) == ["cage_0009.yaml", "cage_0010.yaml"]
+    log = (tmp_path / "runs.jsonl").read_text()
+    assert len(log.splitlines()) == 3
+    assert main(arguments) == 0  # resumed: nothing left to run
+    assert (tmp_path / "runs.jsonl").read_text() == log
+    assert main([*arguments[:-2], "--variant", "object-removed", "--out", str(tmp_path)]) == 2
+    assert "holds runs of mbm as-posed, not mbm object-removed" in capsys.readouterr().err
+
+
+def _record(problem: str, metrics: dict | None, check: dict | None, invalid: str | None = None) -> dict:
+    return {"problem": problem, "type": problem.split("/")[0], "invalid": invalid, "refused": None,
+            "metrics": metrics, "check": check, "wall_time_s": 1.0}
+
+
+_CLEAN = {"ok": True, "collisions": [], "self_collisions": [], "joint_limit_violations": []}
+_TOUCH = {**_CLEAN, "ok": False, "collisions": [{"link": "panda_leftfinger", "other": "obstacles[2]"}]}
+
+
+def test_tables_flag_contradicted_successes_and_read_guidance_metrics_when_present() -> None:
+    reached = {"success": True, "goal_reached": True, "time_to_goal": 3.0, "path_length": 1.0}
+    records = [
+        _record("box/0009", reached, _CLEAN),  # before guidance lands: no plans, no failure
+        _record("box/0010", {**reached, "guided": True, "plans": 2, "plan_time_ms": 12.0}, _TOUCH),
+        _record("box/0011", {"success": False, "goal_reached": False, "guided": True, "plans": 4,
+                             "plan_time_ms": 30.0, "failure": "no_path"}, _CLEAN),
+        _record("box/0012", None, None, invalid="goal: panda_joint4 = -0.043 is outside [-3.0718, -0.0698]"),
+    ]
+    outcomes = [case_outcome(r) for r in records]
+    assert [o.success for o in outcomes] == [True, False, False, False]
+    assert [o.contradicted for o in outcomes] == [False, True, False, False]
+    assert [o.failure for o in outcomes] == [None, "mesh_collision", "no_path", None]
+    box, _ = type_rows(outcomes, ["box"])
+    assert (box.problems, box.invalid, box.success, box.collisions, box.contradicted) == (4, 1, 1, 1, 1)
+    assert box.failures == {"mesh_collision": 1, "no_path": 1}
+    assert (box.median_plan_time_ms, box.mean_plans, box.guided) == (21.0, 3.0, 2)
+    assert box.median_time_to_goal_s == 3.0
