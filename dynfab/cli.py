@@ -42,7 +42,9 @@ DEMOS = {
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="dynfab", description="Reactive motion generation with optimization fabrics.")
     commands = parser.add_subparsers(dest="command", required=True)
-    run = commands.add_parser("run", help="run a scenario file in the embedded simulator")
+    run = commands.add_parser("run", help="run a scenario file in the embedded simulator",
+                              epilog="exit status: 0 goal reached without collision, 1 the run ended without "
+                                     "success (the metrics say why: failure), 2 bad input")
     run.add_argument("file", type=Path, help="scenario YAML file")
     run.add_argument("--planner", choices=PLANNERS, help="override the scenario's planner")
     run.add_argument("--simulator", help="override the scenario's simulator: kinematic or mujoco")
@@ -172,6 +174,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.plot is not None:
         _plot(results[0], args.plot)
         print(f"dynfab: plot written to {args.plot}", file=sys.stderr)
+    if args.command == "run" and not results[0].metrics.success:
+        return 1  # ran, but the goal was not reached without collision (the metrics say why)
     return 0
 
 

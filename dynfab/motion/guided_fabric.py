@@ -37,6 +37,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
+from dynfab.fabric.leaves.goal import GoalAttractor
 from dynfab.fabric.planner import FabricPlanner, GoalConfig
 from dynfab.motion.configuration_checker import PlacedObstacle
 from dynfab.motion.guidance import GoalTargets, GuidanceError, GuidanceSettings, JointGuidance, Plan
@@ -44,9 +45,9 @@ from dynfab.motion.guidance import GoalTargets, GuidanceError, GuidanceSettings,
 __all__ = ["GuidanceStatus", "GuidedFabric", "guided_goal_config"]
 
 
-def guided_goal_config(weight: float = 1.0) -> GoalConfig:
+def guided_goal_config(attractor: GoalAttractor = GoalAttractor()) -> GoalConfig:
     """The joint-space goal a guided fabric's planner must have first (every joint)."""
-    return GoalConfig(link=None, weight=weight)
+    return GoalConfig(link=None, attractor=attractor)
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,9 @@ TOPP-RA (Pham & Pham 2018, the ``toppra`` package) under
 
     |q̇_i(t)| ≤ v_i,   |q̈_i(t)| ≤ a_i,
 
-starting and ending at rest, and the result is :class:`JointTrajectory`, the reference
+starting and ending at rest (TOPP-RA keeps the limits at its grid points; the result is
+played slower where sampling finds them exceeded in between), and the result is
+:class:`JointTrajectory`, the reference
 ``q_r(t), q̇_r(t), q̈_r(t)`` the dynamic fabric tracks (resting at the end). The spline
 stays near the polyline only if the samples are dense at its corners: it is checked
 against the polyline every few milliseconds of path and resampled twice as densely
@@ -43,11 +45,14 @@ class JointTrajectory(Trajectory):
         waypoints: the polyline it was timed along (k, n) [rad].
     """
 
-    def __init__(self, timed: object, waypoints: NDArray[np.float64]) -> None:
+    def __init__(self, timed: object, waypoints: NDArray[np.float64], slowdown: float = 1.0) -> None:
+        """``timed`` (toppra's trajectory) played ``slowdown`` (≥ 1) times slower:
+        ``q_r(t) = q(t / k)``, ``q̇_r = q̇(t / k) / k``, ``q̈_r = q̈(t / k) / k²``."""
         self._timed = timed
-        self.duration = float(timed.duration)
+        self._slowdown = slowdown
+        self.duration = float(timed.duration) * slowdown
         self.waypoints = waypoints
-        self._end = np.asarray(timed(self.duration), dtype=float)
+        self._end = np.asarray(timed(float(timed.duration)), dtype=float)
         self._n = waypoints.shape[1]
 
     @property
@@ -60,10 +65,11 @@ class JointTrajectory(Trajectory):
         return self._end.copy()
 
     def _sample(self, times: np.ndarray) -> Samples:
-        clipped = np.clip(times, 0.0, self.duration)
+        k = self._slowdown
+        clipped = np.clip(times, 0.0, self.duration) / k
         position = np.atleast_2d(self._timed(clipped))
-        velocity = np.atleast_2d(self._timed(clipped, 1))
-        acceleration = np.atleast_2d(self._timed(clipped, 2))
+        velocity = np.atleast_2d(self._timed(clipped, 1)) / k
+        acceleration = np.atleast_2d(self._timed(clipped, 2)) / k**2
         outside = (times < 0.0) | (times > self.duration)
         velocity[outside] = 0.0
         acceleration[outside] = 0.0
@@ -110,7 +116,8 @@ def time_path(waypoints: NDArray[np.float64], velocity: NDArray[np.float64], acc
         if _deviation(path, waypoints) <= settings.deviation:
             break
         spacing /= 2
-    return JointTrajectory(_timed(path, velocity, acceleration, settings), waypoints)
+    timed = _timed(path, velocity, acceleration, settings)
+    return JointTrajectory(timed, waypoints, _slowdown(timed, velocity, acceleration))
 
 
 def _length(waypoints: NDArray[np.float64]) -> float:
@@ -136,6 +143,16 @@ def _deviation(path: toppra.SplineInterpolator, waypoints: NDArray[np.float64]) 
     fraction = np.clip((points @ ab.T - np.einsum("ij,ij->i", a, ab)) / lengths, 0.0, 1.0)  # (P, S)
     nearest = a[None] + fraction[:, :, None] * ab[None]
     return float(np.sqrt(np.min(np.sum((nearest - points[:, None]) ** 2, axis=2), axis=1)).max())
+
+
+def _slowdown(timed: object, velocity: NDArray[np.float64], acceleration: NDArray[np.float64]) -> float:
+    """How much slower ``timed`` must play to keep its limits between TOPP-RA's grid points
+    too (it enforces them at the points): ``k = max(1, max |q̇|/v, √(max |q̈|/a))`` over a
+    fine sampling."""
+    times = np.linspace(0.0, float(timed.duration), 2001)
+    speed = float(np.max(np.abs(np.atleast_2d(timed(times, 1))) / velocity))
+    push = float(np.max(np.abs(np.atleast_2d(timed(times, 2))) / acceleration))
+    return max(1.0, speed, float(np.sqrt(push)))
 
 
 def _timed(path: toppra.SplineInterpolator, velocity: NDArray[np.float64], acceleration: NDArray[np.float64],

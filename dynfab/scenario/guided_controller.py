@@ -23,6 +23,10 @@ from dataclasses import replace
 
 import numpy as np
 
+from dynfab.fabric.leaves.barrier import Barrier
+from dynfab.fabric.leaves.goal import GoalAttractor
+from dynfab.fabric.leaves.obstacle import SphereObstacleAvoidance
+from dynfab.fabric.leaves.shape_obstacle import ShapeObstacleAvoidance
 from dynfab.fabric.planner import FabricPlanner, PlannerConfig
 from dynfab.geometry.shapes import quaternion_matrix
 from dynfab.motion.configuration_checker import PlacedObstacle
@@ -39,7 +43,13 @@ from dynfab.scenario.recovering_controller import with_recovery
 from dynfab.scenario.references import goal_axes
 from dynfab.scenario.schema import GoalSpec, Scenario
 
-__all__ = ["GuidedController", "guidance_refusal", "make_scenario_controller"]
+__all__ = ["GuidedController", "guidance_refusal", "guided_planner_config", "make_scenario_controller"]
+
+#: gain ``k`` of the guided fabric's joint-space attractor [rad/s² per unit metric]; with the range
+#: below chosen on MBM problems 10-11 of the bookshelf and box types (object removed)
+GUIDED_GOAL_GAIN = 20.0
+#: range of the guided fabric's obstacle leaves [m]: the plan keeps clear of what it knew
+GUIDED_OBSTACLE_RANGE = 0.1
 
 
 class GuidedController:
@@ -127,11 +137,7 @@ def make_scenario_controller(scenario: Scenario, robot: Robot, references: Refer
     if guidance_refusal(scenario, robot) is not None:
         return plain()
     planning_robot = replace(robot, limits=scenario.planning_limits(robot.limits))
-    kinds = [obstacle.type for obstacle in scenario.obstacles]
-    config = replace(PlannerConfig.for_robot(planning_robot, (guided_goal_config(),), kinds.count("sphere"), True,
-                                             shape_slots_of(scenario.obstacles)),
-                     control_period=scenario.dt, backend=scenario.backend)
-    fabric = FabricPlanner(planning_robot, scenario.fabric.configured(config))
+    fabric = FabricPlanner(planning_robot, scenario.fabric.configured(guided_planner_config(planning_robot, scenario)))
     slots = place_obstacles(scenario.obstacles, fabric.parameters)
     moving_indices = tuple(k for k, obstacle in enumerate(scenario.obstacles) if obstacle.trajectory is not None)
     inner = FabricController(fabric, References((StaticPoint(tuple(scenario.initial_state.q)),), references.obstacles),
@@ -140,6 +146,19 @@ def make_scenario_controller(scenario: Scenario, robot: Robot, references: Refer
     guided.set_obstacles(_placed(scenario, references, 0.0, static=True))
     return GuidedController(inner, guided, goal_targets(scenario, robot),
                             lambda t: _placed(scenario, references, t, static=False), plain)
+
+
+def guided_planner_config(robot: Robot, scenario: Scenario) -> PlannerConfig:
+    """The guided fabric of a scenario: dynamic, its first goal the joint-space reference
+    (attractor gain :data:`GUIDED_GOAL_GAIN`), obstacle leaves of range
+    :data:`GUIDED_OBSTACLE_RANGE`, the scenario's obstacle slots; the ``fabric:`` block applies on top."""
+    barrier = Barrier(geometry_gain=5.0, energy_gain=0.5, horizon=GUIDED_OBSTACLE_RANGE)
+    spheres = sum(obstacle.type == "sphere" for obstacle in scenario.obstacles)
+    return PlannerConfig(goals=(guided_goal_config(attractor=GoalAttractor(gain=GUIDED_GOAL_GAIN)),),
+                         obstacle_slots=spheres, shape_slots=shape_slots_of(scenario.obstacles), dynamic=True,
+                         obstacle_avoidance=SphereObstacleAvoidance(barrier),
+                         shape_avoidance=ShapeObstacleAvoidance(barrier),
+                         control_period=scenario.dt, backend=scenario.backend)
 
 
 def goal_targets(scenario: Scenario, robot: Robot) -> GoalTargets:

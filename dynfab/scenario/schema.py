@@ -28,7 +28,7 @@ from dynfab.scenario import fields
 from dynfab.scenario.fabric_schema import FabricMapping, FabricSpec
 from dynfab.scenario.fields import TRAJECTORY_TYPES, ScenarioError
 from dynfab.scenario.goal_schema import DEFAULT_ANGLE_TOLERANCE, GoalMapping, GoalSpec, GoalType, goal_spec
-from dynfab.scenario.joint_limits import check_within_limits
+from dynfab.scenario.joint_limits import check_within_limits, clipped_to_limits
 from dynfab.scenario.limits_schema import LimitsMapping, LimitsSpec
 from dynfab.scenario.model_errors import scenario_error
 from dynfab.scenario.model_types import Choice, Flag, Items, Range, ScenarioModel, fail
@@ -266,6 +266,7 @@ def validate_for_robot(scenario: Scenario, robot: Robot) -> Scenario:
     joints = robot.kinematics.joint_names
     fields.check_length(state.q, "initial_state.q", (dof,), f" (one per joint: {', '.join(joints)})")
     check_within_limits(state.q, robot, "initial_state.q")
+    state = dataclasses.replace(state, q=clipped_to_limits(state.q, robot))
     if state.qdot is None:
         state = dataclasses.replace(state, qdot=(0.0,) * velocities)
     velocity_names = ("v", "omega") + joints[3:] if robot.base is not None else joints
@@ -301,7 +302,7 @@ def _goal_for_robot(
         fields.check_length(position, f"{field}.position", (robot.kinematics.dof,),
                             f" (one per joint: {', '.join(robot.kinematics.joint_names)})")
         check_within_limits(position, robot, f"{field}.position")
-        return goal
+        return dataclasses.replace(goal, position=clipped_to_limits(position, robot))
     link = robot.goal_link if goal.link is None else goal.link
     _check_link(link, f"{field}.link", links)
     if robot.planar and goal.type in ("pose", "axis"):

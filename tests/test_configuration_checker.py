@@ -1,0 +1,85 @@
+"""The configuration checker (the global planner's validity check): the compiled kernel
+against an independent numpy evaluation (forward kinematics by pinocchio-checked CasADi,
+distances by dynfab.geometry.distance), on random configurations and every shape kind."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from dynfab.geometry.distance import placed_distance
+from dynfab.geometry.shapes import Box, Capsule, Cylinder, Placement, Plane, Sphere, quaternion_from_normal
+from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
+from dynfab.robots import load_robot
+
+
+def _scene(rng: np.random.Generator) -> list[PlacedObstacle]:
+    def placement() -> Placement:
+        return Placement(tuple(rng.uniform(-0.7, 0.7, 3)), tuple(rng.normal(size=4)))
+
+    obstacles = [PlacedObstacle(Box(tuple(rng.uniform(0.02, 0.4, 3))), placement()) for _ in range(6)]
+    obstacles += [PlacedObstacle(Cylinder(float(rng.uniform(0.02, 0.1)), float(rng.uniform(0.05, 0.4))), placement())
+                  for _ in range(3)]
+    obstacles += [PlacedObstacle(Capsule(0.05, 0.3), placement()), PlacedObstacle(Sphere(0.1), placement()),
+                  PlacedObstacle(Plane(), Placement((0.0, 0.0, -0.3), quaternion_from_normal((0.1, 0.0, 1.0))))]
+    return obstacles
+
+
+def _reference(robot, obstacles, q: np.ndarray) -> tuple[float, float]:
+    centres = np.asarray(robot.sphere_centers(q))
+    radii = robot.sphere_radii
+    obstacle = min(float((placed_distance(o.shape, o.placement, centres) - radii).min()) for o in obstacles)
+    itself = min(float(np.linalg.norm(centres[a] - centres[b]) - radii[a] - radii[b])
+                 for a, b in robot.self_collision_pairs)
+    return obstacle, itself
+
+
+@pytest.fixture(scope="module")
+def panda():
+    return load_robot("panda")
+
+
+def test_compiled_kernel_equals_the_numpy_distances(panda) -> None:
+    rng = np.random.default_rng(3)
+    obstacles = _scene(rng)
+    checker = ConfigurationChecker(panda, obstacles)
+    assert checker.compiled
+    qs = rng.uniform(panda.kinematics.lower, panda.kinematics.upper, (200, panda.dof))
+    batch = checker.batch(qs)
+    for q, row in zip(qs, batch):
+        expected = _reference(panda, obstacles, q)
+        assert row == pytest.approx(expected, abs=1e-12)
+        assert checker.clearances(q) == pytest.approx(expected, abs=1e-12)
+    assert (batch[:, 0] < 0).any() and (batch[:, 0] > 0).any()  # the scene is neither empty nor solid
+
+
+def test_free_and_first_blocked_agree_with_the_clearances(panda) -> None:
+    rng = np.random.default_rng(4)
+    checker = ConfigurationChecker(panda, _scene(rng))
+    qs = rng.uniform(panda.kinematics.lower, panda.kinematics.upper, (300, panda.dof))
+    values = checker.batch(qs)
+    for margin, self_margin in ((0.0, 0.0), (0.05, 0.01), (-0.02, -1.0)):
+        expected = (values[:, 0] >= margin) & (values[:, 1] >= self_margin)
+        assert [checker.free(q, margin, self_margin) for q in qs] == expected.tolist()
+        blocked = np.flatnonzero(~expected)
+        assert checker.first_blocked(qs, margin, self_margin) == (int(blocked[0]) if blocked.size else -1)
+
+
+def test_without_a_compiler_the_numpy_path_gives_the_same_numbers(panda, monkeypatch) -> None:
+    import dynfab.motion.configuration_checker as module
+
+    rng = np.random.default_rng(5)
+    obstacles = _scene(rng)
+    compiled = ConfigurationChecker(panda, obstacles)
+    monkeypatch.setattr(module, "load_checker_library", lambda robot: None)
+    plain = ConfigurationChecker(panda, obstacles)
+    assert not plain.compiled
+    qs = rng.uniform(panda.kinematics.lower, panda.kinematics.upper, (20, panda.dof))
+    np.testing.assert_allclose(plain.batch(qs), compiled.batch(qs), atol=1e-12)
+    assert plain.first_blocked(qs, 0.0, 0.0) == compiled.first_blocked(qs, 0.0, 0.0)
+
+
+def test_no_obstacles_is_infinitely_clear(panda) -> None:
+    checker = ConfigurationChecker(panda)
+    obstacle, itself = checker.clearances(np.asarray(panda.default_q))
+    assert obstacle == np.inf and np.isfinite(itself)

@@ -1,0 +1,130 @@
+"""Global joint-space guidance: inverse kinematics, joint-space paths, their timing, and
+the guided fabric on scenarios where the fabric alone stops in front of a wall."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from dynfab.geometry.shapes import Box, Placement
+from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
+from dynfab.motion.guidance import GuidanceError, JointGuidance, JointTarget
+from dynfab.motion.inverse_kinematics import AxisTarget, PointTarget, solve_ik
+from dynfab.motion.joint_planning import JointPlannerSettings, NoPathError, plan_joint_path, polyline_samples
+from dynfab.motion.joint_trajectory import time_path
+from dynfab.robots import load_robot
+from dynfab.scenario.runner import run_scenario
+from dynfab.scenario.schema import scenario_from_dict
+
+#: a wall between the Panda's start (hand in front, at +y) and a goal behind it (-y)
+WALL = PlacedObstacle(Box((0.6, 0.04, 0.7)), Placement((0.45, 0.0, 0.35)))
+START = np.array([1.0, 0.3, 0.0, -1.8, 0.0, 2.1, 0.8])
+
+
+@pytest.fixture(scope="module")
+def panda():
+    return load_robot("panda")
+
+
+def test_ik_reaches_a_pose_within_limits_and_nearest_the_current_configuration(panda) -> None:
+    rotation_axes = [(1.0, 0.0, 0.0), (0.0, -1.0, 0.0), (0.0, 0.0, -1.0)]   # hand pointing down
+    targets = [PointTarget("panda_hand", (0.5, 0.2, 0.3))]
+    targets += [AxisTarget("panda_hand", tuple(np.eye(3)[i]), rotation_axes[i]) for i in range(3)]
+    result = solve_ik(panda, targets, START, lambda q: True)
+    assert result.q is not None
+    q = result.q
+    kin = panda.kinematics
+    assert np.all(q >= kin.lower) and np.all(q <= kin.upper)
+    np.testing.assert_allclose(np.asarray(kin.position(q, "panda_hand")).ravel(), (0.5, 0.2, 0.3), atol=1e-4)
+    np.testing.assert_allclose(np.asarray(kin.rotation(q, "panda_hand")), np.array(rotation_axes).T, atol=1e-4)
+    assert result.converged >= 1
+
+
+def test_ik_rejects_solutions_the_checker_refuses_and_reports_none_out_of_reach(panda) -> None:
+    unreachable = solve_ik(panda, [PointTarget("panda_hand", (2.0, 0.0, 0.5))], START, lambda q: True)
+    assert unreachable.q is None and unreachable.converged == 0
+    refused = solve_ik(panda, [PointTarget("panda_hand", (0.5, 0.2, 0.3))], START, lambda q: False)
+    assert refused.q is None and refused.rejected == refused.converged > 0
+
+
+def test_planned_path_is_free_everywhere_and_timed_within_the_limits(panda) -> None:
+    checker = ConfigurationChecker(panda, [WALL])
+    kin = panda.kinematics
+    goal = START.copy()
+    goal[0] = -1.3
+    assert checker.free(START, 0.01, 0.0) and checker.free(goal, 0.01, 0.0)
+    assert checker.first_blocked(np.linspace(START, goal, 50), 0.0, 0.0) >= 0   # the straight line is blocked
+    settings = JointPlannerSettings()
+    path = plan_joint_path(checker, START, goal, kin.lower, kin.upper, settings)
+    np.testing.assert_allclose(path.waypoints[0], START)
+    np.testing.assert_allclose(path.waypoints[-1], goal)
+    dense = polyline_samples(path.waypoints, settings.resolution / 4)
+    assert checker.batch(dense)[:, 0].min() > 0.0   # checked at the planner's resolution with its margin
+    velocity, acceleration = panda.limits.velocity / 2, panda.limits.acceleration / 2
+    trajectory = time_path(path.waypoints, velocity, acceleration)
+    times = np.linspace(0.0, trajectory.duration, 2001)
+    q, qdot, qddot = trajectory.sample(times)
+    assert np.all(np.abs(qdot) <= velocity * (1 + 1e-9)) and np.all(np.abs(qddot) <= acceleration * (1 + 1e-9))
+    np.testing.assert_allclose(q[0], START, atol=1e-9)
+    np.testing.assert_allclose(q[-1], goal, atol=1e-6)
+    np.testing.assert_allclose(qdot[[0, -1]], 0.0, atol=1e-6)
+    np.testing.assert_allclose(np.gradient(q, times, axis=0)[5:-5], qdot[5:-5], atol=0.02 * velocity.max())
+    assert checker.batch(q)[:, 0].min() > -0.005   # the spline stays near the free polyline
+
+
+def test_blocked_goal_escapes_to_a_free_configuration_and_an_enclosed_one_fails(panda) -> None:
+    kin = panda.kinematics
+    checker = ConfigurationChecker(panda, [WALL])
+    goal = START.copy()
+    goal[0] = -0.95   # the arm just touching the wall
+    assert not checker.free(goal, 0.01, 0.0)
+    path = plan_joint_path(checker, START, goal, kin.lower, kin.upper)
+    assert path.escaped_goal and not path.escaped_start
+    assert checker.free(path.waypoints[-2], 0.01, 0.0)
+    assert np.linalg.norm(path.waypoints[-2] - goal) <= JointPlannerSettings().escape_radius
+    solid = ConfigurationChecker(panda, [PlacedObstacle(Box((4.0, 4.0, 4.0)), Placement((0.0, 0.0, 0.0)))])
+    with pytest.raises(NoPathError) as failure:
+        plan_joint_path(solid, START, goal, kin.lower, kin.upper)
+    assert failure.value.reason == "start_in_collision"
+
+
+def test_guidance_names_a_goal_outside_the_limits_and_one_without_ik(panda) -> None:
+    guidance = JointGuidance(panda)
+    outside = tuple(panda.kinematics.upper + 0.1)
+    with pytest.raises(GuidanceError) as failure:
+        guidance.plan(START, JointTarget(outside), [])
+    assert failure.value.reason == "goal_outside_limits" and "panda_joint1" in str(failure.value)
+    at_limit = tuple(panda.kinematics.upper + 5e-7)   # a value rounded when written
+    assert np.allclose(guidance.goal_configuration(JointTarget(at_limit), START), panda.kinematics.upper)
+    with pytest.raises(GuidanceError) as failure:
+        guidance.plan(START, [PointTarget("panda_hand", (3.0, 0.0, 0.3))], [])
+    assert failure.value.reason == "no_ik_solution"
+
+
+def _behind_the_wall(guidance: bool, goal: dict) -> dict:
+    return {"robot": "panda", "planner": "dynamic-fabric", "dt": 0.01, "duration": 12.0, "guidance": guidance,
+            "initial_state": {"q": START.tolist()}, "goal": [goal],
+            "obstacles": [{"type": "box", "position": [0.45, 0.0, 0.35], "size": [0.6, 0.04, 0.7]}]}
+
+
+@pytest.mark.parametrize("goal", [
+    {"type": "position", "position": [0.45, -0.25, 0.3], "tolerance": 0.02},
+    {"type": "joint", "position": [-1.3, 0.3, 0.0, -1.8, 0.0, 2.1, 0.8], "tolerance": 0.05},
+])
+def test_guidance_reaches_a_goal_behind_a_wall_that_the_fabric_alone_does_not(goal: dict) -> None:
+    alone = run_scenario(scenario_from_dict(_behind_the_wall(False, goal))).metrics
+    guided = run_scenario(scenario_from_dict(_behind_the_wall(True, goal))).metrics
+    assert not alone.success and alone.guided is False and alone.failure == "stalled"
+    assert guided.success and not guided.collision, guided
+    assert guided.guided and guided.plans >= 1 and guided.failure is None
+    assert 0.0 < guided.plan_time_ms < 5000.0
+    assert guided.max_velocity_ratio <= 1.0 + 1e-9
+
+
+def test_a_goal_guidance_cannot_reach_falls_back_to_the_fabric_and_says_why() -> None:
+    data = _behind_the_wall(True, {"type": "position", "position": [1.5, 0.0, 0.3], "tolerance": 0.02})
+    data["duration"] = 2.0
+    metrics = run_scenario(scenario_from_dict(data)).metrics
+    assert not metrics.success and metrics.guided is False
+    assert metrics.failure == "no_ik_solution" and metrics.fallbacks >= 1
+    assert metrics.final_distance > 0.3
