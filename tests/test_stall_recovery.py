@@ -15,11 +15,24 @@ STALL = Path(__file__).parent / "data" / "boxer_stall.yaml"
 
 
 def test_a_distance_that_stops_improving_is_a_stall_after_the_window() -> None:
-    monitor = StallMonitor(StallRecovery(window=3.0, min_progress=0.2))
+    monitor = StallMonitor(StallRecovery(window=3.0))   # from 2 m: 0.25 * 2 m capped at 0.2 m
     times = np.arange(0.0, 10.0, 0.1)
     stalled = [monitor.stalled(t, max(2.0 - 0.5 * t, 1.0)) for t in times]   # approaches, then stops at 1 m
     first = times[stalled.index(True)]
     assert first == pytest.approx(2.0 + 3.0, abs=0.11)   # the last 0.2 m gain ends at t = 2 s, then 3 s
+
+
+def test_the_progress_expected_scales_with_the_robot_and_the_goal_distance() -> None:
+    recovery = StallRecovery()
+    assert recovery.progress(initial_distance=2.0, reach=0.9) == pytest.approx(0.2)     # a Panda far away: the cap
+    assert recovery.progress(initial_distance=0.2, reach=0.9) == pytest.approx(0.05)    # a Panda near its goal
+    assert recovery.progress(initial_distance=0.5, reach=0.3) == pytest.approx(0.075)   # an SO-100-sized arm
+    small = StallMonitor(recovery, reach=0.3)
+    times = np.arange(0.0, 10.0, 0.01)
+    # 3 cm/s toward a goal 0.3 m away: 9 cm in 3 s is progress for a 30 cm arm (it was a stall at 0.2 m)
+    assert not any(small.stalled(t, 0.3 - 0.03 * t) for t in times[:1000])
+    stuck = StallMonitor(recovery, reach=0.3)
+    assert any(stuck.stalled(t, max(0.25 - 0.05 * t, 0.1)) for t in times)   # stops 10 cm short: a stall
 
 
 def test_oscillating_is_a_stall_and_steady_progress_is_not() -> None:

@@ -36,7 +36,8 @@ class RecoveringController:
     def __init__(self, inner: FabricController, goal: np.ndarray, tolerance: float,
                  goal_point: Callable[[np.ndarray], np.ndarray],
                  spheres: Callable[[float], list[tuple[np.ndarray, float]]], footprint: float,
-                 recovery: StallRecovery = StallRecovery(), path_planner: PathPlanner | None = None) -> None:
+                 recovery: StallRecovery = StallRecovery(), path_planner: PathPlanner | None = None,
+                 reach: float = np.inf) -> None:
         self.inner = inner
         self.recovery_times: list[float] = []
         self._goal = np.asarray(goal, dtype=float)
@@ -46,7 +47,7 @@ class RecoveringController:
         self._footprint = footprint
         self._recovery = recovery
         self._plan = path_planner or rrt_path_planner()
-        self._monitor = StallMonitor(recovery)
+        self._monitor = StallMonitor(recovery, reach)
         self._follower: PathFollower | None = None
         self._lookahead = max(3 * tolerance, footprint)
 
@@ -118,8 +119,21 @@ def with_recovery(controller: FabricController, scenario: Scenario, robot: Robot
 
     footprint = _footprint(robot, goal.link or robot.goal_link, np.asarray(scenario.initial_state.q), goal_point,
                            axes)
+    reach = np.inf if robot.base is not None or robot.planar else link_reach(robot, goal.link or robot.goal_link)
     return RecoveringController(controller, np.asarray(goal.position, dtype=float), goal.tolerance, goal_point,
-                                sphere_snapshot, footprint)
+                                sphere_snapshot, footprint, reach=reach)
+
+
+def link_reach(robot: Robot, link: str, samples: int = 500, seed: int = 0) -> float:
+    """The farthest ``link`` gets from the root over ``samples`` random configurations within
+    the joint limits (unlimited joints: ±π) [m]."""
+    kin = robot.kinematics
+    low = np.where(np.isfinite(kin.lower), kin.lower, -np.pi)
+    high = np.where(np.isfinite(kin.upper), kin.upper, np.pi)
+    q = ca.SX.sym("q", robot.dof)
+    position = ca.Function("link_position", [q], [kin.position(q, link)]).map(samples)
+    configurations = np.random.default_rng(seed).uniform(low, high, (samples, robot.dof))
+    return float(np.linalg.norm(np.asarray(position(configurations.T)), axis=0).max())
 
 
 def _footprint(robot: Robot, link: str, q: np.ndarray, goal_point: Callable[[np.ndarray], np.ndarray],

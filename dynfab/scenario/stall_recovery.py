@@ -7,9 +7,15 @@ paper's Experiment 2b, only triggered automatically:
 
 1. **Stall.** Each tick the distance ``d(t)`` of the goal point to the goal is compared
    with the best distance so far; the run has stalled when, with the goal not reached,
-   ``d`` has not come ``min_progress`` below its best for ``window`` seconds (defaults
-   0.05 m and 3 s: a robot still moving toward its goal improves that easily, one stuck,
-   circling or oscillating does not).
+   ``d`` has not come
+
+       Δ = min(f · min(d₀, reach), Δ_max)
+
+   below its best for ``window`` seconds, with ``d₀`` the goal's initial distance and
+   ``reach`` the robot's (the farthest its goal link gets from the root; unbounded on a
+   mobile base), so that the test means the same for a 30 cm arm and a 1 m one (defaults
+   ``f = 0.25``, ``Δ_max = 0.2 m``, 3 s: a robot still moving toward its goal improves
+   that easily, one stuck, circling or oscillating does not).
 2. **Path.** OMPL's RRT-Connect (:func:`dynfab.motion.global_planning.plan_path`) plans a
    polyline for the goal point, in the goal's coordinates, from where it is to the goal,
    around the scenario's spheres where they are now (moving ones as snapshots), keeping
@@ -45,22 +51,32 @@ class StallRecovery:
 
     Attributes:
         window: time over which progress is measured [s].
-        min_progress: decrease of the goal distance below which the run has stalled [m].
+        progress_fraction: ``f``, the progress expected within ``window`` as a fraction of
+            the smaller of the goal's initial distance and the robot's reach [-].
+        max_progress: ``Δ_max``, the most progress ever expected within ``window`` [m].
         clearance: kept between the footprint and each sphere by the path [m].
         attempts: global paths planned at most in one run [-].
     """
 
     window: float = 3.0
-    min_progress: float = 0.2
+    progress_fraction: float = 0.25
+    max_progress: float = 0.2
     clearance: float = 0.15
     attempts: int = 3
+
+    def progress(self, initial_distance: float, reach: float) -> float:
+        """``Δ`` of the module docstring [m]."""
+        return min(self.progress_fraction * min(initial_distance, reach), self.max_progress)
 
 
 class StallMonitor:
     """Tells whether a distance stopped improving (module docstring)."""
 
-    def __init__(self, recovery: StallRecovery) -> None:
+    def __init__(self, recovery: StallRecovery, reach: float = np.inf) -> None:
+        """``reach``: the robot's [m] (``inf`` on a mobile base)."""
         self._recovery = recovery
+        self._reach = reach
+        self._needed: float | None = None
         self._best = np.inf
         self._best_time = 0.0
 
@@ -69,9 +85,11 @@ class StallMonitor:
         self._best = np.inf
 
     def stalled(self, t: float, distance: float) -> bool:
-        """Record the distance at ``t`` [s]; True if it has not come ``min_progress`` below
-        its best for ``window`` seconds."""
-        if distance < self._best - self._recovery.min_progress or not np.isfinite(self._best):
+        """Record the distance at ``t`` [s]; True if it has not come ``Δ`` (set by the first
+        distance recorded) below its best for ``window`` seconds."""
+        if self._needed is None:
+            self._needed = self._recovery.progress(distance, self._reach)
+        if distance < self._best - self._needed or not np.isfinite(self._best):
             self._best, self._best_time = distance, t
         return t - self._best_time >= self._recovery.window
 
