@@ -33,6 +33,8 @@ def add_benchmark_parser(commands: Any) -> None:
     parser.add_argument("--types", type=_types, default=PROBLEM_TYPES, metavar="T1,T2",
                         help=f"problem types, comma-separated (default all: {','.join(PROBLEM_TYPES)})")
     parser.add_argument("--problems", type=at_least_one, metavar="N", help="the first N problems of each type")
+    parser.add_argument("--first", type=at_least_one, metavar="K", default=1,
+                        help="start at each type's K-th problem (default 1; the shared set numbers them from 9)")
     parser.add_argument("--planner", choices=[p for p in PLANNERS if p != "mpc"], default="dynamic-fabric",
                         help="the scenarios' planner (default dynamic-fabric)")
     parser.add_argument("--guidance", action=argparse.BooleanOptionalAction,
@@ -48,17 +50,15 @@ def add_benchmark_parser(commands: Any) -> None:
 
 def benchmark_command(args: argparse.Namespace) -> int:
     """Run the benchmark ``args`` ask for; print its table (module doc for exit codes)."""
-    from dynfab.benchmarks.mbm.benchmark import BenchmarkError, BenchmarkSettings, guidance_supported, run_benchmark
+    from dynfab.benchmarks.mbm.benchmark import BenchmarkError, BenchmarkSettings, run_benchmark
     from dynfab.benchmarks.mbm.moveit import ProblemError
     from dynfab.experiments.cluster import ClusterError
     from dynfab.experiments.series import RunError
     from dynfab.scenario.schema import ScenarioError
 
-    if args.guidance is not None and not guidance_supported():
-        print("dynfab: --guidance/--no-guidance ignored: scenarios have no guidance key in this version",
-              file=sys.stderr)
     out = args.out or Path("dynfab-benchmarks") / f"mbm-{args.variant}"
-    settings = BenchmarkSettings(args.variant, args.types, args.problems, args.planner, args.guidance, args.seed)
+    settings = BenchmarkSettings(args.variant, args.types, args.problems, args.planner, args.guidance, args.seed,
+                                 args.first - 1)
     try:
         records = run_benchmark(settings, out, args.jobs, requested_cluster(args.workers, args.scheduler), sys.stderr)
     except (BenchmarkError, ClusterError, ProblemError, ScenarioError) as error:

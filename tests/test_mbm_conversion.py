@@ -96,3 +96,8 @@ def test_a_malformed_file_names_file_and_field() -> None:
                                            r"world\.collision_objects\[0\]\.primitives\[0\]\.dimensions: "
                                            r"expected 2 numbers, got 1$"):
         problem_from_texts("box", 1, {"scene": scene, "request": _REQUEST})
+
+
+def test_problems_can_start_after_the_first_ones_of_each_type() -> None:
+    problems = load_problems(["box", "cage"], per_type=2, skip=3)
+    assert [(p.type, p.number) for p in problems] == [("box", 12), ("box", 13), ("cage", 12), ("cage", 13)]

@@ -35,9 +35,8 @@ from dynfab.benchmarks.mbm.tables import write_tables
 from dynfab.benchmarks.mbm.variants import Case, prepare_case
 from dynfab.experiments.cluster import Cluster, series_executor
 from dynfab.experiments.series import Progress, RunError, SeriesError, exclusive, log_lines
-from dynfab.scenario.schema import ScenarioDocument
 
-__all__ = ["BenchmarkError", "BenchmarkSettings", "guidance_supported", "run_benchmark"]
+__all__ = ["BenchmarkError", "BenchmarkSettings", "run_benchmark"]
 
 
 class BenchmarkError(ValueError):
@@ -55,6 +54,7 @@ class BenchmarkSettings:
         planner: The scenario's planner.
         guidance: The scenario's ``guidance`` key; None leaves it out (the schema's default).
         seed: Seed of the moving spheres.
+        skip: Problems of each type skipped before the first ``per_type`` (in number order).
     """
 
     variant: str = "as-posed"
@@ -63,6 +63,7 @@ class BenchmarkSettings:
     planner: str = PLANNER
     guidance: bool | None = None
     seed: int = 0
+    skip: int = 0
 
 
 def run_benchmark(settings: BenchmarkSettings, out_dir: str | Path, jobs: int | None = None,
@@ -81,8 +82,8 @@ def run_benchmark(settings: BenchmarkSettings, out_dir: str | Path, jobs: int | 
     out.mkdir(parents=True, exist_ok=True)
     robot = franka()
     cases = [prepare_case(problem, settings.variant, robot, settings.planner, settings.seed)
-             for problem in load_problems(settings.types, settings.per_type)]
-    if settings.guidance is not None and guidance_supported():
+             for problem in load_problems(settings.types, settings.per_type, skip=settings.skip)]
+    if settings.guidance is not None:
         cases = [dataclasses.replace(case, mapping={**case.mapping, "guidance": settings.guidance}) for case in cases]
     log = out / "runs.jsonl"
     try:
@@ -104,11 +105,6 @@ def run_benchmark(settings: BenchmarkSettings, out_dir: str | Path, jobs: int | 
     except SeriesError as error:
         raise BenchmarkError(str(error)) from None
     return ordered
-
-
-def guidance_supported() -> bool:
-    """Whether scenario files have the ``guidance`` key (global guidance is being added)."""
-    return "guidance" in ScenarioDocument.model_fields
 
 
 def _digest(mapping: dict[str, Any]) -> str:

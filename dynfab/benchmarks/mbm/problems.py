@@ -62,8 +62,9 @@ def bundled_archive() -> Path:
 
 
 def load_problems(types: Sequence[str] = PROBLEM_TYPES, per_type: int | None = None,
-                  archive: Path | None = None) -> tuple[Problem, ...]:
-    """The problems of ``types`` (in that order, by number), the first ``per_type`` of each.
+                  archive: Path | None = None, skip: int = 0) -> tuple[Problem, ...]:
+    """The problems of ``types`` (in that order, by number), the first ``per_type`` of each
+    after the first ``skip``.
 
     Raises:
         ValueError: An unknown type.
@@ -85,7 +86,7 @@ def load_problems(types: Sequence[str] = PROBLEM_TYPES, per_type: int | None = N
     problems = []
     for problem_type in types:
         numbers = sorted(number for t, number in texts if t == problem_type)
-        for number in numbers[:per_type]:
+        for number in numbers[skip:][:per_type]:
             problems.append(problem_from_texts(problem_type, number, texts[(problem_type, number)]))
     return tuple(problems)
 
