@@ -15,7 +15,7 @@ from dynfab.robots import Kinematics, load_urdf
 from dynfab.robots.builtin import panda_robot
 from dynfab.robots.collision_model import CollisionModel, auto_collision_model, fit_body_spheres, fit_link_spheres
 from dynfab.robots.link_meshes import LinkMeshError, link_collision_meshes
-from dynfab.robots.panda_sphere_fit import franka_kinematics
+from dynfab.robots.franka import DYNFAB_LINKS, franka_kinematics
 from dynfab.robots.panda_spheres import PANDA_FITTED_SPHERES
 from dynfab.robots.robot import CollisionSphere
 from dynfab.robots.body_distances import body_meshes
@@ -231,43 +231,84 @@ def test_missing_mesh_of_a_moving_link_names_the_link(tmp_path: Path) -> None:
         auto_collision_model(urdf, cache=tmp_path)
 
 
-def test_builtin_panda_spheres_cover_frankas_meshes() -> None:
-    """The built-in Panda's table (panda_spheres.py) against example-robot-data's meshes:
-    panda_link0..7 share dynfab's frames; the flange, hand and closed fingers are welded to
-    panda_link7, whose spheres cover them too."""
+def _franka_spheres() -> tuple[list[CollisionSphere], dict[str, str]]:
+    """The built-in table on Franka's link names, and dynfab's name of each Franka link."""
+    franka_of = {dynfab: franka for franka, dynfab in DYNFAB_LINKS.items()}
+    return [CollisionSphere(franka_of[link], center, radius) for link, center, radius in PANDA_FITTED_SPHERES], \
+        franka_of
+
+
+def test_builtin_panda_spheres_cover_frankas_meshes_within_5_mm() -> None:
+    """The built-in Panda's table (panda_spheres.py) against example-robot-data's meshes,
+    link by link (the hand body and each finger have spheres of their own): no point of
+    an independent dense sample lies more than 5 mm outside."""
     kinematics = franka_kinematics()
-    body_of = bodies(kinematics)
-    centres = np.array([center for _, center, _ in PANDA_FITTED_SPHERES])
-    radii = np.array([radius for _, _, radius in PANDA_FITTED_SPHERES])
-    links = np.array([link for link, _, _ in PANDA_FITTED_SPHERES])
-    for link in kinematics.link_names:
+    spheres, franka_of = _franka_spheres()
+    links = np.array([s.link for s in spheres])
+    centres = np.array([s.center for s in spheres])
+    radii = np.array([s.radius for s in spheres])
+    for link in DYNFAB_LINKS:
         meshes = link_collision_meshes(kinematics.model, link)
-        if not meshes:
-            continue
-        owner = f"panda_link{body_of[link]}"
-        transform = np.array(kinematics.transform(np.zeros(7), link, parent=owner))
-        surface = _independent_surface(meshes) @ transform[:3, :3].T + transform[:3, 3]
-        outside = outside_distances(surface, centres[links == owner], radii[links == owner])
-        assert outside.max() <= 0.01 + 1e-9, (link, outside.max())
-    counts = {link: int(np.sum(links == link)) for link in set(links)}
-    assert len(PANDA_FITTED_SPHERES) == 22 and max(counts.values()) <= 5, counts
+        outside = outside_distances(_independent_surface(meshes), centres[links == link], radii[links == link])
+        assert outside.max() <= 0.005 + 1e-9, (link, outside.max())
+    counts = {link: int(np.sum(links == link)) for link in DYNFAB_LINKS}
+    assert len(PANDA_FITTED_SPHERES) == 75 and max(counts.values()) <= 17, counts
+    assert set(counts) == set(franka_of.values())
 
 
-def test_builtin_panda_pairs_follow_the_rules_and_see_every_mesh_contact() -> None:
-    """Pairs are two bodies apart, apart at the default configuration, and on 2000 fresh
-    random configurations (not the selection's): wherever two bodies' meshes touch (12.7 %
-    of them), a kept pair of theirs overlaps (measured: by at least 5.7 mm), so the fabric
-    keeps the meshes apart; the pairs forbid 22 % of the configurations, but only 1.3 %
-    where every mesh pair is 2 cm apart."""
-    panda = panda_robot("fitted")
-    spheres, pairs = panda.collision_spheres, panda.self_collision_pairs
-    depth = {f"panda_link{i}": i for i in range(8)}
-    assert len(set(pairs)) == len(pairs) == 30
-    assert all(abs(depth[spheres[a].link] - depth[spheres[b].link]) >= 2 for a, b in pairs)
+def _stick_out(meshes: list[trimesh.Trimesh], centre: np.ndarray, radius: float) -> float:
+    """How far a sphere reaches out of the union of closed ``meshes``: the largest distance
+    to the meshes of the points of its surface (a dense Fibonacci sample) outside all [m]."""
+    count = 2000
+    k = np.arange(count) + 0.5
+    polar, azimuth = np.arccos(1 - 2 * k / count), np.pi * (1 + 5 ** 0.5) * k
+    points = centre + radius * np.column_stack([np.cos(azimuth) * np.sin(polar), np.sin(azimuth) * np.sin(polar),
+                                                np.cos(polar)])
+    inside = np.zeros(count, dtype=bool)
+    distance = np.full(count, np.inf)
+    for mesh in meshes:
+        mesh = mesh.copy()
+        mesh.merge_vertices()
+        assert mesh.is_watertight
+        inside |= mesh.contains(points)
+        distance = np.minimum(distance, trimesh.proximity.closest_point(mesh, points)[1])
+    return float(distance[~inside].max(initial=0.0))
+
+
+def test_builtin_panda_spheres_reach_at_most_1_cm_out_of_hand_and_fingers_2_cm_elsewhere() -> None:
+    """Measured on the spheres' surfaces against Franka's meshes, independently of the
+    fitter's bound (the fitter may never grow a sphere beyond it: sphere_fitting.py)."""
+    kinematics = franka_kinematics()
+    spheres, _ = _franka_spheres()
+    worst: dict[str, float] = {}
+    for sphere in spheres:
+        meshes = link_collision_meshes(kinematics.model, sphere.link)
+        reach = _stick_out(meshes, np.array(sphere.center), sphere.radius)
+        worst[sphere.link] = max(worst.get(sphere.link, 0.0), reach)
+    for link, reach in worst.items():
+        bound = 0.01 if link in ("panda_hand", "panda_leftfinger", "panda_rightfinger") else 0.02
+        assert reach <= bound + 1e-4, (link, reach)  # 0.1 mm: the sample's spacing on the sphere
+
+
+@pytest.mark.parametrize("fingers", [0.04, 0.0])
+def test_builtin_panda_pairs_follow_the_rules_and_see_every_mesh_contact(fingers: float) -> None:
+    """Pairs are two bodies apart and apart at the default configuration; on 2000 fresh
+    random configurations (not the selection's), with the hand open and closed: every body
+    pair whose meshes touch has kept pairs, one of which overlaps in 98 % of the touching
+    samples and comes within 1.6 cm in all (measured; the selection's slack is 1 cm on its
+    own samples, 5 mm coverage of both surfaces cannot promise less); the pairs forbid 7 %
+    of the configurations where every mesh pair is 2 cm apart (22 spheres at 3 cm bulge:
+    they overlapped in every touching sample and forbade 1.3 %)."""
+    panda = panda_robot("fitted", fingers)
+    pairs = panda.self_collision_pairs
+    spheres, _ = _franka_spheres()
+    kinematics = franka_kinematics(fingers)
+    body_of = bodies(kinematics)
+    depth = [body_of[s.link] for s in spheres]
+    assert len(set(pairs)) == len(pairs) == 123
+    assert all(abs(depth[a] - depth[b]) >= 2 for a, b in pairs)
     centres, radii = panda.sphere_centers(panda.default_q), panda.sphere_radii
     assert min(np.linalg.norm(centres[a] - centres[b]) - radii[a] - radii[b] for a, b in pairs) > 0.01
-    kinematics = franka_kinematics()
-    body_of = bodies(kinematics)
     q = sample_configurations(kinematics, 2000, 12345)
     meshes = body_meshes(kinematics, body_of, set(range(8)))
     body_pairs = [(a, b) for a in range(8) for b in range(a + 2, 8)]
@@ -275,17 +316,20 @@ def test_builtin_panda_pairs_follow_the_rules_and_see_every_mesh_contact() -> No
     centres = sphere_centres(kinematics, spheres, q)
     kept = np.array(pairs)
     gaps = np.linalg.norm(centres[:, kept[:, 0]] - centres[:, kept[:, 1]], axis=2) - radii[kept[:, 0]] - radii[kept[:, 1]]
-    kept_bodies = [(depth[spheres[a].link], depth[spheres[b].link]) for a, b in pairs]
+    kept_bodies = [(depth[a], depth[b]) for a, b in pairs]
+    closest = []
     for body_pair, distance in distances.items():
         touching = distance <= 0.0
         if not touching.any():
             continue
         mine = [k for k, pair in enumerate(kept_bodies) if pair == body_pair]
         assert mine, body_pair
-        assert np.all(gaps[touching][:, mine].min(axis=1) < 0.0), body_pair
+        closest.append(gaps[touching][:, mine].min(axis=1))
+    seen = np.concatenate(closest)
+    assert len(seen) > 200 and np.mean(seen < 0.0) >= 0.95 and seen.max() <= 0.016, (np.mean(seen < 0.0), seen.max())
     apart = np.all([distance >= 0.02 for distance in distances.values()], axis=0)
     blocked = (gaps < 0.0).any(axis=1)
-    assert np.mean(blocked & apart) < 0.03
+    assert np.mean(blocked & apart) < 0.08
 
 
 def test_unknown_panda_sphere_model_is_refused() -> None:

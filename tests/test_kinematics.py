@@ -10,6 +10,7 @@ import pinocchio as pin
 import pytest
 
 from dynfab.robots import Kinematics, UnknownLinkError, parse_urdf
+from dynfab.robots.franka import PANDA_JOINTS
 
 PANDA_TEXT = resources.files("dynfab.robots").joinpath("data", "panda.urdf").read_text()
 
@@ -46,7 +47,8 @@ SMALL_TEXT = """<?xml version="1.0"?>
 
 @pytest.fixture(scope="module")
 def panda() -> Kinematics:
-    return Kinematics(parse_urdf(PANDA_TEXT))
+    """The built-in Panda's arm joints; the fingers locked closed (0, as pinocchio's q)."""
+    return Kinematics(parse_urdf(PANDA_TEXT), joints=PANDA_JOINTS)
 
 
 def _pin_placements(text: str, q_pin: np.ndarray) -> tuple[pin.Model, pin.Data]:
@@ -78,7 +80,9 @@ def _random_q(kin: Kinematics, rng: np.random.Generator) -> np.ndarray:
 def test_panda_structure(panda: Kinematics) -> None:
     assert panda.dof == 7
     assert panda.joint_names == tuple(f"panda_joint{i}" for i in range(1, 8))
-    assert panda.link_names == tuple(f"panda_link{i}" for i in range(9)) + ("panda_hand",)
+    assert panda.link_names == tuple(f"panda_link{i}" for i in range(9)) + (
+        "panda_hand_body", "panda_hand", "panda_leftfinger", "panda_rightfinger")
+    assert panda.locked == {"panda_finger_joint1": 0.0}
     np.testing.assert_allclose(panda.lower, [-2.8973, -1.7628, -2.8973, -3.0718,
                                              -2.8973, -0.0175, -2.8973])
     np.testing.assert_allclose(panda.upper, [2.8973, 1.7628, 2.8973, -0.0698,
@@ -90,7 +94,7 @@ def test_panda_every_link_matches_pinocchio(panda: Kinematics) -> None:
     rng = np.random.default_rng(0)
     for _ in range(25):
         q = _random_q(panda, rng)
-        model, data = _pin_placements(PANDA_TEXT, q)
+        model, data = _pin_placements(PANDA_TEXT, to_pinocchio_q(pin.buildModelFromXML(PANDA_TEXT), panda, q))
         for link in panda.link_names:
             expected = data.oMf[model.getFrameId(link)]
             transform = np.array(panda.transform(q, link))
@@ -115,7 +119,7 @@ def test_relative_to_parent_and_offset_match_pinocchio(panda: Kinematics) -> Non
     links = panda.link_names
     for _ in range(20):
         q = _random_q(panda, rng)
-        model, data = _pin_placements(PANDA_TEXT, q)
+        model, data = _pin_placements(PANDA_TEXT, to_pinocchio_q(pin.buildModelFromXML(PANDA_TEXT), panda, q))
         link, parent = rng.choice(links, size=2, replace=False)
         offset = rng.normal(size=3) * 0.1
         relative = data.oMf[model.getFrameId(parent)].actInv(
@@ -245,7 +249,7 @@ def test_unknown_link_names_link_and_valid_ones(panda: Kinematics) -> None:
 
 
 def test_subtree_root(panda: Kinematics) -> None:
-    sub = Kinematics(parse_urdf(PANDA_TEXT), root_link="panda_link4")
+    sub = Kinematics(parse_urdf(PANDA_TEXT), root_link="panda_link4", joints=PANDA_JOINTS[4:])
     assert sub.joint_names == ("panda_joint5", "panda_joint6", "panda_joint7")
     q = np.array([0.3, 1.2, -0.4])
     full_q = np.concatenate([[0.5, 0.2, -0.1, -1.7], q])

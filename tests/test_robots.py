@@ -27,10 +27,12 @@ def test_load_panda(panda: Robot) -> None:
     assert panda.goal_link == "panda_hand"
     assert not panda.planar
     np.testing.assert_array_equal(panda.default_q, Q0)
-    assert len(panda.collision_spheres) == 22  # fitted to Franka's meshes: test_collision_model.py
-    assert all(0.03 <= s.radius <= 0.11 for s in panda.collision_spheres)
+    assert len(panda.collision_spheres) == 75  # fitted to Franka's meshes: test_collision_model.py
+    assert all(0.005 <= s.radius <= 0.11 for s in panda.collision_spheres)
     covered = {s.link for s in panda.collision_spheres}
-    assert covered == {f"panda_link{i}" for i in range(8)}  # the hand is welded to panda_link7
+    assert covered == {f"panda_link{i}" for i in range(8)} | {"panda_hand_body", "panda_leftfinger",
+                                                              "panda_rightfinger"}
+    assert panda.kinematics.locked == {"panda_finger_joint1": 0.04}  # open: no planner coordinate
     with pytest.raises(ValueError):
         panda.default_q[0] = 0.0  # read-only
 
@@ -73,7 +75,9 @@ def _configurations(robot: Robot, count: int, seed: int) -> list[np.ndarray]:
 
 def test_panda_spheres_cover_every_joint_origin(panda: Robot) -> None:
     kin = panda.kinematics
-    chain = kin.link_names[kin.link_names.index("panda_link1"):]
+    # every joint origin of the arm, the hand body and the fingers; not panda_hand, the
+    # point between the open fingertips, where nothing is
+    chain = [link for link in kin.link_names[kin.link_names.index("panda_link1"):] if link != "panda_hand"]
     radii = panda.sphere_radii
     for q in _configurations(panda, 30, seed=5):
         centers = panda.sphere_centers(q)
@@ -84,12 +88,14 @@ def test_panda_spheres_cover_every_joint_origin(panda: Robot) -> None:
 
 
 def test_panda_spheres_cover_segments_between_joints(panda: Robot) -> None:
-    """Points along the straight segments between consecutive joint origins."""
+    """Points along the straight segments between consecutive joint origins, from the base
+    to the hand body."""
     kin = panda.kinematics
     radii = panda.sphere_radii
+    chain = [f"panda_link{i}" for i in range(9)] + ["panda_hand_body"]
     for q in _configurations(panda, 10, seed=6):
         centers = panda.sphere_centers(q)
-        origins = [np.array(kin.position(q, link)).ravel() for link in kin.link_names]
+        origins = [np.array(kin.position(q, link)).ravel() for link in chain]
         for start, end in zip(origins[1:-1], origins[2:]):
             for t in np.linspace(0.0, 1.0, 11):
                 point = start + t * (end - start)
@@ -98,13 +104,13 @@ def test_panda_spheres_cover_segments_between_joints(panda: Robot) -> None:
 
 def _joint_depth(link: str) -> int:
     """Number of actuated joints between the base and ``link``."""
-    return 7 if link in ("panda_link8", "panda_hand") else int(link[-1])
+    return int(link[-1]) if link[-1].isdigit() and link != "panda_link8" else 7
 
 
 def test_panda_self_collision_pairs(panda: Robot) -> None:
     spheres = panda.collision_spheres
     pairs = panda.self_collision_pairs
-    assert 20 <= len(pairs) <= 40
+    assert 100 <= len(pairs) <= 140
     assert len(set(pairs)) == len(pairs)
     for a, b in pairs:
         assert abs(_joint_depth(spheres[a].link) - _joint_depth(spheres[b].link)) >= 2
@@ -114,7 +120,7 @@ def test_panda_self_collision_pairs(panda: Robot) -> None:
     for a, b in pairs:
         clearance = (np.linalg.norm(centers[a] - centers[b])
                      - spheres[a].radius - spheres[b].radius)
-        assert clearance > 0.05, f"pair ({a}, {b}) in contact at the default configuration"
+        assert clearance > 0.04, f"pair ({a}, {b}) in contact at the default configuration"
     # at q = 0 (joint 4 just beyond its limit) Franka's meshes of the forearm and the hand
     # overlap by 4.1 cm (tests/test_collision_model.py measures the meshes); a pair sees it
     centers = panda.sphere_centers(np.zeros(7))

@@ -47,14 +47,15 @@ def test_box_is_covered_within_tolerance_by_spheres_inside_it() -> None:
     assert outside.max() <= 0.01 + 5e-4
     assert np.all(np.abs(centers) < size / 2)  # centres inside the box
     depth = (size / 2 - np.abs(centers)).min(axis=1)  # exact distance to the box surface
-    # the corners need spheres that reach out beyond max_bulge (or many more spheres); the
-    # reported bulge is the exact one
+    # the reported bulge is the exact one, and it keeps the bound even at the corners (which
+    # therefore need spheres of their own: 20 here, 14 when the last step could grow a
+    # sphere 1 cm beyond it)
     assert fit.bulge == pytest.approx(max((radii - depth).max(), 0.0), abs=1e-6)
-    assert fit.bulge <= 0.03
+    assert fit.bulge <= SphereFitParameters().max_bulge + 1e-12
     assert fit.coverage <= 0.01 + 1e-9
-    # a sphere centred at depth <= 0.04 m reaching <= 0.07 m covers a disc of radius
-    # <= sqrt(0.07^2 - 0.04^2) = 0.057 m of the 0.30 x 0.12 m top face: at least 4 are needed
-    assert 4 <= len(fit.spheres) <= 14
+    # a sphere centred at depth <= 0.04 m reaching <= 0.06 m covers a disc of radius
+    # <= sqrt(0.06^2 - 0.04^2) = 0.045 m of the 0.30 x 0.12 m top face: at least 4 are needed
+    assert 4 <= len(fit.spheres) <= 24
 
 
 def test_cylinder_is_covered_within_tolerance() -> None:

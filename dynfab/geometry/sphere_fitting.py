@@ -6,18 +6,24 @@ The fit (deterministic for a given seed):
    their outward face normals ``n``.
 2. Candidate centres on the inner medial axis by the *shrinking-ball* construction: for a
    sample ``p`` the largest ball tangent to the surface at ``p`` from inside (centre
-   ``p - r n``) that holds no other sample; ``r`` is then the distance of the centre to
-   the surface, so a candidate of radius ``R = r + max_bulge`` sticks out of the body by
-   at most ``max_bulge``.
-3. Set cover: a candidate covers the samples with ``|s - c| <= R + tolerance``; take the
-   one that covers most uncovered samples until all are covered and drop spheres whose
-   samples others cover (:mod:`dynfab.geometry.set_cover`), or, with ``fewest``, solve for
-   the fewest candidates that cover every sample.
+   ``p - r n``) that holds no other sample; ``r`` is then about the distance of the centre
+   to the surface.
+3. Set cover: a candidate may reach ``R = min(r, d) + max_bulge`` with ``d`` the depth of
+   its centre in the body (:func:`sphere_bulges`) and covers the samples with
+   ``|s - c| <= R + target``, ``target = tolerance - check_edge / sqrt(3)`` (what step 5
+   checks); take the one that covers most uncovered samples until all are covered and drop
+   spheres whose samples others cover (:mod:`dynfab.geometry.set_cover`), or, with
+   ``fewest``, solve for the fewest candidates that cover every sample.
 4. Refine: shrink every sphere to the smallest radius that still covers the samples
-   nearest to it.
+   nearest to it (never above its ``R``).
 5. Check on the vertices of the mesh subdivided to short edges (every surface point is
-   near one); vertices found outside join the fit set and the fit is repeated (at most a
-   few times); the last misses grow the radius of their nearest sphere.
+   near one); vertices found outside join the fit set and the fit is repeated (at most
+   :data:`_ROUNDS` times, samples covered within ``target - _MARGIN``).
+6. Misses left after the last round grow their nearest sphere, never beyond its ``R``;
+   the check points still outside get spheres of their own (steps 2-4 with those points
+   as the rows to cover). So every sphere keeps ``R <= d + max_bulge`` (the bulge bound
+   always holds), and a check point no candidate can reach is reported as measured
+   (:attr:`SphereFit.coverage` above ``tolerance``).
 
 Coverage of a surface point ``s`` by spheres ``(c_i, R_i)``:
 
@@ -46,6 +52,9 @@ __all__ = ["FittedSphere", "SphereFit", "SphereFitParameters", "check_points", "
 _SHRINK_ITERATIONS = 30
 #: Fit/verify rounds: a round adds the verification samples found outside to the fit set.
 _ROUNDS = 2
+#: The rounds cover their samples this much tighter than the check asks [m], so that most
+#: check points between samples are covered too (fewer misses left to step 6).
+_MARGIN = 0.001
 
 
 @dataclass(frozen=True)
@@ -129,13 +138,17 @@ def fit_spheres(meshes: Sequence[trimesh.Trimesh],
     check = check_points(parts, parameters.check_edge)
     target = parameters.tolerance - parameters.check_edge / np.sqrt(3.0)
     for _ in range(_ROUNDS):
-        centers, radii = _fit(parts, points, normals, parameters)
+        centers, radii, largest = _fit(parts, points, normals, points, parameters, target - _MARGIN)
         missed = outside_distances(check, centers, radii) > target
         if not missed.any():
             break
         points = np.vstack([points, check[missed]])
         normals = np.vstack([normals, _closest_normals(parts, check[missed])])
-    radii = _patched(check, centers, radii, target)
+    radii = _grown(check, centers, radii, largest, target)
+    missed = outside_distances(check, centers, radii) > target
+    if missed.any():
+        added, added_radii, _ = _fit(parts, points, normals, check[missed], parameters, target)
+        centers, radii = np.vstack([centers, added]), np.concatenate([radii, added_radii])
     outside = outside_distances(check, centers, radii).max(initial=0.0) + parameters.check_edge / np.sqrt(3.0)
     bulges = sphere_bulges(parts, centers, radii)
     spheres = tuple(FittedSphere(tuple(float(x) for x in c), float(r))  # type: ignore[arg-type]
@@ -253,31 +266,34 @@ def _closest_normals(parts: Sequence[trimesh.Trimesh], points: np.ndarray) -> np
     return normals
 
 
-def _patched(points: np.ndarray, centers: np.ndarray, radii: np.ndarray,
-             tolerance: float) -> np.ndarray:
-    """Radii grown so that every point is at most ``tolerance`` outside its nearest sphere."""
+def _fit(parts: Sequence[trimesh.Trimesh], points: np.ndarray, normals: np.ndarray, rows: np.ndarray,
+         parameters: SphereFitParameters, target: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Spheres covering ``rows`` within ``target`` [m]: shrinking-ball candidates of the
+    samples ``points`` (outward ``normals``) reaching at most ``min(r, depth) + max_bulge``,
+    a set cover of the rows (greedy and pruned, or the fewest), then radii shrunk to what
+    the rows nearest to each sphere need; centres (k, 3), radii (k,) and the largest
+    radii the bulge bound allows (k,) [m]."""
+    centers, inner = _medial_balls(points, normals)
+    reach = np.minimum(inner, _depths(parts, centers)) + parameters.max_bulge
+    cover = _cover_matrix(rows, centers, reach + target)
+    chosen = fewest_cover(cover) if parameters.fewest else prune(cover, greedy_cover(cover))
+    centers, largest = centers[chosen], reach[chosen]
+    gaps = np.linalg.norm(rows[:, None, :] - centers[None, :, :], axis=2)
+    owner = np.argmin(gaps - largest, axis=1)
+    needed = np.array([gaps[owner == k, k].max(initial=0.0) - target for k in range(len(chosen))])
+    return centers, np.minimum(np.maximum(needed, target), largest), largest
+
+
+def _grown(points: np.ndarray, centers: np.ndarray, radii: np.ndarray, largest: np.ndarray,
+           tolerance: float) -> np.ndarray:
+    """Radii grown so that every point is at most ``tolerance`` outside its nearest sphere,
+    each at most to its ``largest`` radius (a point that needs more stays outside)."""
     gaps = np.linalg.norm(points[:, None, :] - centers[None, :, :], axis=2) - radii
     owner = np.argmin(gaps, axis=1)
-    radii = radii.copy()
+    grown = radii.copy()
     for k in range(len(radii)):
-        radii[k] += max(gaps[owner == k, k].max(initial=-np.inf) - tolerance, 0.0)
-    return radii
-
-
-def _fit(parts: Sequence[trimesh.Trimesh], points: np.ndarray, normals: np.ndarray,
-         parameters: SphereFitParameters) -> tuple[np.ndarray, np.ndarray]:
-    """Shrinking-ball candidates, a set cover (greedy and pruned, or the fewest), then radii
-    at most ``depth + max_bulge`` shrunk to what the samples nearest to each sphere need."""
-    centers, inner = _medial_balls(points, normals)
-    cover = _cover_matrix(points, centers, inner + parameters.max_bulge + parameters.tolerance)
-    chosen = fewest_cover(cover) if parameters.fewest else prune(cover, greedy_cover(cover))
-    centers = centers[chosen]
-    largest = np.minimum(inner[chosen], _depths(parts, centers)) + parameters.max_bulge
-    gaps = np.linalg.norm(points[:, None, :] - centers[None, :, :], axis=2)
-    owner = np.argmin(gaps - largest, axis=1)
-    needed = np.array([gaps[owner == k, k].max(initial=0.0) - parameters.tolerance
-                       for k in range(len(chosen))])
-    return centers, np.clip(needed, parameters.tolerance, largest)
+        grown[k] += max(gaps[owner == k, k].max(initial=-np.inf) - tolerance, 0.0)
+    return np.minimum(grown, largest)
 
 
 def _medial_balls(points: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

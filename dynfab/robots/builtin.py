@@ -9,13 +9,14 @@ from importlib import resources
 
 import numpy as np
 
+from .franka import FINGER_JOINT, FINGER_RANGE, OPEN, PANDA_JOINTS
 from .kinematics import Kinematics
 from .panda_spheres import PANDA_FITTED_PAIRS, PANDA_FITTED_SPHERES
 from .limits import BOXER_ACCELERATION, FRANKA_ACCELERATION, MotionLimits
-from .robot import CollisionSphere, DifferentialDriveBase, Robot, default_limits
+from .robot import BASE_JOINTS, CollisionSphere, DifferentialDriveBase, Robot, default_limits
 from .urdf import load_urdf, parse_urdf
 
-__all__ = ["BUILTIN_ROBOTS", "UnknownRobotError", "load_robot", "panda_robot", "robot_from_urdf"]
+__all__ = ["BUILTIN_ROBOTS", "FINGERED_ROBOTS", "UnknownRobotError", "load_robot", "panda_robot", "robot_from_urdf"]
 
 
 class UnknownRobotError(ValueError):
@@ -48,9 +49,10 @@ _PANDA_SPHERES: tuple[tuple[str, str, tuple[float, float, float], float], ...] =
     ("fingertips", "panda_hand", (0.0, 0.0, -0.02), 0.04),
 )
 
-#: Which spheres the built-in ``panda`` uses: ``"fitted"`` (panda_spheres.py: 22 spheres
-#: fitted to Franka's collision meshes, none of whose surface points lies more than 1 cm
-#: outside them, and 30 pairs chosen on the meshes) or ``"hand-written"`` (the table above,
+#: Which spheres the built-in ``panda`` uses: ``"fitted"`` (panda_spheres.py: 75 spheres
+#: fitted to Franka's collision meshes of the arm, the hand and each finger, none of whose
+#: surface points lies more than 5 mm outside them, reaching at most 1 cm out of the hand
+#: and fingers and 2 cm elsewhere, and 123 pairs chosen on the meshes) or ``"hand-written"`` (the table above,
 #: the default until 2026-11: it leaves 29 % of the mesh surface more than 1 cm and 12 %
 #: more than 3 cm outside, up to 8.3 cm at PANDA_DEFAULT_Q, and its pairs let the meshes
 #: touch themselves in 11 of 50 Experiment-1 runs). ``panda_robot("hand-written")`` keeps
@@ -98,17 +100,18 @@ BOXER_DISC_RADIUS = 0.19
 BOXER_SPHERE_RADIUS = 0.24
 
 # Arm spheres that can reach the Boxer's body spheres: indices into PANDA_FITTED_SPHERES
-# (panda_link4's two, then panda_link5 to panda_link7) that come within 2 cm of a body
-# sphere (indices into _BOXER_BODY) in the closest of 100,000 uniform random arm
-# configurations within the joint limits (measured 2026-11-23; the other arm-body sphere
-# pairs stay at least 2.3 cm apart, panda_link0 sits on the plate and is left out). At
-# BOXER_PANDA_DEFAULT_Q all these pairs are more than 0.4 m apart.
+# (from panda_link4 on: the hand and the fingers included) that come within 2 cm of a
+# body sphere (indices into _BOXER_BODY) in the closest of 100,000 uniform random arm
+# configurations within the joint limits, the hand open and closed (measured 2026-11-25;
+# the other arm-body sphere pairs stay at least 2.06 cm apart; panda_link0 sits on the
+# plate and is left out, panda_link1 to panda_link3 never come near). At
+# BOXER_PANDA_DEFAULT_Q all these pairs are more than 0.5 m apart.
 _ALL_BODY = tuple(range(len(_BOXER_BODY)))
 _ARM_NEAR_BODY: tuple[tuple[int, tuple[int, ...]], ...] = (
-    (11, _ALL_BODY), (12, (0, 1, 2, 3))) + tuple((arm, _ALL_BODY) for arm in range(13, 22))
+    ((35, (2, 3)),) + tuple((arm, _ALL_BODY) for arm in range(36, 75) if arm != 40))
 
 
-def load_robot(name: str) -> Robot:
+def load_robot(name: str, fingers: float | None = None) -> Robot:
     """A built-in robot by name.
 
     Args:
@@ -117,15 +120,23 @@ def load_robot(name: str) -> Robot:
             ``"boxer"`` (Clearpath Boxer, differential drive, goal link ``base_link``,
             q = [x, y, yaw], planar) or ``"boxer-panda"`` (the Panda on a Boxer, goal
             link ``panda_hand``, q = [x, y, yaw, 7 arm joints]).
+        fingers: The Panda's opening per finger [m], ``0 <= fingers <= 0.04`` (Franka's
+            limits); None: open (:data:`~dynfab.robots.franka.OPEN`). Only for robots
+            with the Panda.
 
     Raises:
         UnknownRobotError: ``name`` is not built in; the message lists valid names.
+        ValueError: ``fingers`` for a robot without fingers, or outside Franka's limits.
     """
     factory = BUILTIN_ROBOTS.get(name)
     if factory is None:
         raise UnknownRobotError(f"unknown robot '{name}'; built-in robots: "
                                 f"{', '.join(BUILTIN_ROBOTS)}")
-    return factory()
+    if fingers is None:
+        return factory()
+    if name not in FINGERED_ROBOTS:
+        raise ValueError(f"fingers: the {name} has no fingers (only {', '.join(FINGERED_ROBOTS)})")
+    return FINGERED_ROBOTS[name](fingers)
 
 
 def robot_from_urdf(path: str | os.PathLike[str], goal_link: str,
@@ -174,27 +185,35 @@ def robot_from_urdf(path: str | os.PathLike[str], goal_link: str,
                  default_q=np.asarray(default_q, dtype=float), base=base)
 
 
-def _builtin_kinematics(filename: str) -> Kinematics:
-    """Kinematics of a URDF shipped in ``dynfab/robots/data``."""
+def _builtin_kinematics(filename: str, joints: Sequence[str] | None = None,
+                        fingers: float | None = None) -> Kinematics:
+    """Kinematics of a URDF shipped in ``dynfab/robots/data``; with ``fingers``, the active
+    ``joints`` and the Panda's fingers locked at that opening [m]."""
     text = resources.files(__package__).joinpath("data", filename).read_text("utf-8")
-    return Kinematics(parse_urdf(text))
+    if fingers is None:
+        return Kinematics(parse_urdf(text))
+    low, high = FINGER_RANGE
+    if not low <= fingers <= high:
+        raise ValueError(f"fingers: the opening per finger must be within {low:g} ... {high:g} m, got {fingers!r}")
+    return Kinematics(parse_urdf(text), joints=joints, locked={FINGER_JOINT: float(fingers)})
 
 
 def _panda() -> Robot:
-    """The Franka Panda with the spheres :data:`PANDA_SPHERE_MODEL` names."""
+    """The Franka Panda, hand open, with the spheres :data:`PANDA_SPHERE_MODEL` names."""
     return panda_robot(PANDA_SPHERE_MODEL)
 
 
-def panda_robot(sphere_model: str) -> Robot:
+def panda_robot(sphere_model: str, fingers: float = OPEN) -> Robot:
     """The Franka Panda with its ``"fitted"`` or ``"hand-written"`` collision spheres and
-    self-collision pairs (see :data:`PANDA_SPHERE_MODEL`).
+    self-collision pairs (see :data:`PANDA_SPHERE_MODEL`), the fingers locked at
+    ``fingers`` [m] per finger (0 closed ... 0.04 open).
 
     Raises:
-        ValueError: Another ``sphere_model``.
+        ValueError: Another ``sphere_model``, or ``fingers`` outside 0 ... 0.04.
     """
     if sphere_model not in ("fitted", "hand-written"):
         raise ValueError(f"panda sphere_model must be fitted or hand-written, got {sphere_model!r}")
-    kinematics = _builtin_kinematics("panda.urdf")
+    kinematics = _builtin_kinematics("panda.urdf", PANDA_JOINTS, fingers)
     if sphere_model == "fitted":
         spheres = tuple(CollisionSphere(link, center, radius) for link, center, radius in PANDA_FITTED_SPHERES)
         pairs = PANDA_FITTED_PAIRS
@@ -240,8 +259,9 @@ def _boxer() -> Robot:
                  base=BOXER_BASE, limits=_known_limits(kinematics, BOXER_BASE))
 
 
-def _boxer_panda() -> Robot:
-    """The Panda on a Boxer: six body spheres, then the Panda's fitted spheres.
+def _boxer_panda(fingers: float = OPEN) -> Robot:
+    """The Panda on a Boxer: six body spheres, then the Panda's fitted spheres; the fingers
+    locked at ``fingers`` [m] per finger.
 
     Self-collision pairs: the Panda's own, plus the arm spheres that can reach the body
     against the body spheres they can reach (``_ARM_NEAR_BODY``).
@@ -251,7 +271,7 @@ def _boxer_panda() -> Robot:
     offset = len(body)
     pairs = tuple((a + offset, b + offset) for a, b in PANDA_FITTED_PAIRS) + tuple(
         (b, a + offset) for a, near in _ARM_NEAR_BODY for b in near)
-    kinematics = _builtin_kinematics("boxer_panda.urdf")
+    kinematics = _builtin_kinematics("boxer_panda.urdf", BASE_JOINTS + PANDA_JOINTS, fingers)
     return Robot(name="boxer-panda", kinematics=kinematics,
                  goal_link="panda_hand", collision_spheres=body + arm,
                  self_collision_pairs=pairs, planar=False,
@@ -262,3 +282,6 @@ def _boxer_panda() -> Robot:
 #: Built-in robot names and their constructors.
 BUILTIN_ROBOTS: dict[str, Callable[[], Robot]] = {
     "panda": _panda, "point": _point, "boxer": _boxer, "boxer-panda": _boxer_panda}
+#: Built-in robots with the Panda's fingers: constructors taking the opening [m].
+FINGERED_ROBOTS: dict[str, Callable[[float], Robot]] = {
+    "panda": lambda fingers: panda_robot(PANDA_SPHERE_MODEL, fingers), "boxer-panda": _boxer_panda}

@@ -16,6 +16,7 @@ import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from types import MappingProxyType
 
 import numpy as np
 import trimesh
@@ -31,7 +32,7 @@ from .urdf import MeshFile, UrdfModel, load_urdf
 __all__ = ["CollisionModel", "LinkFit", "auto_collision_model", "cache_dir", "fit_body_spheres", "fit_link_spheres"]
 
 #: Bump when the fit or the file layout changes, so that old entries are not reused.
-_CACHE_VERSION = 3
+_CACHE_VERSION = 4
 
 
 @dataclass(frozen=True)
@@ -72,8 +73,10 @@ class CollisionModel:
 
 
 def fit_link_spheres(kinematics: Kinematics,
-                     parameters: SphereFitParameters = SphereFitParameters()) -> tuple[LinkFit, ...]:
-    """Spheres for every link of the tree with ``<collision>`` geometry.
+                     parameters: SphereFitParameters = SphereFitParameters(),
+                     per_link: Mapping[str, SphereFitParameters] = MappingProxyType({})) -> tuple[LinkFit, ...]:
+    """Spheres for every link of the tree with ``<collision>`` geometry, fitted with
+    ``per_link[link]`` where given, else with ``parameters``.
 
     Links welded to the root whose mesh files are missing are skipped (they never move
     and nothing can be learnt about them); for a link that moves it is an error.
@@ -94,7 +97,7 @@ def fit_link_spheres(kinematics: Kinematics,
             raise
         if not meshes:
             continue
-        fit = fit_spheres(meshes, parameters)
+        fit = fit_spheres(meshes, per_link.get(link, parameters))
         spheres = tuple(CollisionSphere(link, s.center, s.radius) for s in fit.spheres)
         fits.append(LinkFit(link=link, spheres=spheres, coverage=fit.coverage, bulge=fit.bulge))
     return tuple(fits)

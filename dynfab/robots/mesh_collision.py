@@ -17,10 +17,12 @@ and a pair of links is checked unless
 from __future__ import annotations
 
 import itertools
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
+import trimesh
 from numpy.typing import ArrayLike, NDArray
 
 from dynfab.geometry.exact_collision import MeshSet, exact_distance, mesh_set
@@ -65,19 +67,24 @@ class MeshCollisionModel:
         return flat.reshape(configurations.shape[0], len(self.links), 4, 4)
 
 
-def mesh_collision_model(kinematics: Kinematics, default_q: ArrayLike) -> MeshCollisionModel | None:
+def mesh_collision_model(kinematics: Kinematics, default_q: ArrayLike,
+                         link_meshes: Mapping[str, Sequence[trimesh.Trimesh]] | None = None
+                         ) -> MeshCollisionModel | None:
     """The mesh model of a robot; None if none of its links has collision geometry.
 
     Args:
         kinematics: Kinematics of a URDF robot (its ``model`` gives the meshes).
         default_q: Default configuration, where touching pairs are left out (module doc).
+        link_meshes: The meshes of each link in its frame, instead of the URDF's (a
+            built-in robot whose description has none: :mod:`dynfab.robots.builtin_meshes`).
 
     Raises:
         LinkMeshError: A collision mesh that is missing or unreadable (names link and URI).
     """
     links, meshes = [], []
     for link in kinematics.link_names:
-        found = link_collision_meshes(kinematics.model, link)
+        found = (link_collision_meshes(kinematics.model, link) if link_meshes is None
+                 else list(link_meshes.get(link, ())))
         if found:
             links.append(link)
             meshes.append(mesh_set(found))

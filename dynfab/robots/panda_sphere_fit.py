@@ -4,88 +4,125 @@ command that rewrites that file:
     python -m dynfab.robots.panda_sphere_fit > dynfab/robots/panda_spheres.py
 
 From Franka's collision meshes as example-robot-data ships them (``panda.urdf``, active
-joints ``panda_joint1..7``, the fingers locked closed), whose frames ``panda_link0`` ...
-``panda_link7`` are dynfab's (tests/test_robots.py checks the kinematics):
+joints ``panda_joint1..7``), whose frames ``panda_link0`` ... ``panda_link7``, ``panda_hand``
+(dynfab's ``panda_hand_body``) and the fingers are dynfab's (:mod:`dynfab.robots.franka`;
+tests/test_robots.py checks the kinematics):
 
-1. spheres per *body* (:func:`~dynfab.robots.collision_model.fit_body_spheres`): the
-   flange, hand and closed fingers are welded to ``panda_link7`` and fitted with it;
-   the fewest spheres (:attr:`PANDA_FIT`) with no mesh surface point more than 1 cm
-   outside and spheres reaching at most 3 cm out of the meshes (the fitter's last step may
-   grow a sphere over points it missed: 4.0 cm on ``panda_link7``);
+1. spheres per *link* (:func:`~dynfab.robots.collision_model.fit_link_spheres`), the
+   hand and each finger on their own so that the fingers' spheres move with the opening
+   a scenario sets: the fewest spheres with no mesh surface point more than 5 mm outside
+   (checked on the meshes subdivided to 2 mm edges) and spheres reaching at most
+   :data:`HAND_BULGE` out of the meshes at the hand and the fingers, :data:`ARM_BULGE`
+   elsewhere (the fit holds its bulge bound by construction; :data:`_HEADROOM` below it,
+   for step 3);
 2. a sphere of ``panda_link1`` whose centre lies within 1 cm of joint 1's axis is moved
    onto it, its radius grown by the shift (it still holds the old sphere, so coverage
-   is kept): a point on that axis never moves, and the planner leaves static spheres
-   out of obstacle avoidance (they cost nothing per step);
-3. numbers rounded to 0.1 mm, radii rounded up by one more 0.1 mm (coverage is kept);
-4. self-collision pairs on the meshes (:attr:`PANDA_PAIRS`): body pairs whose meshes come
-   within 2 cm in 10,000 random configurations, and per pair the fewest sphere pairs that
-   in each of those configurations see the bodies at most 2 cm farther apart than the
-   meshes are (2 cm = twice the coverage tolerance: what 1 cm coverage of both surfaces
-   can guarantee).
+   is kept), if its bulge stays within the bound: a point on that axis never moves, and
+   the planner leaves static spheres out of obstacle avoidance (they cost nothing per step);
+3. numbers rounded to 0.1 mm, radii rounded up by one more 0.1 mm (coverage is kept, the
+   bulge grows by at most 0.3 mm);
+4. self-collision pairs on the meshes (:attr:`PANDA_PAIRS`), selected with the hand
+   open and closed and united (the fingers are part of the hand's body for the
+   selection; the pairs hold at every opening in between to within the fingers' 4 cm
+   travel): body pairs whose meshes come within 2 cm in 10,000 random configurations,
+   and per pair the fewest sphere pairs that in each of those configurations see the
+   bodies at most 1 cm farther apart than the meshes are (twice the coverage tolerance).
 
-Why these choices (static fabric, exp1 and the benchmark scene of ``./run bench``: 5
-spheres, 2 boxes, a pose goal) is in the module docstring of ``panda_spheres.py``.
+The summary at the end of ``panda_spheres.py`` is measured on the final (snapped,
+rounded) spheres: coverage on the 2 mm check points plus their spacing bound, bulge as
+:func:`~dynfab.geometry.sphere_fitting.sphere_bulges` bounds it.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import replace
 
-from dynfab.geometry.sphere_fitting import SphereFitParameters
+import numpy as np
 
-from .collision_model import LinkFit, fit_body_spheres
-from .kinematics import Kinematics
-from .mesh_paths import resolve_uri
+from dynfab.geometry.sphere_fitting import SphereFitParameters, check_points, outside_distances, sphere_bulges
+
+from .collision_model import LinkFit, fit_link_spheres
+from .franka import DYNFAB_LINKS, OPEN, PANDA_URDF, franka_kinematics
+from .link_meshes import link_collision_meshes
 from .robot import CollisionSphere
 from .self_collision import PairSelection, select_pairs
-from .urdf import load_urdf
 
-__all__ = ["PANDA_FIT", "PANDA_JOINTS", "PANDA_PAIRS", "PANDA_URDF", "fit_panda", "franka_kinematics", "table_module"]
+# PANDA_URDF lives in dynfab.robots.franka; importers of it from here keep working.
+__all__ = ["ARM_BULGE", "HAND_BULGE", "HAND_LINKS", "PANDA_FIT", "PANDA_PAIRS", "PANDA_URDF", "TOLERANCE",
+           "fit_panda", "measured", "table_module"]
 
-#: Franka's Panda description as example-robot-data ships it.
-PANDA_URDF = "package://example-robot-data/robots/panda_description/urdf/panda.urdf"
-#: The arm's joints (the fingers are locked closed).
-PANDA_JOINTS = tuple(f"panda_joint{i}" for i in range(1, 8))
-#: Sphere fit: 1 cm coverage, at most 3 cm out of the meshes, the fewest spheres.
-PANDA_FIT = SphereFitParameters(tolerance=0.01, max_bulge=0.03, fewest=True)
-#: Pair selection on the meshes, 2 cm slack (see the module docstring).
-PANDA_PAIRS = PairSelection(samples=10000, margin=0.02, meshes=True, cover_slack=0.02)
+#: Largest distance of a mesh surface point outside the spheres [m].
+TOLERANCE = 0.005
+#: Largest distance a sphere reaches out of the meshes: hand and fingers, the rest [m].
+HAND_BULGE, ARM_BULGE = 0.01, 0.02
+#: Franka's links with the tighter bulge bound.
+HAND_LINKS = ("panda_hand", "panda_leftfinger", "panda_rightfinger")
+#: What step 3 may add to a bulge: 0.2 mm of radius, 0.09 mm of centre shift [m].
+_HEADROOM = 3e-4
+#: Sphere fit of the arm links (see the module docstring); the check edge of 2 mm leaves
+#: 3.8 mm of the 5 mm to the fit.
+PANDA_FIT = SphereFitParameters(tolerance=TOLERANCE, max_bulge=ARM_BULGE - _HEADROOM, check_edge=0.002,
+                                fewest=True)
+#: Pair selection on the meshes, 1 cm slack (see the module docstring).
+PANDA_PAIRS = PairSelection(samples=10000, margin=0.02, meshes=True, cover_slack=0.01)
 #: Largest shift of a ``panda_link1`` sphere onto joint 1's axis [m].
 AXIS_SNAP = 0.01
 #: Rounding step of the written numbers [m].
 _STEP = 1e-4
 
 
-def franka_kinematics() -> Kinematics:
-    """Kinematics of example-robot-data's Panda with the arm joints active.
+def _bound(link: str) -> float:
+    """The bulge bound of a Franka link [m]."""
+    return HAND_BULGE if link in HAND_LINKS else ARM_BULGE
+
+
+def fit_panda() -> tuple[tuple[LinkFit, ...], tuple[tuple[int, int], ...]]:
+    """Steps 1-4 of the module docstring: the fits per link (dynfab's link names; spheres
+    snapped and rounded; coverage and bulge measured on them) and the sphere pairs.
 
     Raises:
         FileNotFoundError: example-robot-data is not installed.
     """
-    path = resolve_uri(PANDA_URDF, None)
-    if path is None:
-        raise FileNotFoundError(f"{PANDA_URDF}: install dynfab[robots] (example-robot-data)")
-    return Kinematics(load_urdf(path), joints=PANDA_JOINTS)
-
-
-def fit_panda(kinematics: Kinematics) -> tuple[tuple[LinkFit, ...], tuple[tuple[int, int], ...]]:
-    """Steps 1-4 of the module docstring: the fits per body (spheres snapped and rounded;
-    coverage and bulge as fitted) and the sphere pairs."""
-    fits = tuple(replace(fit, spheres=tuple(_rounded(_onto_axis(s)) for s in fit.spheres))
-                 for fit in fit_body_spheres(kinematics, PANDA_FIT))
+    kinematics = franka_kinematics(OPEN)
+    hand = {link: SphereFitParameters(tolerance=TOLERANCE, max_bulge=HAND_BULGE - _HEADROOM,
+                                      check_edge=PANDA_FIT.check_edge, fewest=True) for link in HAND_LINKS}
+    fits = []
+    for fit in fit_link_spheres(kinematics, PANDA_FIT, hand):
+        meshes = link_collision_meshes(kinematics.model, fit.link)
+        spheres = tuple(_rounded(_onto_axis(s, meshes)) for s in fit.spheres)
+        fits.append(measured(LinkFit(fit.link, spheres, fit.coverage, fit.bulge), meshes))
     spheres = [s for fit in fits for s in fit.spheres]
-    return fits, select_pairs(kinematics, spheres, PANDA_PAIRS)
+    pairs = sorted(set(select_pairs(kinematics, spheres, PANDA_PAIRS))
+                   | set(select_pairs(franka_kinematics(0.0), spheres, PANDA_PAIRS)))
+    renamed = tuple(LinkFit(DYNFAB_LINKS[fit.link], tuple(CollisionSphere(DYNFAB_LINKS[s.link], s.center, s.radius)
+                                                          for s in fit.spheres), fit.coverage, fit.bulge)
+                    for fit in fits)
+    return renamed, tuple(pairs)
 
 
-def _onto_axis(sphere: CollisionSphere) -> CollisionSphere:
-    """A ``panda_link1`` sphere within :data:`AXIS_SNAP` of the z axis (joint 1) moved onto it."""
+def measured(fit: LinkFit, meshes: Sequence) -> LinkFit:
+    """``fit`` with its coverage and bulge measured on ``meshes`` (its link's, link frame):
+    coverage on the meshes' vertices subdivided to :attr:`PANDA_FIT` ``.check_edge`` plus
+    ``check_edge / sqrt(3)``, bulge bounded as :func:`sphere_bulges` does [m]."""
+    centres = np.array([s.center for s in fit.spheres])
+    radii = np.array([s.radius for s in fit.spheres])
+    edge = PANDA_FIT.check_edge
+    coverage = outside_distances(check_points(meshes, edge), centres, radii).max(initial=0.0) + edge / math.sqrt(3.0)
+    bulge = sphere_bulges(meshes, centres, radii).max(initial=0.0)
+    return LinkFit(fit.link, fit.spheres, float(coverage), float(bulge))
+
+
+def _onto_axis(sphere: CollisionSphere, meshes: Sequence) -> CollisionSphere:
+    """A ``panda_link1`` sphere within :data:`AXIS_SNAP` of the z axis (joint 1) moved onto
+    it, if its bulge stays within the bound."""
     x, y, z = sphere.center
     shift = math.hypot(x, y)
     if sphere.link != "panda_link1" or shift > AXIS_SNAP:
         return sphere
-    return CollisionSphere(sphere.link, (0.0, 0.0, z), sphere.radius + shift)
+    snapped = CollisionSphere(sphere.link, (0.0, 0.0, z), sphere.radius + shift)
+    bulge = sphere_bulges(meshes, np.array([snapped.center]), np.array([snapped.radius]))[0]
+    return snapped if bulge <= _bound(sphere.link) - _HEADROOM else sphere
 
 
 def _rounded(sphere: CollisionSphere) -> CollisionSphere:
@@ -114,10 +151,9 @@ def table_module(fits: Sequence[LinkFit], pairs: Sequence[tuple[int, int]], docs
 
 
 def _summary(fits: Sequence[LinkFit], pairs: Sequence[tuple[int, int]]) -> str:
-    """Per body: sphere count, coverage and bulge as fitted (snapping and rounding only
-    grow radii: coverage stays, bulge grows by at most the shift plus 0.2 mm)."""
-    rows = [f"    {fit.link:<12} {len(fit.spheres):>2} spheres, coverage {100 * fit.coverage:.2f} cm, "
-            f"bulge {100 * fit.bulge:.2f} cm" for fit in fits]
+    """Per link: sphere count, coverage and bulge, measured on the final spheres."""
+    rows = [f"    {fit.link:<17} {len(fit.spheres):>2} spheres, coverage {1000 * fit.coverage:.1f} mm, "
+            f"bulge {1000 * fit.bulge:.1f} mm" for fit in fits]
     total = sum(len(fit.spheres) for fit in fits)
     return "\n".join(rows + [f"    {total} spheres, {len(pairs)} self-collision pairs"])
 
@@ -127,7 +163,7 @@ def main() -> int:
     ``Fitted:``, a new summary, the new tables."""
     from . import panda_spheres
 
-    fits, pairs = fit_panda(franka_kinematics())
+    fits, pairs = fit_panda()
     head, _, _ = (panda_spheres.__doc__ or "").partition("Fitted:")
     print(table_module(fits, pairs, f"{head.rstrip()}\n\nFitted:\n\n{_summary(fits, pairs)}"), end="")
     return 0

@@ -1,43 +1,49 @@
 """The Panda's collision spheres fitted to Franka's collision meshes (example-robot-data),
 made and rewritten by ``python -m dynfab.robots.panda_sphere_fit`` (see that module for the
-steps: the fewest spheres per body with 1 cm coverage and 3 cm bulge (4.0 cm on
-``panda_link7``, where the fitter grew a sphere over points it had missed), the flange,
-hand and closed fingers fitted with ``panda_link7``, a ``panda_link1`` sphere moved onto
-joint 1's axis, pairs chosen on the meshes).
+steps: the fewest spheres per link, the hand body and each finger on their own, with 5 mm
+coverage and at most 1 cm bulge at the hand and the fingers, 2 cm elsewhere; a
+``panda_link1`` sphere moved onto joint 1's axis where the bound allows; pairs chosen on the
+meshes with the hand open and closed).
 
 Claims, checked in tests/test_collision_model.py: no point of the collision meshes lies more
-than 1.0 cm outside the spheres (vertices plus about 1 sample per 4 mm^2); on 2000 random
-configurations, wherever two bodies' meshes touch, one of the kept pairs overlaps.
+than 5 mm outside the spheres (vertices plus about 1 sample per 4 mm^2); no sphere reaches
+more than 1 cm out of the hand's and the fingers' meshes and 2 cm out of the others'
+(measured on the spheres' surfaces); on 2000 random configurations, open and closed,
+wherever two bodies' meshes touch a kept pair of theirs comes within 1.6 cm, and overlaps
+in 98 % of those configurations.
 
-Why these parameters (measured 2026-11-23 on the 2-core machine; static fabric; Experiment
-1 seeds 0-49, each model with its own scenarios; the scene of ``./run bench``: 5 spheres,
-2 boxes and a pose goal):
+Why (issue 19): the previous table (22 spheres, 1 cm coverage, 3 cm bulge, the flange,
+hand and closed fingers welded to ``panda_link7`` and fitted with it, 30 pairs) reached up
+to 4.0 cm out of the hand, so every MotionBenchMaker grasp goal (the open hand 2-10 mm
+around an object) was in collision for the fabric. Now the hand has its own body and
+fingers at the opening a scenario sets (``robot: {name: panda, fingers: 0.04}``).
 
-- the 13 hand-written spheres (``panda_robot("hand-written")``) leave up to 8.3 cm of the
-  meshes outside and their 19 pairs let the meshes touch themselves in 11 of 50 exp1 runs;
-- the first fit (1 cm, at most 2 cm bulge, greedy cover per link, every closest pair: 46
-  spheres, 152 pairs) took 2.7 times the scene's step time;
-- the fewest-sphere cover with per-body fits needs 22 spheres at 3 cm bulge (19 at 4 cm);
-  pairs chosen on the meshes drop the pairs only the spheres' bulge brings together, and
-  the covering rule keeps 30 instead of 65; together 1.37-1.41 times the hand-written
-  model's step time in the scene (``./run bench``), target 1.5;
-- 3 cm bulge keeps the robot about as slim as the hand-written spheres: the surface of
-  the sphere union lies on average 1.6 cm (at most 3.9 cm) out of the meshes, against 1.7
-  (8.2) cm; exp1: 49/50 reached without collision (one deadlock, seed 34), the meshes
-  never touch an obstacle nor themselves (hand-written: 50/50, meshes touch themselves in
-  11 runs).
+What it costs (measured 2026-11-25 on the 2-core machine, ``./run bench``, the scene of
+5 spheres, 2 boxes and a pose goal, static fabric, VM): 0.518 ms a step against 0.176 ms
+with the previous table, 2.9x (2.8x against the hand-written spheres timed in the same run
+as a control for the machine's load); compiled, ``./run bench``'s backends: C step
+67 us against 15 us, exported C 31 against 6.9 us, Boxer+Panda 220 against 47 us (about
+4.5x). That is above the 2.5x issue 19 accepts without a trade-off. Most of it is the
+obstacle leaves of 58 moving spheres (17 on ``panda_link0`` never move and cost nothing
+per step); the 123 pairs are about a third (VM: 0.40 ms without them). The trade-off on
+the table: the hand and fingers as here (19 spheres at 5 mm / 1 cm, what the grasp goals
+need) and the arm at the previous 1 cm / 3 cm (24 spheres), 43 spheres and 65 pairs,
+0.33 ms a step in the same scene, 1.9x.
 
 Fitted:
 
-    panda_link0   5 spheres, coverage 1.00 cm, bulge 3.41 cm
-    panda_link1   2 spheres, coverage 1.00 cm, bulge 3.19 cm
-    panda_link2   2 spheres, coverage 1.00 cm, bulge 3.22 cm
-    panda_link3   2 spheres, coverage 1.00 cm, bulge 3.22 cm
-    panda_link4   2 spheres, coverage 1.00 cm, bulge 2.77 cm
-    panda_link5   3 spheres, coverage 1.00 cm, bulge 3.36 cm
-    panda_link6   2 spheres, coverage 1.00 cm, bulge 3.19 cm
-    panda_link7   4 spheres, coverage 1.00 cm, bulge 4.03 cm
-    22 spheres, 30 self-collision pairs
+    panda_link0       17 spheres, coverage 4.9 mm, bulge 19.9 mm
+    panda_link1        6 spheres, coverage 4.5 mm, bulge 19.7 mm
+    panda_link2        6 spheres, coverage 4.9 mm, bulge 19.7 mm
+    panda_link3        6 spheres, coverage 4.8 mm, bulge 19.9 mm
+    panda_link4        6 spheres, coverage 4.9 mm, bulge 19.8 mm
+    panda_link5        7 spheres, coverage 4.2 mm, bulge 19.6 mm
+    panda_link6        4 spheres, coverage 4.7 mm, bulge 19.8 mm
+    panda_link7        4 spheres, coverage 4.7 mm, bulge 19.8 mm
+    panda_hand_body   11 spheres, coverage 4.8 mm, bulge 9.8 mm
+    panda_leftfinger   4 spheres, coverage 4.1 mm, bulge 9.9 mm
+    panda_rightfinger  4 spheres, coverage 4.0 mm, bulge 9.8 mm
+    75 spheres, 123 self-collision pairs
 """
 
 from __future__ import annotations
@@ -46,33 +52,96 @@ __all__ = ["PANDA_FITTED_PAIRS", "PANDA_FITTED_SPHERES"]
 
 #: (link, centre in the link frame [m], radius [m]).
 PANDA_FITTED_SPHERES: tuple[tuple[str, tuple[float, float, float], float], ...] = (
-    ("panda_link0", (-0.1091, -0.0176, 0.0276), 0.0616),
-    ("panda_link0", (-0.0088, 0.0204, 0.0553), 0.0863),
-    ("panda_link0", (-0.0859, 0.0342, 0.0337), 0.0658),
-    ("panda_link0", (-0.0115, -0.0003, 0.0700), 0.1002),
-    ("panda_link0", (-0.0311, -0.0377, 0.0428), 0.0745),
-    ("panda_link1", (0.0000, -0.0422, -0.0209), 0.0869),
-    ("panda_link1", (0.0000, 0.0000, -0.1288), 0.0903),
-    ("panda_link2", (0.0000, -0.1388, 0.0127), 0.0822),
-    ("panda_link2", (0.0004, -0.0215, 0.0427), 0.0869),
-    ("panda_link3", (0.0177, 0.0103, -0.0652), 0.0865),
-    ("panda_link3", (0.0601, 0.0419, -0.0204), 0.0874),
-    ("panda_link4", (-0.0705, 0.0706, 0.0083), 0.0803),
-    ("panda_link4", (-0.0201, 0.0204, 0.0389), 0.0846),
-    ("panda_link5", (0.0001, -0.0092, -0.2199), 0.0710),
-    ("panda_link5", (0.0000, 0.0306, -0.1480), 0.0864),
-    ("panda_link5", (0.0003, 0.0601, -0.0244), 0.0829),
-    ("panda_link6", (0.0738, 0.0030, 0.0030), 0.0740),
-    ("panda_link6", (0.0272, -0.0083, 0.0106), 0.0731),
-    ("panda_link7", (0.0122, 0.0090, 0.0864), 0.0608),
-    ("panda_link7", (-0.0364, -0.0365, 0.1302), 0.0626),
-    ("panda_link7", (0.0378, 0.0378, 0.1253), 0.0588),
-    ("panda_link7", (-0.0047, -0.0108, 0.1979), 0.0347),
+    ("panda_link0", (0.0326, 0.0220, 0.0291), 0.0484),
+    ("panda_link0", (0.0204, -0.0371, 0.0281), 0.0472),
+    ("panda_link0", (-0.0086, 0.0666, 0.0206), 0.0404),
+    ("panda_link0", (-0.0182, -0.0649, 0.0221), 0.0420),
+    ("panda_link0", (-0.0895, -0.0460, 0.0277), 0.0469),
+    ("panda_link0", (-0.1297, -0.0370, 0.0118), 0.0317),
+    ("panda_link0", (-0.0591, 0.0607, 0.0180), 0.0364),
+    ("panda_link0", (0.0231, -0.0078, 0.0422), 0.0610),
+    ("panda_link0", (-0.1318, 0.0116, 0.0149), 0.0347),
+    ("panda_link0", (-0.0009, -0.0015, 0.0787), 0.0812),
+    ("panda_link0", (-0.1079, 0.0414, 0.0235), 0.0427),
+    ("panda_link0", (-0.0535, -0.0028, 0.0556), 0.0754),
+    ("panda_link0", (-0.0139, -0.0461, 0.0373), 0.0570),
+    ("panda_link0", (-0.0953, -0.0420, 0.0281), 0.0457),
+    ("panda_link0", (0.0307, 0.0559, 0.0106), 0.0131),
+    ("panda_link0", (-0.0515, -0.0659, 0.0164), 0.0236),
+    ("panda_link0", (-0.1293, 0.0221, 0.0155), 0.0291),
+    ("panda_link1", (0.0002, -0.0053, -0.1365), 0.0742),
+    ("panda_link1", (0.0000, -0.0540, -0.0004), 0.0746),
+    ("panda_link1", (0.0004, -0.0265, -0.0468), 0.0734),
+    ("panda_link1", (0.0000, -0.0394, -0.0724), 0.0737),
+    ("panda_link1", (0.0135, 0.0134, -0.1556), 0.0552),
+    ("panda_link1", (-0.0097, 0.0043, -0.1481), 0.0635),
+    ("panda_link2", (-0.0015, -0.0104, 0.0361), 0.0720),
+    ("panda_link2", (0.0000, -0.0720, 0.0312), 0.0735),
+    ("panda_link2", (0.0000, -0.1388, 0.0127), 0.0722),
+    ("panda_link2", (-0.0019, -0.0128, 0.0752), 0.0650),
+    ("panda_link2", (0.0083, -0.1487, -0.0050), 0.0639),
+    ("panda_link2", (-0.0037, -0.1445, -0.0039), 0.0692),
+    ("panda_link3", (0.0802, 0.0402, -0.0023), 0.0730),
+    ("panda_link3", (0.0035, -0.0065, -0.0770), 0.0634),
+    ("panda_link3", (0.0346, 0.0201, -0.0536), 0.0772),
+    ("panda_link3", (-0.0092, -0.0070, -0.0816), 0.0578),
+    ("panda_link3", (-0.0175, 0.0227, -0.0959), 0.0449),
+    ("panda_link3", (0.0627, 0.0258, -0.0074), 0.0544),
+    ("panda_link4", (-0.0018, 0.0019, 0.0412), 0.0727),
+    ("panda_link4", (-0.0905, 0.0871, 0.0141), 0.0556),
+    ("panda_link4", (-0.0456, 0.0521, 0.0215), 0.0776),
+    ("panda_link4", (-0.0682, 0.0902, -0.0152), 0.0526),
+    ("panda_link4", (-0.0911, 0.0818, -0.0057), 0.0613),
+    ("panda_link4", (-0.0278, -0.0209, 0.0075), 0.0276),
+    ("panda_link5", (0.0049, -0.0071, -0.2182), 0.0622),
+    ("panda_link5", (0.0002, 0.0184, -0.2078), 0.0721),
+    ("panda_link5", (0.0001, 0.0549, -0.0491), 0.0691),
+    ("panda_link5", (-0.0021, -0.0035, -0.2154), 0.0661),
+    ("panda_link5", (-0.0001, 0.0396, -0.0960), 0.0689),
+    ("panda_link5", (-0.0001, 0.0625, -0.0040), 0.0687),
+    ("panda_link5", (0.0000, 0.0342, -0.1471), 0.0699),
+    ("panda_link6", (0.0004, 0.0053, 0.0150), 0.0592),
+    ("panda_link6", (0.0845, -0.0088, 0.0021), 0.0616),
+    ("panda_link6", (0.0681, 0.0382, 0.0042), 0.0607),
+    ("panda_link6", (0.0478, -0.0076, 0.0084), 0.0626),
+    ("panda_link7", (0.0258, 0.0214, 0.0787), 0.0465),
+    ("panda_link7", (0.0476, 0.0479, 0.0826), 0.0333),
+    ("panda_link7", (-0.0020, -0.0137, 0.0792), 0.0461),
+    ("panda_link7", (-0.0158, 0.0005, 0.0794), 0.0470),
+    ("panda_hand_body", (0.0012, -0.0059, 0.0096), 0.0380),
+    ("panda_hand_body", (0.0004, 0.0020, 0.0455), 0.0283),
+    ("panda_hand_body", (0.0007, -0.0367, 0.0433), 0.0293),
+    ("panda_hand_body", (0.0001, 0.0746, 0.0405), 0.0311),
+    ("panda_hand_body", (0.0005, 0.0718, 0.0158), 0.0329),
+    ("panda_hand_body", (-0.0006, 0.0396, 0.0443), 0.0280),
+    ("panda_hand_body", (0.0007, -0.0748, 0.0458), 0.0288),
+    ("panda_hand_body", (-0.0001, 0.0405, 0.0154), 0.0369),
+    ("panda_hand_body", (-0.0001, -0.0455, 0.0105), 0.0341),
+    ("panda_hand_body", (-0.0001, -0.0824, 0.0082), 0.0279),
+    ("panda_hand_body", (-0.0003, -0.0727, -0.0047), 0.0242),
+    ("panda_leftfinger", (0.0034, 0.0195, 0.0142), 0.0151),
+    ("panda_leftfinger", (0.0080, 0.0124, 0.0047), 0.0086),
+    ("panda_leftfinger", (-0.0040, 0.0180, 0.0084), 0.0162),
+    ("panda_leftfinger", (-0.0020, 0.0082, 0.0419), 0.0158),
+    ("panda_rightfinger", (-0.0025, -0.0178, 0.0113), 0.0162),
+    ("panda_rightfinger", (0.0008, -0.0169, 0.0171), 0.0134),
+    ("panda_rightfinger", (-0.0005, -0.0049, 0.0018), 0.0105),
+    ("panda_rightfinger", (0.0026, -0.0086, 0.0426), 0.0159),
 )
 
 #: Index pairs into PANDA_FITTED_SPHERES kept apart.
 PANDA_FITTED_PAIRS: tuple[tuple[int, int], ...] = (
-    (0, 15), (0, 16), (0, 18), (0, 20), (1, 18), (2, 17), (3, 15), (3, 16), (3, 17), (3, 19),
-    (3, 20), (4, 21), (5, 15), (5, 16), (5, 19), (5, 20), (5, 21), (6, 15), (6, 16), (6, 17),
-    (6, 18), (6, 19), (8, 14), (8, 16), (8, 19), (8, 20), (8, 21), (14, 19), (14, 20), (15, 20),
+    (0, 55), (0, 60), (1, 50), (2, 43), (2, 50), (2, 53), (2, 54), (2, 59), (3, 59), (4, 43),
+    (4, 45), (5, 43), (5, 51), (5, 52), (5, 70), (6, 53), (6, 62), (7, 46), (7, 48), (7, 53),
+    (7, 54), (7, 55), (7, 65), (7, 70), (8, 55), (9, 45), (9, 46), (9, 48), (9, 49), (9, 50),
+    (9, 52), (9, 53), (9, 54), (9, 55), (9, 56), (9, 58), (9, 59), (9, 63), (9, 65), (9, 74),
+    (10, 46), (10, 48), (10, 49), (10, 52), (10, 53), (10, 60), (10, 65), (10, 74), (11, 43), (11, 45),
+    (11, 46), (11, 48), (11, 50), (11, 51), (11, 52), (11, 59), (11, 62), (11, 65), (11, 70), (11, 74),
+    (12, 43), (12, 49), (12, 54), (12, 57), (12, 62), (13, 50), (13, 60), (17, 43), (17, 45), (17, 46),
+    (17, 48), (17, 49), (17, 50), (17, 53), (17, 54), (17, 56), (17, 59), (17, 62), (17, 64), (17, 70),
+    (17, 74), (18, 43), (18, 49), (18, 56), (18, 59), (18, 62), (18, 63), (18, 70), (18, 74), (19, 50),
+    (19, 53), (19, 54), (19, 57), (19, 59), (19, 60), (19, 70), (20, 49), (20, 62), (20, 70), (20, 72),
+    (23, 43), (23, 54), (23, 57), (23, 59), (23, 62), (23, 70), (23, 74), (24, 59), (24, 62), (24, 70),
+    (25, 69), (26, 43), (26, 49), (26, 50), (26, 59), (26, 62), (26, 70), (26, 74), (28, 70), (45, 53),
+    (45, 55), (45, 66), (46, 52),
 )

@@ -1,10 +1,14 @@
 """Collision metrics of URDF robots measured on their collision meshes (DESIGN.md section 6).
 
 Which robots: a robot that is not planar and has at least one link with ``<collision>``
-geometry (a URDF robot as it ships). The built-in robots (their URDFs carry no collision
-geometry), planar robots and URDFs without collision geometry keep the sphere figures:
-``clearance`` is the sphere clearance and ``self_collision`` / ``min_self_distance`` are
-None.
+geometry (a URDF robot as it ships), and the built-in ``panda`` and ``boxer-panda``
+(:mod:`dynfab.robots.builtin_meshes`): Franka's collision meshes from example-robot-data
+(links 0-7, the hand, the fingers at the scenario's opening; same frames) and, for
+``boxer-panda``, Clearpath's collision box of the Boxer's body. example-robot-data is in
+the ``robots`` / ``test`` extras, not the core: without it these two keep the sphere
+figures, as do the planar built-in robots (``point``, ``boxer``) and URDFs without collision
+geometry: ``clearance`` is the sphere clearance and ``self_collision`` /
+``min_self_distance`` are None.
 
 For a mesh robot the run's metrics become
 
@@ -27,6 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dynfab.geometry.shapes import Placement
+from dynfab.robots.builtin_meshes import builtin_collision_meshes
 from dynfab.robots.link_meshes import LinkMeshError
 from dynfab.robots.mesh_collision import MeshCollisionModel, mesh_collision_model
 from dynfab.robots.mesh_sweep import MeshSweep, PlacedShape
@@ -46,7 +51,7 @@ def mesh_model_for(robot: Robot) -> MeshCollisionModel | None:
     if robot.planar:
         return None
     try:
-        return mesh_collision_model(robot.kinematics, robot.default_q)
+        return mesh_collision_model(robot.kinematics, robot.default_q, builtin_collision_meshes(robot))
     except LinkMeshError as error:
         raise ScenarioError("robot.urdf", str(error)) from error
 

@@ -1,6 +1,6 @@
-"""The ``robot:`` key of a scenario: a built-in name or a URDF as it ships, with its
-active and locked joints, package folders and collision model (spheres and pairs, or
-``auto``)."""
+"""The ``robot:`` key of a scenario: a built-in name (or ``{name, fingers}``: the
+Panda's finger opening) or a URDF as it ships, with its active and locked joints, package
+folders and collision model (spheres and pairs, or ``auto``)."""
 
 from __future__ import annotations
 
@@ -22,6 +22,24 @@ from dynfab.scenario.ranges import MAX_JOINT_VALUE, MAX_SPHERE_TOLERANCE, Length
 
 
 BUILTIN_ROBOTS: tuple[str, ...] = ("panda", "point", "boxer", "boxer-panda")
+#: Built-in robots with the Panda's hand, whose finger opening a scenario may set.
+FINGERED_ROBOTS: tuple[str, ...] = ("panda", "boxer-panda")
+#: Franka's limits of the opening per finger [m] (dynfab.robots.franka.FINGER_RANGE).
+FINGERS_MIN, FINGERS_MAX = 0.0, 0.04
+
+
+@dataclass(frozen=True)
+class BuiltinRobotSpec:
+    """A built-in robot with options: ``robot: {name: panda, fingers: 0.02}``.
+
+    Attributes:
+        name: A name from :data:`BUILTIN_ROBOTS`.
+        fingers: The Panda's opening per finger [m], 0 (closed) ... 0.04 (open, the
+            default); only for :data:`FINGERED_ROBOTS`.
+    """
+
+    name: str
+    fingers: float | None = None
 
 
 @dataclass(frozen=True)
@@ -144,13 +162,34 @@ class UrdfRobotMapping(ScenarioModel):
         return self
 
 
-RobotMapping = tagged_union({"name": Annotated[str, Choice(BUILTIN_ROBOTS)], "mapping": UrdfRobotMapping}, None,
-                            "a built-in robot name or a mapping",
-                            lambda value: "name" if isinstance(value, str) else
-                            "mapping" if isinstance(value, Mapping) else None)
+class BuiltinRobotMapping(ScenarioModel):
+    """``robot:`` as ``{name: panda, fingers: 0.04}``: a built-in robot with options."""
+
+    expected: ClassVar[str] = "a built-in robot name or a mapping"
+    name: Annotated[str, Choice(BUILTIN_ROBOTS)]
+    fingers: Annotated[float, Range(FINGERS_MIN, FINGERS_MAX, unit=" m")] | None = None
+
+    @model_validator(mode="after")
+    def _fingers_need_a_hand(self) -> BuiltinRobotMapping:
+        if self.fingers is not None and self.name not in FINGERED_ROBOTS:
+            raise fail(f"the {self.name} has no fingers (only {', '.join(FINGERED_ROBOTS)})", "fingers")
+        return self
 
 
-def robot_spec(robot: str | UrdfRobotMapping, field: str, base_dir: Path) -> str | UrdfRobotSpec:
+def _robot_kind(value: Any) -> str | None:
+    if isinstance(value, str):
+        return "name"
+    if isinstance(value, Mapping):
+        return "builtin" if "name" in value and "urdf" not in value else "mapping"
+    return None
+
+
+RobotMapping = tagged_union({"name": Annotated[str, Choice(BUILTIN_ROBOTS)], "builtin": BuiltinRobotMapping,
+                             "mapping": UrdfRobotMapping}, None, "a built-in robot name or a mapping", _robot_kind)
+
+
+def robot_spec(robot: str | BuiltinRobotMapping | UrdfRobotMapping, field: str,
+               base_dir: Path) -> str | BuiltinRobotSpec | UrdfRobotSpec:
     """The robot value of a validated ``robot:`` key; a URDF path is resolved against
     ``base_dir`` and the package folders.
 
@@ -159,6 +198,8 @@ def robot_spec(robot: str | UrdfRobotMapping, field: str, base_dir: Path) -> str
     """
     if isinstance(robot, str):
         return robot
+    if isinstance(robot, BuiltinRobotMapping):
+        return BuiltinRobotSpec(robot.name, robot.fingers)
     package_dirs = tuple(base_dir / folder for folder in robot.package_dirs)
     urdf = resolve_uri(robot.urdf, base_dir, package_dirs)
     if urdf is None:

@@ -110,7 +110,7 @@ def _described_robot(scenario: Scenario) -> Robot:
                 raise ScenarioError(f"robot.{key}", rest) from error
             raise ScenarioError("robot.urdf", message) from error
     try:
-        return load_robot(spec)
+        return load_robot(spec) if isinstance(spec, str) else load_robot(spec.name, fingers=spec.fingers)
     except UnknownRobotError as error:
         raise ScenarioError("robot", str(error)) from error
 

@@ -42,7 +42,8 @@ from dynfab.scenario.ranges import (
     MAX_SPEED,
     MAX_STEPS,
 )
-from dynfab.scenario.robot_schema import BUILTIN_ROBOTS, CollisionSphereSpec, RobotMapping, UrdfRobotSpec, robot_spec
+from dynfab.scenario.robot_schema import (BUILTIN_ROBOTS, BuiltinRobotSpec, CollisionSphereSpec, RobotMapping,
+                                         UrdfRobotSpec, robot_spec)
 from dynfab.scenario.simulation_schema import CONTROL, DELAY, NOISE, SIMULATOR, Simulation
 from dynfab.scenario.yaml_loader import load_yaml_file
 
@@ -50,7 +51,7 @@ if TYPE_CHECKING:
     from dynfab.robots.limits import MotionLimits
     from dynfab.robots.robot import Robot
 
-__all__ = ["BUILTIN_ROBOTS", "DEFAULT_ANGLE_TOLERANCE", "OBSTACLE_TYPES", "PLANNERS", "TRAJECTORY_TYPES",
+__all__ = ["BUILTIN_ROBOTS", "BuiltinRobotSpec", "DEFAULT_ANGLE_TOLERANCE", "OBSTACLE_TYPES", "PLANNERS", "TRAJECTORY_TYPES",
            "CollisionSphereSpec", "FabricSpec", "GoalSpec", "GoalType", "InitialState", "ObstacleSpec", "ObstacleType",
            "Scenario", "ScenarioDocument", "ScenarioError", "Simulation", "UrdfRobotSpec", "load_scenario",
            "scenario_from_dict", "validate_for_robot"]
@@ -80,7 +81,8 @@ class Scenario:
     """A validated scenario file.
 
     Attributes:
-        robot: A name from :data:`BUILTIN_ROBOTS` or a URDF robot description.
+        robot: A name from :data:`BUILTIN_ROBOTS`, one with options (the Panda's finger
+            opening: :class:`BuiltinRobotSpec`) or a URDF robot description.
         planner: One of :data:`PLANNERS`.
         dt: Control period [s] (> 0).
         duration: Simulated time [s] (>= dt).
@@ -102,7 +104,7 @@ class Scenario:
             :mod:`dynfab.scenario.fabric_schema`); the planner's defaults where unset.
     """
 
-    robot: str | UrdfRobotSpec
+    robot: str | BuiltinRobotSpec | UrdfRobotSpec
     planner: str
     dt: float
     duration: float
