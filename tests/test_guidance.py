@@ -5,13 +5,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from toppra.parametrizer import ParametrizeConstAccel
 
 from dynfab.geometry.shapes import Box, Placement
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.guidance import GuidanceError, JointGuidance, JointTarget
 from dynfab.motion.inverse_kinematics import AxisTarget, PointTarget, solve_ik
 from dynfab.motion.joint_planning import JointPlannerSettings, NoPathError, plan_joint_path, polyline_samples
-from dynfab.motion.joint_trajectory import time_path
+from dynfab.motion.joint_trajectory import TimingSettings, _spline, _timed, time_path
 from dynfab.robots import load_robot
 from dynfab.scenario.runner import run_scenario
 from dynfab.scenario.schema import scenario_from_dict
@@ -70,6 +71,21 @@ def test_planned_path_is_free_everywhere_and_timed_within_the_limits(panda) -> N
     np.testing.assert_allclose(qdot[[0, -1]], 0.0, atol=1e-6)
     np.testing.assert_allclose(np.gradient(q, times, axis=0)[5:-5], qdot[5:-5], atol=0.02 * velocity.max())
     assert checker.batch(q)[:, 0].min() > -0.005   # the spline stays near the free polyline
+
+
+def test_timing_evaluates_as_toppras_constant_acceleration_parametrizer() -> None:
+    waypoints = np.array([[0.0, 0.0], [1.0, 0.5], [1.2, -0.4], [2.0, 0.0]])
+    path = _spline(polyline_samples(waypoints, 0.1))
+    timed = _timed(path, np.array([1.0, 0.8]), np.array([2.0, 3.0]), TimingSettings())
+    low, high = path.path_interval
+    gridpoints = np.linspace(low, high, 101)
+    toppras = ParametrizeConstAccel(path, gridpoints, timed._v)
+    np.testing.assert_allclose(timed._s, gridpoints)
+    assert timed.duration == pytest.approx(toppras.duration, rel=1e-12)
+    times = np.concatenate([np.linspace(0.0, timed.duration, 777), [timed.duration]])
+    for order in (0, 1, 2):
+        np.testing.assert_allclose(timed(times, order), toppras(times, order), rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(timed(0.3, 1), toppras(0.3, 1), rtol=1e-9, atol=1e-12)
 
 
 def test_blocked_goal_escapes_to_a_free_configuration_and_an_enclosed_one_fails(panda) -> None:

@@ -19,6 +19,7 @@ compiler, as numpy over the CasADi forward kinematics (the same numbers, slower)
 
 from __future__ import annotations
 
+import ctypes
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -36,6 +37,7 @@ __all__ = ["ConfigurationChecker", "PlacedObstacle"]
 
 _KIND: dict[type, int] = {Sphere: 0, Box: 1, Cylinder: 2, Capsule: 3, Plane: 4}
 _ROW = 17
+_ONE = ctypes.c_int(1)
 
 
 @dataclass(frozen=True)
@@ -66,6 +68,9 @@ class ConfigurationChecker:
         self._n = robot.dof
         self._q = np.zeros(self._n)
         self._q_pointer = as_pointer(self._q)
+        self._q_address = ctypes.c_void_p(self._q.ctypes.data)
+        self._margins = (math.nan, math.nan)
+        self._margin_values = (ctypes.c_double(math.nan), ctypes.c_double(math.nan))
         self._out = np.zeros(2)
         self._out_pointer = as_pointer(self._out)
         q = ca.SX.sym("q", self._n)
@@ -82,6 +87,8 @@ class ConfigurationChecker:
         self._obstacles = tuple(obstacles)
         self._rows = np.ascontiguousarray(np.array([_row(o) for o in self._obstacles]).reshape(-1, _ROW))
         self._rows_pointer = as_pointer(self._rows)
+        self._rows_address = ctypes.c_void_p(self._rows.ctypes.data)
+        self._count = ctypes.c_int(len(self._obstacles))
 
     def clearances(self, q: NDArray[np.float64]) -> tuple[float, float]:
         """``(c_obs, c_self)`` at one configuration [m]."""
@@ -108,9 +115,12 @@ class ConfigurationChecker:
         if self._library is None:
             obstacle, itself = self.clearances(q)
             return obstacle >= margin and itself >= self_margin
+        if (margin, self_margin) != self._margins:  # the planner asks with the same margins every time
+            self._margins = (margin, self_margin)
+            self._margin_values = (ctypes.c_double(margin), ctypes.c_double(self_margin))
         self._q[:] = q
-        return self._library.first_blocked(self._q_pointer, 1, self._rows_pointer, len(self._obstacles),
-                                           margin, self_margin) < 0
+        return self._library.first_blocked_unconverted(self._q_address, _ONE, self._rows_address, self._count,
+                                                       *self._margin_values) < 0
 
     def first_blocked(self, qs: NDArray[np.float64], margin: float, self_margin: float) -> int:
         """Index of the first row of ``qs`` (N, n) with ``c_obs < margin`` or

@@ -97,6 +97,7 @@ class _Validity:
 
     def __init__(self, checker: ConfigurationChecker, settings: JointPlannerSettings, n: int) -> None:
         self._checker = checker
+        self._free = checker.free  # bound once: OMPL calls __call__ for every configuration
         self._margin = settings.margin
         self._self_margin = settings.self_margin
         self._n = n
@@ -108,7 +109,7 @@ class _Validity:
 
     def __call__(self, state: ob.State) -> bool:
         self.count += 1
-        return self._checker.free(state[0:self._n], self._margin, self._self_margin)
+        return self._free(state[0:self._n], self._margin, self._self_margin)
 
 
 def plan_joint_path(checker: ConfigurationChecker, start: NDArray[np.float64], goal: NDArray[np.float64],
