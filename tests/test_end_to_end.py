@@ -21,9 +21,9 @@ SEEDS = range(10)
 
 
 def run_recording_controller(data: dict[str, Any]) -> tuple[RunResult, FabricController]:
-    """Run a scenario mapping as the paper would (no stall recovery) and also return the
-    controller the runner built for it."""
-    result = run_scenario(scenario_from_dict({**data, "recovery": False}))
+    """Run a scenario mapping as the paper would (the fabric alone: no global guidance, no
+    stall recovery) and also return the controller the runner built for it."""
+    result = run_scenario(scenario_from_dict({**data, "recovery": False, "guidance": False}))
     assert isinstance(result.controller, FabricController)
     return result, result.controller
 

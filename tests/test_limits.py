@@ -81,7 +81,7 @@ def test_limits_must_name_the_robots_velocity_coordinates():
 
 def _scenario_with_limits(tmp_path, limits) -> str:
     import yaml
-    data = {"robot": "panda", "planner": "static-fabric", "dt": 0.01, "duration": 1.0,
+    data = {"robot": "panda", "planner": "static-fabric", "dt": 0.01, "duration": 1.0, "guidance": False,
             "initial_state": {"q": [1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0]},
             "goal": [{"type": "position", "link": "panda_hand", "position": [0.5, 0.3, 0.5], "tolerance": 0.02}],
             "limits": limits}

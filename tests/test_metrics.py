@@ -24,6 +24,7 @@ JSON_KEYS = [
     "success", "goal_reached", "collision", "time_to_goal", "clearance",
     "path_length", "summed_error", "solver_time_ms", "steps", "orientation_error", "sphere_clearance",
     "self_collision", "min_self_distance", "max_velocity_ratio", "max_acceleration_ratio", "contacts",
+    "guided", "plans", "plan_time_ms", "recovered", "fallbacks", "failure", "final_distance",
 ]
 
 
