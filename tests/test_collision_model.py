@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from dynfab.geometry.sphere_fitting import outside_distances
+from dynfab.geometry.sphere_fitting import SphereFitParameters, outside_distances
 from dynfab.robots import Kinematics, load_urdf
 from dynfab.robots.builtin import panda_robot
 from dynfab.robots.collision_model import CollisionModel, auto_collision_model, fit_body_spheres, fit_link_spheres
@@ -26,7 +26,7 @@ ARMS = ("ur5", "kinova", "xarm7", "panda")
 #: Sphere count a typical arm link may need (the brief says about 10); the UR5's 0.55 m upper
 #: arm and Kinova's upper arm need more (see the report in the test below).
 TYPICAL_LINK_SPHERES = 10
-LONGEST_LINK_SPHERES = 20
+LONGEST_LINK_SPHERES = 25  # the UR5's upper arm: 24 since the bulge bound is strict (17 before)
 
 
 @pytest.fixture(scope="session")
@@ -61,7 +61,7 @@ def test_spheres_cover_every_link_mesh_within_1_cm(arm: tuple[str, CollisionMode
         # still within 1 cm, so the check is on all of the surface
         assert outside.max() <= 0.01 + 1e-9, (name, fit.link, outside.max())
         assert fit.coverage <= 0.01 + 1e-9
-        assert fit.bulge <= 0.035, (name, fit.link, fit.bulge)
+        assert fit.bulge <= SphereFitParameters().max_bulge + 1e-12, (name, fit.link, fit.bulge)
         counts[fit.link] = len(fit.spheres)
     assert np.median(list(counts.values())) <= TYPICAL_LINK_SPHERES, counts
     assert max(counts.values()) <= LONGEST_LINK_SPHERES, counts
