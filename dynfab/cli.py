@@ -22,7 +22,7 @@ from dynfab.fabric.backends import BACKENDS
 from dynfab.plot_command import add_plot_parser, plot_command
 from dynfab.scenario.recording import RecordingError, load_recording, run_recording, save_recording
 from dynfab.scenario.runner import RunResult, run_scenario
-from dynfab.scenario.schema import PLANNERS, Scenario, ScenarioError, load_scenario
+from dynfab.scenario.schema import PLANNERS, BuiltinRobotSpec, Scenario, ScenarioError, load_scenario
 from dynfab.tune_command import add_tune_parser, tune_command
 from dynfab.view_command import add_view_parser, view_command
 
@@ -262,7 +262,9 @@ def _check(recording_path: Path, scenario_path: Path, as_json: bool) -> int:
 def _run(path: Path, scenario: Scenario, video: VideoRecorder | None = None) -> RunResult:
     simulation = scenario.simulation
     under = (f", mujoco with {simulation.control} control" if simulation.simulator == "mujoco" else "")
-    header = (f"dynfab: {path.name}: robot {scenario.robot if isinstance(scenario.robot, str) else 'urdf'}, "
+    spec = scenario.robot
+    robot = spec if isinstance(spec, str) else spec.name if isinstance(spec, BuiltinRobotSpec) else "urdf"
+    header = (f"dynfab: {path.name}: robot {robot}, "
               f"planner {scenario.planner}, {scenario.duration:g} s at dt {scenario.dt:g} s{under}")
     return run_scenario(scenario, progress=_ProgressBar(header), observer=video)
 
