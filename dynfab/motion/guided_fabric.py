@@ -138,12 +138,11 @@ class GuidedFabric:
                 return
         dt = 0.0 if self._last_t is None else max(0.0, t - self._last_t)
         self._last_t = t
-        point = self._plan.trajectory.evaluate(self._tau)
-        lag = float(np.linalg.norm(q - point.position))
+        params = self.fabric.parameters
+        lag = float(np.linalg.norm(q - params.goal_position[0]))   # the reference at τ, written last tick
         rate = float(np.clip((settings.lag_stop - lag) / (settings.lag_stop - settings.lag_slow), 0.0, 1.0))
         self._tau += rate * dt
         point = self._plan.trajectory.evaluate(self._tau)
-        params = self.fabric.parameters
         params.goal_position[0][:] = point.position
         params.goal_velocity[0][:] = rate * point.velocity
         params.goal_acceleration[0][:] = rate**2 * point.acceleration
@@ -199,8 +198,10 @@ class GuidedFabric:
         self._plan = plan
         self._tau = 0.0
         self._last_t = t
+        self._hold(plan.trajectory.evaluate(0.0).position)   # the new reference's start, at rest
 
     def _hold(self, q: NDArray[np.float64]) -> None:
+        """Write the reference ``q`` at rest into the fabric's first goal."""
         params = self.fabric.parameters
         params.goal_position[0][:] = q
         params.goal_velocity[0][:] = 0.0

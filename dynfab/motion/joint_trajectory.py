@@ -68,9 +68,9 @@ class JointTrajectory(Trajectory):
     def _sample(self, times: np.ndarray) -> Samples:
         k = self._slowdown
         clipped = np.clip(times, 0.0, self.duration) / k
-        position = np.atleast_2d(self._timed(clipped))
-        velocity = np.atleast_2d(self._timed(clipped, 1)) / k
-        acceleration = np.atleast_2d(self._timed(clipped, 2)) / k**2
+        position, velocity, acceleration = self._timed.samples(clipped)
+        velocity /= k
+        acceleration /= k**2
         outside = (times < 0.0) | (times > self.duration)
         velocity[outside] = 0.0
         acceleration[outside] = 0.0
@@ -96,16 +96,25 @@ class ConstantAcceleration:
         self._t = np.concatenate([[0.0], np.cumsum(2.0 * ds / (self._v[:-1] + self._v[1:]))])
         self.duration = float(self._t[-1])
 
+    def samples(self, times: NDArray[np.float64]) -> Samples:
+        """``(q, q̇, q̈)`` at ``times`` (m,), each (m, n), sharing the path lookups."""
+        s, v, u = self._path_state(np.atleast_1d(np.asarray(times, dtype=float)))
+        first = self._path(s, 1)
+        return self._path(s), first * v[:, None], self._path(s, 2) * (v**2)[:, None] + first * u[:, None]
+
+    def _path_state(self, t: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64],
+                                                            NDArray[np.float64]]:
+        """``(s, ṡ, s̈)`` at the times ``t`` (m,)."""
+        i = np.clip(np.searchsorted(self._t, t, side="right") - 1, 0, self._u.size - 1)
+        dt = t - self._t[i]
+        u = self._u[i]
+        return self._s[i] + dt * self._v[i] + 0.5 * dt**2 * u, self._v[i] + dt * u, u
+
     def __call__(self, times: float | NDArray[np.float64], order: int = 0) -> NDArray[np.float64]:
         """``q``, ``q̇`` or ``q̈`` (``order`` 0, 1, 2) at ``times`` (m,) or a scalar: (m, n) or (n,)."""
         t = np.asarray(times, dtype=float)
         scalar = t.ndim == 0
-        t = np.atleast_1d(t)
-        i = np.clip(np.searchsorted(self._t, t, side="right") - 1, 0, self._u.size - 1)
-        dt = t - self._t[i]
-        u = self._u[i]
-        v = self._v[i] + dt * u
-        s = self._s[i] + dt * self._v[i] + 0.5 * dt**2 * u
+        s, v, u = self._path_state(np.atleast_1d(t))
         if order == 0:
             out = self._path(s)
         elif order == 1:
