@@ -3,10 +3,14 @@ joint limits are checked with the rest of the robot-dependent values, in
 :func:`dynfab.scenario.schema.validate_for_robot`.
 
 - No collision with an obstacle and no self-collision at ``t = 0``: on the collision
-  meshes for a robot that has them (scenario/exact_metrics.py), else on the collision
-  spheres (obstacle clearance ``d_o(R_oᵀ (p_i - c_o)) - r_i < 0`` with the exact signed
-  distance ``d_o`` of the obstacle's shape, in the plane of the shape's origin for planar
-  robots; self pairs ``||p_i - p_j|| - r_i - r_j < 0``).
+  meshes for a robot that has them (scenario/exact_metrics.py: URDF robots with collision
+  geometry, and the built-in ``panda`` and ``boxer-panda`` on Franka's meshes when
+  example-robot-data is installed), and then only on them: a start the meshes find free
+  is never refused because a sphere, which reaches up to 1-2 cm out of them, overlaps an
+  obstacle; else on the collision spheres (obstacle clearance
+  ``d_o(R_oᵀ (p_i - c_o)) - r_i < 0`` with the exact signed distance ``d_o`` of the
+  obstacle's shape, in the plane of the shape's origin for planar robots; self pairs
+  ``||p_i - p_j|| - r_i - r_j < 0``).
 """
 
 from __future__ import annotations
