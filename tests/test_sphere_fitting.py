@@ -116,3 +116,26 @@ def test_fewest_spheres_cover_an_l_shape_with_fewer_spheres_than_greedy() -> Non
     radii = np.array([s.radius for s in fewest.spheres])
     assert outside_distances(surface, centers, radii).max() <= 0.01 + 5e-4
     assert fewest.coverage <= 0.01 + 1e-9 and fewest.bulge <= 0.05
+
+
+def test_tight_fit_of_overlapping_boxes_keeps_both_bounds() -> None:
+    """Four overlapping small boxes (a Franka finger's collision geometry) at 5 mm coverage
+    and 1 cm bulge: the surface is covered within 5 mm and no sphere reaches more than
+    1 cm out of the union (a centre's depth in its deepest box, trimesh's signed distance,
+    is at most its depth in the union, so ``radius - depth`` bounds the reach)."""
+    boxes = []
+    for size, offset in (((0.022, 0.015, 0.020), (0.0, 0.0185, 0.011)), ((0.022, 0.0088, 0.0038), (0.0, 0.0068, 0.0022)),
+                         ((0.0175, 0.007, 0.0235), (0.0, 0.0159, 0.02835)), ((0.0175, 0.0152, 0.0185), (0.0, 0.0076, 0.04525))):
+        box = trimesh.creation.box(extents=size)
+        box.apply_translation(offset)
+        boxes.append(box)
+    parameters = SphereFitParameters(tolerance=0.005, max_bulge=0.01, check_edge=0.002, fewest=True)
+    fit = fit_spheres(boxes, parameters)
+    centers = np.array([s.center for s in fit.spheres])
+    radii = np.array([s.radius for s in fit.spheres])
+    surface = np.vstack([trimesh.sample.sample_surface(box, 4000, seed=5)[0] for box in boxes])
+    exposed = ~np.any([box.contains(surface) for box in boxes], axis=0)
+    assert outside_distances(surface[exposed], centers, radii).max() <= 0.005 + 1e-9
+    depth = np.max([np.maximum(trimesh.proximity.signed_distance(box, centers), 0.0) for box in boxes], axis=0)
+    assert np.all(radii - depth <= 0.01 + 1e-9), radii - depth
+    assert fit.bulge <= 0.01 + 1e-12 and fit.coverage <= 0.005 + 1e-9
