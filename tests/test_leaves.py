@@ -13,6 +13,7 @@ RNG = np.random.default_rng(5)
 
 
 @pytest.mark.parametrize("barrier", [Barrier(), Barrier(geometry_gain=5.0, energy_gain=0.5, horizon=0.2),
+                                     Barrier(geometry_gain=5.0, energy_gain=0.02, horizon=0.1, offset=0.005),
                                      Barrier(geometry=lambda x, xdot: -1.0 / x**2 * xdot**2, horizon=1.0)])
 def test_default_barrier_closed_form_equals_euler_lagrange(barrier: Barrier) -> None:
     closed = barrier.weighted_geometry()
@@ -45,3 +46,15 @@ def test_barrier_metric_active_only_while_approaching_within_range() -> None:
 def test_barrier_rejects_bad_parameters(kwargs: dict, message: str) -> None:
     with pytest.raises(ValueError, match=message):
         Barrier(**kwargs)
+
+
+def test_an_offset_barrier_is_the_plain_one_shifted_by_its_offset() -> None:
+    def evaluate(barrier: Barrier, x: float, xdot: float) -> list[np.ndarray]:
+        spec = barrier.weighted_geometry()
+        leaf = ca.Function("leaf", [spec.x, spec.xdot], [spec.M, spec.f_geometry, spec.f_energy])
+        return [np.asarray(v) for v in leaf(x, xdot)]
+
+    plain, shifted = Barrier(energy_gain=0.5, horizon=0.2), Barrier(energy_gain=0.5, horizon=0.2, offset=0.005)
+    for x, xdot in ((0.03, -0.2), (0.1, -1.0), (0.004, -0.5), (0.3, -0.1), (0.05, 0.3)):
+        np.testing.assert_allclose(evaluate(shifted, x + 0.005, xdot), evaluate(plain, x, xdot), rtol=1e-12, atol=1e-12)
+    assert evaluate(shifted, 0.004, -0.5)[0] > evaluate(plain, 0.004, -0.5)[0]   # 4 mm is 1 mm past the buffer

@@ -54,7 +54,8 @@ class GuidanceSettings:
         ik: inverse kinematics of task goals.
         timing: how the path is timed.
         speed: fraction of the velocity and acceleration limits the reference uses [-].
-        attempts: plans tried per request, each with the next seed [-].
+        attempts: plans tried per request, each with the next seed and twice the previous
+            one's time limit (1, 2, 4 s by default) [-].
         replans: plans at most in one run after the first [-].
         lag_slow: tracking error ``‖q − q_r‖`` at which the reference clock starts to slow [rad].
         lag_stop: tracking error at which it stops (the reference waits for the robot) [rad].
@@ -165,9 +166,9 @@ class JointGuidance:
         error: GuidanceError | None = None
         checks = 0
         for attempt in range(self.settings.attempts):
+            settings = replace(self.settings.path, time_limit=self.settings.path.time_limit * 2**attempt)
             try:
-                path = plan_joint_path(self.checker, start, target, self._lower, self._upper, self.settings.path,
-                                       seed + attempt)
+                path = plan_joint_path(self.checker, start, target, self._lower, self._upper, settings, seed + attempt)
             except NoPathError as failure:
                 error = GuidanceError(failure.reason, str(failure))
                 if failure.reason != "no_path":

@@ -45,11 +45,19 @@ from dynfab.scenario.schema import GoalSpec, Scenario
 
 __all__ = ["GuidedController", "guidance_refusal", "guided_planner_config", "make_scenario_controller"]
 
-#: gain ``k`` of the guided fabric's joint-space attractor [rad/s² per unit metric]; with the range
-#: below chosen on MBM problems 10-11 of the bookshelf and box types (object removed)
+#: The guided fabric's constants below were chosen on MBM problems 10-11 (gain, range) and 13-16
+#: (energy, buffer) of the shared set, object removed; results are reported on problems 17 on.
+#: gain ``k`` of the guided fabric's joint-space attractor [rad/s² per unit metric]
 GUIDED_GOAL_GAIN = 20.0
+#: ``α`` of that attractor [1/rad]: full pull until ``1/α`` from the goal
+GUIDED_GOAL_SHARPNESS = 10.0
 #: range of the guided fabric's obstacle leaves [m]: the plan keeps clear of what it knew
 GUIDED_OBSTACLE_RANGE = 0.1
+#: ``λ`` of the guided fabric's obstacle leaves [m²]
+GUIDED_OBSTACLE_ENERGY = 0.02
+#: clearance the guided fabric's obstacle leaves keep as a buffer [m]: the built-in Panda's
+#: spheres leave up to 5 mm of its meshes outside
+GUIDED_OBSTACLE_BUFFER = 0.005
 
 
 class GuidedController:
@@ -152,9 +160,11 @@ def guided_planner_config(robot: Robot, scenario: Scenario) -> PlannerConfig:
     """The guided fabric of a scenario: dynamic, its first goal the joint-space reference
     (attractor gain :data:`GUIDED_GOAL_GAIN`), obstacle leaves of range
     :data:`GUIDED_OBSTACLE_RANGE`, the scenario's obstacle slots; the ``fabric:`` block applies on top."""
-    barrier = Barrier(geometry_gain=5.0, energy_gain=0.5, horizon=GUIDED_OBSTACLE_RANGE)
+    barrier = Barrier(geometry_gain=5.0, energy_gain=GUIDED_OBSTACLE_ENERGY, horizon=GUIDED_OBSTACLE_RANGE,
+                      offset=GUIDED_OBSTACLE_BUFFER)
     spheres = sum(obstacle.type == "sphere" for obstacle in scenario.obstacles)
-    return PlannerConfig(goals=(guided_goal_config(attractor=GoalAttractor(gain=GUIDED_GOAL_GAIN)),),
+    attractor = GoalAttractor(gain=GUIDED_GOAL_GAIN, sharpness=GUIDED_GOAL_SHARPNESS)
+    return PlannerConfig(goals=(guided_goal_config(attractor=attractor),),
                          obstacle_slots=spheres, shape_slots=shape_slots_of(scenario.obstacles), dynamic=True,
                          obstacle_avoidance=SphereObstacleAvoidance(barrier),
                          shape_avoidance=ShapeObstacleAvoidance(barrier),

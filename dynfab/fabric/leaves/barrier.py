@@ -13,6 +13,10 @@ energy:
 
 ``x`` is clamped below at ``min_clearance`` so metric and forces stay finite when a sphere
 overlaps the robot (the leaf then pushes as hard as its clamp allows).
+
+With an ``offset`` ``δ`` the leaf acts on ``x − δ`` in place of ``x``: it keeps ``δ`` of the
+clearance as a buffer (collision spheres that leave up to ``δ`` of a robot's meshes outside
+them then keep the meshes clear).
 """
 
 from __future__ import annotations
@@ -39,6 +43,7 @@ class Barrier:
         energy_gain: ``λ`` in ``L_e = λ (1 − H(ẋ)) ẋ² (1/x − 1/r)₊²`` [m²].
         horizon: the range ``r`` beyond which the leaf is inactive [m or rad].
         min_clearance: clamp of ``x`` used inside ``h`` and ``L_e`` [m or rad].
+        offset: ``δ``, the clearance kept as a buffer: the leaf acts on ``x − δ`` [m or rad].
         geometry: optional replacement ``h(x, ẋ)``; receives the clamped ``x``.
         energy: optional replacement ``L_e(x, ẋ)``; receives the clamped ``x``.
     """
@@ -47,6 +52,7 @@ class Barrier:
     energy_gain: float = 0.1
     horizon: float = 0.3
     min_clearance: float = 1e-3
+    offset: float = 0.0
     geometry: GeometryFunction | None = None
     energy: EnergyFunction | None = None
 
@@ -69,7 +75,7 @@ class Barrier:
         """
         x = ca.SX.sym("x", 1)
         xdot = ca.SX.sym("xdot", 1)
-        clearance = ca.fmax(x, self.min_clearance)
+        clearance = ca.fmax(x - self.offset, self.min_clearance)
         geometry = self.geometry or _default_geometry(self.geometry_gain)
         h = geometry(clearance, xdot)
         if self.energy is not None:
@@ -78,7 +84,7 @@ class Barrier:
         reach = ca.fmax(0, inverse - 1 / self.horizon)
         gate = 1 - ca.heaviside(xdot)
         metric = 2 * self.energy_gain * reach**2 * gate
-        unclamped = x > self.min_clearance
+        unclamped = x - self.offset > self.min_clearance
         f_energy = -2 * self.energy_gain * reach * gate * xdot**2 * inverse**2 * unclamped
         return WeightedGeometry(metric, metric * h, f_energy, x, xdot)
 
@@ -87,7 +93,7 @@ class Barrier:
         x = ca.SX.sym("x", 1)
         xdot = ca.SX.sym("xdot", 1)
         energy = self.energy or _default_energy(self.energy_gain, self.horizon)
-        return Lagrangian(energy(ca.fmax(x, self.min_clearance), xdot), x, xdot)
+        return Lagrangian(energy(ca.fmax(x - self.offset, self.min_clearance), xdot), x, xdot)
 
 
 def _default_geometry(gain: float) -> GeometryFunction:
