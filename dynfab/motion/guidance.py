@@ -62,6 +62,8 @@ class GuidanceSettings:
         check_period: how often the reference ahead is checked against what moves [s].
         check_horizon: how far ahead it is checked [s].
         stall_window: time without progress after which the run has stalled [s].
+        stall_rate: least mean rate of the reference's clock over ``stall_window`` while it
+            runs [-].
         stall_progress: progress expected within ``stall_window``, as a fraction of the
             goal's initial joint-space distance (at least ``stall_floor``) [-].
         stall_floor: smallest progress expected within ``stall_window`` [rad].
@@ -78,6 +80,7 @@ class GuidanceSettings:
     check_period: float = 0.1
     check_horizon: float = 1.0
     stall_window: float = 2.0
+    stall_rate: float = 0.25
     stall_progress: float = 0.05
     stall_floor: float = 0.02
 

@@ -19,9 +19,12 @@ It replans from where the robot is (at most ``replans`` times) when
 
 - the reference within ``check_horizon`` ahead meets an obstacle given as moving
   (checked every ``check_period``), or
-- the run stalls: the joint-space distance to the goal configuration has not come
+- the run stalls: while the reference runs, its clock ``τ`` has not advanced by
+  ``stall_rate · stall_window`` within ``stall_window`` seconds (the robot is held back);
+  once it has ended, the joint-space distance to the goal configuration has not come
   ``max(stall_floor, stall_progress · d₀)`` below its best for ``stall_window`` seconds
-  (``d₀``: its distance when the goal was set, so the test scales with the motion asked for).
+  (``d₀``: its distance when the goal was set, so the test scales with the motion asked
+  for). A detour that leads away from the goal is progress as long as it is followed.
 
 Replans plan among the static obstacles and the moving ones where they are now. If no
 plan can be made the reference holds the configuration the robot had (the fabric then
@@ -103,6 +106,7 @@ class GuidedFabric:
         self._next_check = 0.0
         self._best = np.inf
         self._best_time = 0.0
+        self._ended_seen = False
         self._progress_needed = settings.stall_floor
         self._seed = 0
 
@@ -157,10 +161,16 @@ class GuidedFabric:
         """Whether the reference is blocked ahead by something moving, or progress stalled."""
         assert self._plan is not None
         settings = self._settings
-        distance = float(np.linalg.norm(q - self._plan.goal))
-        if distance < self._best - self._progress_needed:
-            self._best, self._best_time = distance, t
-        if distance > settings.stall_floor and t - self._best_time > settings.stall_window:
+        if self._tau < self._plan.trajectory.duration:  # on the way: the reference's clock must advance
+            progress, needed = -self._tau, settings.stall_rate * settings.stall_window
+            at_goal = False
+        else:  # the reference has ended: the robot must close in on the goal configuration
+            progress, needed = float(np.linalg.norm(q - self._plan.goal)), self._progress_needed
+            at_goal = progress <= settings.stall_floor
+        if progress < self._best - needed or not self._ended_seen and self._tau >= self._plan.trajectory.duration:
+            self._ended_seen = self._tau >= self._plan.trajectory.duration
+            self._best, self._best_time = progress, t
+        if not at_goal and t - self._best_time > settings.stall_window:
             self.status = replace(self.status, replans_stalled=self.status.replans_stalled + 1)
             return True
         if moving and t >= self._next_check:
@@ -188,7 +198,7 @@ class GuidedFabric:
                               plan_time_ms=elapsed_ms if status.plan_time_ms is None else status.plan_time_ms,
                               plan_times_ms=status.plan_times_ms + (elapsed_ms,), failure=failure)
         self.failure_message = message
-        self._best, self._best_time = np.inf, t
+        self._best, self._best_time, self._ended_seen = np.inf, t, False
         self._next_check = t
         if plan is None:
             if first:
