@@ -17,9 +17,12 @@ from dynfab.fabric import c_backend
 from dynfab.fabric.fingerprint import canonical, inputs_digest
 from dynfab.fabric.planner import FabricPlanner, GoalConfig, PlannerConfig
 from dynfab.robots import load_robot
+from dynfab.robots.builtin import panda_robot
 from dynfab.robots.robot import CollisionSphere
 
-PANDA = load_robot("panda")
+#: the Panda with its 13 hand-written spheres: what these tests check does not depend on the
+#: collision model, and the built-in one (75 spheres) takes minutes to compile
+PANDA = panda_robot("hand-written")
 HAND_GOAL = (GoalConfig(link="panda_hand"),)
 needs_compiler = pytest.mark.skipif(c_backend.find_compiler() is None, reason="no C compiler")
 
@@ -41,7 +44,7 @@ def _both(robot_name: str, config: PlannerConfig) -> tuple[FabricPlanner, Fabric
 CASES = {
     "static": ("panda", PlannerConfig(goals=HAND_GOAL, obstacle_slots=2)),
     "dynamic": ("panda", PlannerConfig(goals=HAND_GOAL, obstacle_slots=2, dynamic=True)),
-    "base": ("boxer-panda", PlannerConfig.for_robot(load_robot("boxer-panda"), HAND_GOAL, obstacle_slots=2)),
+    "base": ("boxer", PlannerConfig.for_robot(load_robot("boxer"), (GoalConfig(link="base_link"),), obstacle_slots=2)),
     "jerk-limited": ("panda", PlannerConfig(goals=HAND_GOAL, obstacle_slots=1,
                                             limits=dataclasses.replace(PANDA.limits, jerk=np.full(7, 50.0)))),
 }
@@ -90,8 +93,8 @@ def _build_in_new_process(cache: Path, obstacle_slots: int) -> None:
     """Build a C planner in another process, so that this one never maps the library
     the test then damages."""
     code = ("from dynfab.fabric.planner import FabricPlanner, GoalConfig, PlannerConfig; "
-            "from dynfab.robots import load_robot; "
-            f"FabricPlanner(load_robot('panda'), PlannerConfig(goals=(GoalConfig(link='panda_hand'),), "
+            "from dynfab.robots.builtin import panda_robot; "
+            f"FabricPlanner(panda_robot('hand-written'), PlannerConfig(goals=(GoalConfig(link='panda_hand'),), "
             f"obstacle_slots={obstacle_slots}, backend='c'))")
     subprocess.run([sys.executable, "-c", code], check=True, capture_output=True,
                    env={**os.environ, "DYNFAB_CACHE_DIR": str(cache)})
@@ -147,7 +150,8 @@ def test_inputs_digest_follows_robot_and_config() -> None:
     config = PlannerConfig(goals=HAND_GOAL, obstacle_slots=2)
     same = PlannerConfig(goals=(GoalConfig(link="panda_hand"),), obstacle_slots=2)
     assert canonical(config) == canonical(same)
-    assert inputs_digest(PANDA, config) == inputs_digest(load_robot("panda"), same)
+    assert inputs_digest(PANDA, config) == inputs_digest(panda_robot("hand-written"), same)
+    assert inputs_digest(PANDA, config) != inputs_digest(load_robot("panda"), same)
     assert inputs_digest(PANDA, config) != inputs_digest(PANDA, dataclasses.replace(config, obstacle_slots=3))
     spheres = list(PANDA.collision_spheres)
     spheres[0] = CollisionSphere(spheres[0].link, spheres[0].center, spheres[0].radius + 1e-9)
@@ -178,18 +182,21 @@ def test_planner_with_a_python_callable_compiles_and_is_found_by_its_code(
 
 @needs_compiler
 def test_run_with_backend_c_gives_the_vm_metrics(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    from test_cli import VALID, write_scenario
+    from test_cli import write_scenario
 
     from dynfab.cli import main
 
-    path = write_scenario(tmp_path, VALID)
+    point = {"robot": "point", "planner": "static-fabric", "dt": 0.01, "duration": 8.0,
+             "initial_state": {"q": [0.0, 0.0]}, "goal": [{"type": "position", "position": [2.0, 0.5]}],
+             "obstacles": [{"type": "sphere", "position": [1.0, 0.3], "radius": 0.3}]}
+    path = write_scenario(tmp_path, point)
     assert main(["run", str(path), "--json"]) == 0
     vm = json.loads(capsys.readouterr().out)
     assert main(["run", str(path), "--json", "--backend", "c"]) == 0
     compiled = json.loads(capsys.readouterr().out)
     assert compiled.pop("solver_time_ms") > 0 and vm.pop("solver_time_ms") > 0
     assert compiled == vm and compiled["success"]
-    assert main(["run", str(write_scenario(tmp_path, {**VALID, "backend": "c"}, "c.yaml")), "--json"]) == 0
+    assert main(["run", str(write_scenario(tmp_path, {**point, "backend": "c"}, "c.yaml")), "--json"]) == 0
     from_key = json.loads(capsys.readouterr().out)
     from_key.pop("solver_time_ms")
     assert from_key == vm
