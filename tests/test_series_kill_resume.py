@@ -32,7 +32,7 @@ def _results(lines: list[str]) -> dict[tuple[int, str], dict]:
     results = {}
     for line in lines:
         record = json.loads(line)
-        metrics = {k: v for k, v in record["metrics"].items() if k != "solver_time_ms"}
+        metrics = {k: v for k, v in record["metrics"].items() if k not in ("solver_time_ms", "plan_time_ms")}
         results[(record["seed"], record["planner"])] = metrics
     return results
 
