@@ -22,6 +22,7 @@ from dynfab.scenario.recording import load_recording
 from dynfab.scenario.runner import robot_for, run_scenario
 from dynfab.scenario.schema import scenario_from_dict
 
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 UR5_START = [0.0, -1.57, 1.57, -1.57, -1.57, 0.0]
 #: The tool swings a quarter turn about the base; the forearm sweeps through (0.165, 0.113, 0.514).
 UR5: dict[str, Any] = {
@@ -215,30 +216,36 @@ def test_start_in_self_collision_on_meshes(tmp_path: Path, capsys: pytest.Captur
     assert any(f"links '{a}' and '{b}' touch" in message for a, b in touching)
 
 
+#: a robot measured by its spheres: the planar arm of examples/custom_urdf (no collision meshes)
+ARM = {**yaml.safe_load((EXAMPLES / "custom_urdf" / "arm_spheres.yaml").read_text(encoding="utf-8")),
+       "duration": 1.0}
+ARM["robot"] = {**ARM["robot"], "urdf": str(EXAMPLES / "custom_urdf" / "arm.urdf")}
+
+
 def test_start_in_collision_on_spheres(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    panda = load_robot("panda")
-    hand = [float(x) for x in np.asarray(panda.kinematics.position(PANDA["initial_state"]["q"], "panda_hand")).ravel()]
-    message = error_of(scenario_file(tmp_path, PANDA, obstacles=[{"type": "sphere", "position": hand,
-                                                                  "radius": 0.05}]), capsys)
+    arm = robot_for(scenario_from_dict(ARM))
+    tool = [float(x) for x in np.asarray(arm.kinematics.position(ARM["initial_state"]["q"], "tool")).ravel()[:2]]
+    message = error_of(scenario_file(tmp_path, ARM, obstacles=[{"type": "sphere", "position": tool,
+                                                               "radius": 0.05}]), capsys)
     assert "the start state is in collision: collision sphere" in message and "overlaps obstacles[0]" in message
     rng = np.random.default_rng(5)
-    lower, upper = panda.kinematics.lower, panda.kinematics.upper
+    lower, upper = arm.kinematics.lower, arm.kinematics.upper
     for _ in range(2000):  # a configuration where two spheres of a self-collision pair overlap
-        q = rng.uniform(lower, upper)
-        centers, radii = panda.sphere_centers(q), panda.sphere_radii
-        if any(np.linalg.norm(centers[i] - centers[j]) < radii[i] + radii[j] for i, j in panda.self_collision_pairs):
+        q = rng.uniform(np.maximum(lower, -np.pi), np.minimum(upper, np.pi))
+        centers, radii = arm.sphere_centers(q), arm.sphere_radii
+        if any(np.linalg.norm(centers[i] - centers[j]) < radii[i] + radii[j] for i, j in arm.self_collision_pairs):
             break
     else:
-        pytest.fail("no self-colliding Panda configuration found")
-    message = error_of(scenario_file(tmp_path, with_q(PANDA, [float(x) for x in q]), obstacles=[]), capsys)
+        pytest.fail("no self-colliding arm configuration found")
+    message = error_of(scenario_file(tmp_path, with_q(ARM, [float(x) for x in q]), obstacles=[]), capsys)
     assert "the start state is in self-collision: collision spheres" in message and "overlap by" in message
 
 
 def test_check_needs_meshes_and_the_robot_of_the_recording(hit: tuple[Path, Path], tmp_path: Path,
                                                            capsys: pytest.CaptureFixture[str]) -> None:
     _, recording = hit
-    assert main(["check", str(recording), str(scenario_file(tmp_path, PANDA))]) == 2
-    assert "robot: 'panda' has no collision meshes" in capsys.readouterr().err
+    assert main(["check", str(recording), str(scenario_file(tmp_path, ARM))]) == 2
+    assert "has no collision meshes" in capsys.readouterr().err
     np.savez(tmp_path / "other.npz", t=np.zeros(2), q=np.zeros((2, 6)), qdot=np.zeros((2, 6)),
              qddot=np.zeros((2, 6)), joint_names=np.array([f"j{i}" for i in range(6)]))
     assert main(["check", str(tmp_path / "other.npz"), str(scenario_file(tmp_path, UR5))]) == 2
@@ -260,12 +267,12 @@ def test_shape_obstacles_count_on_meshes_and_spheres(tmp_path: Path, capsys: pyt
            "orientation": [0.92388, 0.0, 0.0, 0.38268]}
     message = error_of(scenario_file(tmp_path, UR5, obstacles=[box]), capsys)
     assert "link 'forearm_link' touches obstacles[0]" in message
-    # a floor just under the Panda's hand: the sphere check names the plane
+    # a floor just under the Panda's hand: the mesh check (Franka's meshes) names a link and the plane
     panda = load_robot("panda")
     hand = np.asarray(panda.kinematics.position(PANDA["initial_state"]["q"], "panda_hand")).ravel()
     floor = {"type": "plane", "point": [0.0, 0.0, float(hand[2]) - 0.02], "normal": [0, 0, 1]}
     message = error_of(scenario_file(tmp_path, PANDA, obstacles=[floor]), capsys)
-    assert "the start state is in collision: collision sphere" in message and "overlaps obstacles[0]" in message
+    assert "the start state is in collision: link '" in message and "touches obstacles[0]" in message
     # a box the forearm sweeps through: the mesh metrics see it
     box = {"type": "box", "position": [0.165, 0.113, 0.514], "size": [0.06, 0.06, 0.06]}
     result = run_scenario(scenario_from_dict({**UR5, "obstacles": [box]}))
