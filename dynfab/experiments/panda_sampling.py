@@ -9,7 +9,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from dynfab.robots import load_robot
+from dynfab.robots.builtin import panda_robot
 
 Q0 = (1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0)
 
@@ -25,8 +25,10 @@ class PandaSampler:
     upper: np.ndarray
 
     @classmethod
-    def create(cls) -> PandaSampler:
-        robot = load_robot("panda")
+    def create(cls, sphere_model: str = "fitted") -> PandaSampler:
+        """The built-in Panda's sampler, with its ``"fitted"`` spheres (those it runs with) or
+        the 13 ``"hand-written"`` ones (whose indices name parts: base, forearm, fingertips)."""
+        robot = panda_robot(sphere_model)
         kin = robot.kinematics
         q = ca.SX.sym("q", kin.dof)
         hand = ca.Function("hand", [q], [kin.position(q, "panda_hand")])
