@@ -181,7 +181,7 @@ def test_exp6_hand_passes_close_to_the_robots_hand_and_forearm(seed: int) -> Non
     waypoints = np.array(hand["trajectory"]["waypoints"])
     assert len(waypoints) == 4 + 3 * exp6.WIGGLE_POINTS
     path = trajectory_from_mapping(hand["trajectory"], "hand").sample(np.arange(0.0, 20.0, 0.01))[0]
-    sampler = PandaSampler.create()
+    sampler = PandaSampler.create("hand-written")   # the sphere indices exp6 names
     assert np.linalg.norm(sampler.hand_position(exp6.goal_pose()) - exp6.GOAL) < 1e-3
 
     def gaps(points: np.ndarray, q: tuple[float, ...]) -> np.ndarray:
