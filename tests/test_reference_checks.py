@@ -106,4 +106,4 @@ def test_a_reference_that_turns_non_finite_mid_run_ends_the_run_with_the_metrics
     assert metrics["steps"] == 100   # 1 s at dt = 0.01
     assert "run stopped early: the reference of planner goal 0 turned non-finite at t = 1.000 s" in captured.err
     assert "Traceback" not in captured.err
-    assert code == 0   # the metrics of the run so far are the output; the reason is on stderr
+    assert code == 1   # the metrics of the run so far are the output (no success); the reason is on stderr
