@@ -159,7 +159,8 @@ class _Budget:
 def _check_events(text: str) -> None:
     """Walk the parser's events and refuse what the module docstring lists."""
     budget = _Budget()
-    for event in yaml.parse(text, Loader=_LOADER):
+    for event in yaml.parse(text, Loader=yaml.SafeLoader):  # lazy: libyaml's parser reads ahead and stops
+        # at its own nesting limit (1000 levels, PyYAML >= 6.0.3) before this check can name the field
         if isinstance(event, yaml.CollectionEndEvent):
             frame = budget.frames.pop()
             if frame.anchor:
