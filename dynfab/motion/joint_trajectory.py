@@ -18,12 +18,12 @@ while it strays more than ``deviation`` radians.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
+from types import ModuleType
+from typing import TYPE_CHECKING
 
 import numpy as np
-import toppra
-import toppra.algorithm as algorithm
-import toppra.constraint as constraint
 from numpy.typing import NDArray
 
 from dynfab.motion.joint_planning import polyline_samples
@@ -31,7 +31,20 @@ from dynfab.motion.trajectories import Samples, Trajectory
 
 __all__ = ["ConstantAcceleration", "JointTrajectory", "TimingError", "time_path"]
 
-toppra.setup_logging("WARNING")
+if TYPE_CHECKING:
+    import toppra
+
+
+@functools.cache
+def _toppra() -> ModuleType:
+    """toppra, imported on the first timing (it takes 0.4 s, which ``dynfab run`` on a bad
+    file should not pay) with its logging quieted."""
+    import toppra
+    import toppra.algorithm
+    import toppra.constraint
+
+    toppra.setup_logging("WARNING")
+    return toppra
 
 
 class TimingError(RuntimeError):
@@ -180,7 +193,7 @@ def _spline(samples: NDArray[np.float64]) -> toppra.SplineInterpolator:
     keep = np.concatenate([[True], chords > 1e-12])
     samples, chords = samples[keep], np.concatenate([[0.0], chords])[keep]
     s = np.cumsum(chords)
-    return toppra.SplineInterpolator(s / s[-1] * max(s[-1], 1e-9), samples, bc_type="natural")
+    return _toppra().SplineInterpolator(s / s[-1] * max(s[-1], 1e-9), samples, bc_type="natural")
 
 
 def _deviation(path: toppra.SplineInterpolator, waypoints: NDArray[np.float64]) -> float:
@@ -209,6 +222,7 @@ def _timed(path: toppra.SplineInterpolator, velocity: NDArray[np.float64], accel
            settings: TimingSettings) -> ConstantAcceleration:
     low, high = path.path_interval
     count = max(100, int(settings.gridpoints * (high - low)))
+    algorithm, constraint = _toppra().algorithm, _toppra().constraint
     constraints = [
         constraint.JointVelocityConstraint(np.column_stack([-velocity, velocity])),
         constraint.JointAccelerationConstraint(np.column_stack([-acceleration, acceleration]),
