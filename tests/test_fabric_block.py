@@ -112,8 +112,9 @@ def test_a_stronger_obstacle_barrier_keeps_more_clearance() -> None:
 
 def test_a_default_block_runs_exactly_as_no_block() -> None:
     goals = (GoalConfig(link="panda_hand"),)
-    explicit = {**REACH, "fabric": fabric_block(PlannerConfig.for_robot(PANDA, goals, obstacle_slots=1))}
-    with_block, without = run_scenario(scenario_from_dict(explicit)), run_scenario(scenario_from_dict(REACH))
+    reach = {**REACH, "guidance": False}   # the scenario's own fabric (the guided one has defaults of its own)
+    explicit = {**reach, "fabric": fabric_block(PlannerConfig.for_robot(PANDA, goals, obstacle_slots=1))}
+    with_block, without = run_scenario(scenario_from_dict(explicit)), run_scenario(scenario_from_dict(reach))
     assert np.array_equal(with_block.record.q, without.record.q)
     assert dataclasses.replace(with_block.metrics, solver_time_ms=0.0) == dataclasses.replace(without.metrics,
                                                                                               solver_time_ms=0.0)
