@@ -65,15 +65,20 @@ def test_free_and_first_blocked_agree_with_the_clearances(panda) -> None:
         assert checker.first_blocked(qs, margin, self_margin) == (int(blocked[0]) if blocked.size else -1)
 
 
-def test_without_a_compiler_the_numpy_path_gives_the_same_numbers(panda, monkeypatch) -> None:
+def _compiled_and_plain(robot, obstacles, monkeypatch) -> tuple[ConfigurationChecker, ConfigurationChecker]:
+    """The compiled checker and the numpy one (as without a C compiler) on the same scene."""
     import dynfab.motion.configuration_checker as module
 
-    rng = np.random.default_rng(5)
-    obstacles = _scene(rng)
-    compiled = ConfigurationChecker(panda, obstacles)
+    compiled = ConfigurationChecker(robot, obstacles)
     monkeypatch.setattr(module, "load_checker_library", lambda robot: None)
-    plain = ConfigurationChecker(panda, obstacles)
-    assert not plain.compiled
+    plain = ConfigurationChecker(robot, obstacles)
+    assert compiled.compiled and not plain.compiled
+    return compiled, plain
+
+
+def test_without_a_compiler_the_numpy_path_gives_the_same_numbers(panda, monkeypatch) -> None:
+    rng = np.random.default_rng(5)
+    compiled, plain = _compiled_and_plain(panda, _scene(rng), monkeypatch)
     qs = rng.uniform(panda.kinematics.lower, panda.kinematics.upper, (20, panda.dof))
     np.testing.assert_allclose(plain.batch(qs), compiled.batch(qs), atol=1e-12)
     assert plain.first_blocked(qs, 0.0, 0.0) == compiled.first_blocked(qs, 0.0, 0.0)
@@ -83,3 +88,23 @@ def test_no_obstacles_is_infinitely_clear(panda) -> None:
     checker = ConfigurationChecker(panda)
     obstacle, itself = checker.clearances(np.asarray(panda.default_q))
     assert obstacle == np.inf and np.isfinite(itself)
+
+
+def test_a_motion_is_free_exactly_when_its_configurations_step_apart_are(panda, monkeypatch) -> None:
+    rng = np.random.default_rng(6)
+    compiled, plain = _compiled_and_plain(panda, _scene(rng), monkeypatch)
+    lower, upper = panda.kinematics.lower, panda.kinematics.upper
+    step, margin, self_margin = 0.05, 0.01, 0.0
+    outcomes = []
+    for _ in range(60):
+        a = rng.uniform(lower, upper)
+        b = np.clip(a + rng.normal(scale=rng.choice([0.02, 0.3, 1.0]), size=panda.dof), lower, upper)
+        count = max(1, int(np.ceil(np.linalg.norm(b - a) / step)))
+        along = a + (np.arange(1, count + 1) / count)[:, None] * (b - a)
+        expected = compiled.first_blocked(along, margin, self_margin) < 0
+        free, checked = compiled.motion_free(a, b, step, margin, self_margin)
+        assert free == expected
+        assert 1 <= checked <= count and (checked == count or not free)
+        assert plain.motion_free(a, b, step, margin, self_margin)[0] == expected
+        outcomes.append(expected)
+    assert any(outcomes) and not all(outcomes)

@@ -7,10 +7,14 @@
  *   c_obs(q)  = min_{i,k} d_k(R_k^T (p_i(q) - c_k)) - r_i             [m]
  *   c_self(q) = min_{(a,b)} |p_a(q) - p_b(q)| - r_a - r_b               [m]
  *
- * with a broad phase: a sphere i and an obstacle k with bounding radius B_k are skipped
- * when |p_i - c_k| - r_i - B_k exceeds the threshold that still matters (the smallest
- * clearance so far, or the margin when only validity is asked), which cannot change the
- * result. An obstacle row has 17 numbers: kind (0 sphere, 1 box, 2 cylinder, 3 capsule,
+ * with a broad phase in two levels: a link's spheres (a group with the ball of radius R_g
+ * about their centroid g holding them all) and an obstacle k with bounding radius B_k are
+ * skipped when |g - c_k| - R_g - B_k exceeds the threshold that still matters (the
+ * smallest clearance so far, or the margin when only validity is asked), and so is one
+ * sphere i when |p_i - c_k| - r_i - B_k does; the self-collision pairs between two links
+ * (a block) are skipped when the links' balls are farther apart than the threshold.
+ * None of this can change the result. The groups and blocks come with the robot's
+ * constants (DYNFAB_GROUPS, DYNFAB_BLOCKS, dynfab_group_*[], dynfab_block_*[]). An obstacle row has 17 numbers: kind (0 sphere, 1 box, 2 cylinder, 3 capsule,
  * 4 plane), centre (3), rotation R row-major (9), dimensions (3), bounding radius
  * (a plane: ignored).
  */
@@ -64,33 +68,56 @@ static void dynfab_one(const double* q, const double* obstacles, int n_obstacles
   arg[0] = q;
   res[0] = p_all;
   centres(arg, res, iw, w, 0);
+  double groups[3 * DYNFAB_GROUPS]; /* centroid of each link's sphere centres, a point fixed on the link */
+  for (int g = 0; g < DYNFAB_GROUPS; ++g) {
+    double sum[3] = {0.0, 0.0, 0.0};
+    for (int m = dynfab_group_start[g]; m < dynfab_group_start[g + 1]; ++m)
+      for (int a = 0; a < 3; ++a) sum[a] += p_all[a * DYNFAB_SPHERES + dynfab_group_spheres[m]];
+    const double count = (double)(dynfab_group_start[g + 1] - dynfab_group_start[g]);
+    for (int a = 0; a < 3; ++a) groups[3 * g + a] = sum[a] / count;
+  }
   double best = INFINITY;
   for (int k = 0; k < n_obstacles && !(stop && best < margin); ++k) {
     const double* o = obstacles + DYNFAB_ROW * k;
     const int plane = (int)o[0] == 4;
-    for (int i = 0; i < DYNFAB_SPHERES; ++i) {
-      const double p[3] = {p_all[i], p_all[DYNFAB_SPHERES + i], p_all[2 * DYNFAB_SPHERES + i]};
-      if (!plane) {
-        const double reach = (stop ? margin : best) + dynfab_radii[i] + o[16];
-        const double dx = p[0] - o[1], dy = p[1] - o[2], dz = p[2] - o[3];
+    for (int g = 0; g < DYNFAB_GROUPS && !(stop && best < margin); ++g) {
+      if (!plane) { /* the link's bounding ball: all of its spheres, or none, can matter */
+        const double reach = (stop ? margin : best) + dynfab_group_radius[g] + o[16];
+        const double dx = groups[3 * g] - o[1], dy = groups[3 * g + 1] - o[2], dz = groups[3 * g + 2] - o[3];
         if (reach > 0.0 && dx * dx + dy * dy + dz * dz > reach * reach) continue;
       }
-      const double c = dynfab_distance(o, p) - dynfab_radii[i];
-      if (c < best) best = c;
-      if (stop && best < margin) break;
+      for (int m = dynfab_group_start[g]; m < dynfab_group_start[g + 1]; ++m) {
+        const int i = dynfab_group_spheres[m];
+        const double p[3] = {p_all[i], p_all[DYNFAB_SPHERES + i], p_all[2 * DYNFAB_SPHERES + i]};
+        if (!plane) {
+          const double reach = (stop ? margin : best) + dynfab_radii[i] + o[16];
+          const double dx = p[0] - o[1], dy = p[1] - o[2], dz = p[2] - o[3];
+          if (reach > 0.0 && dx * dx + dy * dy + dz * dz > reach * reach) continue;
+        }
+        const double c = dynfab_distance(o, p) - dynfab_radii[i];
+        if (c < best) best = c;
+        if (stop && best < margin) break;
+      }
     }
   }
   out[0] = best;
   double self_best = INFINITY;
   if (!(stop && best < margin)) {
-    for (int j = 0; j < DYNFAB_PAIRS; ++j) {
-      const int a = dynfab_pairs[2 * j], b = dynfab_pairs[2 * j + 1];
-      const double dx = p_all[a] - p_all[b];
-      const double dy = p_all[DYNFAB_SPHERES + a] - p_all[DYNFAB_SPHERES + b];
-      const double dz = p_all[2 * DYNFAB_SPHERES + a] - p_all[2 * DYNFAB_SPHERES + b];
-      const double c = sqrt(dx * dx + dy * dy + dz * dz) - dynfab_radii[a] - dynfab_radii[b];
-      if (c < self_best) self_best = c;
-      if (stop && self_best < self_margin) break;
+    for (int blk = 0; blk < DYNFAB_BLOCKS && !(stop && self_best < self_margin); ++blk) {
+      const int ga = dynfab_block_groups[2 * blk], gb = dynfab_block_groups[2 * blk + 1];
+      const double reach = (stop ? self_margin : self_best) + dynfab_group_radius[ga] + dynfab_group_radius[gb];
+      const double gx = groups[3 * ga] - groups[3 * gb], gy = groups[3 * ga + 1] - groups[3 * gb + 1],
+                   gz = groups[3 * ga + 2] - groups[3 * gb + 2];
+      if (reach > 0.0 && gx * gx + gy * gy + gz * gz > reach * reach) continue; /* the links' balls are apart */
+      for (int j = dynfab_block_start[blk]; j < dynfab_block_start[blk + 1]; ++j) {
+        const int a = dynfab_pairs[2 * j], b = dynfab_pairs[2 * j + 1];
+        const double dx = p_all[a] - p_all[b];
+        const double dy = p_all[DYNFAB_SPHERES + a] - p_all[DYNFAB_SPHERES + b];
+        const double dz = p_all[2 * DYNFAB_SPHERES + a] - p_all[2 * DYNFAB_SPHERES + b];
+        const double c = sqrt(dx * dx + dy * dy + dz * dz) - dynfab_radii[a] - dynfab_radii[b];
+        if (c < self_best) self_best = c;
+        if (stop && self_best < self_margin) break;
+      }
     }
   }
   out[1] = self_best;
@@ -112,4 +139,32 @@ CASADI_SYMBOL_EXPORT int dynfab_first_blocked(const double* qs, int count, const
     if (out[0] < margin || out[1] < self_margin) return c;
   }
   return -1;
+}
+
+/* Checks the straight motion from `a` to `b` (DYNFAB_DOF each) at configurations at most
+ * `step` apart (Euclidean, joint space): `b` first, then the inner configurations coarse
+ * to fine (every 2^k-th before the ones between them), so that a blocked motion is
+ * usually found after a few checks. `a` is not checked (the planner's motions start at a
+ * free configuration). Returns the number of configurations checked, negated if the last
+ * of them is not free (the motion is blocked). */
+CASADI_SYMBOL_EXPORT int dynfab_motion_free(const double* a, const double* b, double step, const double* obstacles,
+                                            int n_obstacles, double margin, double self_margin) {
+  double out[2], q[DYNFAB_DOF], length2 = 0.0;
+  int checked = 1;
+  dynfab_one(b, obstacles, n_obstacles, margin, self_margin, 1, out);
+  if (out[0] < margin || out[1] < self_margin) return -checked;
+  for (int j = 0; j < DYNFAB_DOF; ++j) length2 += (b[j] - a[j]) * (b[j] - a[j]);
+  const int count = (int)ceil(sqrt(length2) / step);
+  int stride = 1;
+  while (2 * stride < count) stride *= 2;
+  for (; stride >= 1; stride /= 2) {
+    for (int i = stride; i < count; i += 2 * stride) { /* odd multiples of stride: new at this level */
+      const double f = (double)i / count;
+      for (int j = 0; j < DYNFAB_DOF; ++j) q[j] = a[j] + f * (b[j] - a[j]);
+      ++checked;
+      dynfab_one(q, obstacles, n_obstacles, margin, self_margin, 1, out);
+      if (out[0] < margin || out[1] < self_margin) return -checked;
+    }
+  }
+  return checked;
 }

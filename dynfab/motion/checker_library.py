@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import ctypes
 import hashlib
+from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
@@ -31,8 +32,9 @@ _DOUBLES = ctypes.POINTER(ctypes.c_double)
 
 
 class CheckerLibrary:
-    """The loaded kernel: ``clearances`` and ``first_blocked`` of ``checker_kernel.c``
-    (``first_blocked_unconverted``: the latter, its arguments given as ctypes values)."""
+    """The loaded kernel: ``clearances``, ``first_blocked`` and ``motion_free`` of
+    ``checker_kernel.c`` (``first_blocked_unconverted``: ``first_blocked`` with its arguments
+    given as ctypes values)."""
 
     def __init__(self, path: Path) -> None:
         self._library = ctypes.CDLL(str(path))
@@ -48,6 +50,10 @@ class CheckerLibrary:
         # must be passed as its ctypes type (c_void_p, c_int, c_void_p, c_int, c_double, c_double)
         self.first_blocked_unconverted = self._library["dynfab_first_blocked"]
         self.first_blocked_unconverted.restype = ctypes.c_int
+        self.motion_free = self._library.dynfab_motion_free
+        self.motion_free.argtypes = [_DOUBLES, _DOUBLES, ctypes.c_double, _DOUBLES, ctypes.c_int, ctypes.c_double,
+                                     ctypes.c_double]
+        self.motion_free.restype = ctypes.c_int
 
 
 def load_checker_library(robot: Robot) -> CheckerLibrary | None:
@@ -59,7 +65,7 @@ def load_checker_library(robot: Robot) -> CheckerLibrary | None:
     source = _source(robot)
     key = hashlib.sha256(f"{compiler.path} {compiler.version} {' '.join(_FLAGS)}\n{source}".encode()).hexdigest()
     path = cache_dir() / f"checker-{key}.so"
-    if not _verified(path, key):
+    if not _verified(path):
         try:
             _compile(source, compiler, path)
         except (OSError, RuntimeError):
@@ -74,7 +80,6 @@ def _source(robot: Robot) -> str:
     generator = ca.CodeGenerator("dynfab_checker", {"with_header": False})
     generator.add(centres)
     radii = ", ".join(repr(float(r)) for r in robot.sphere_radii) or "0.0"
-    pairs = ", ".join(f"{a}, {b}" for a, b in robot.self_collision_pairs) or "0, 0"
     constants = "\n".join([
         f"#define DYNFAB_DOF {robot.dof}",
         f"#define DYNFAB_SPHERES {len(robot.collision_spheres)}",
@@ -84,16 +89,81 @@ def _source(robot: Robot) -> str:
         f"#define DYNFAB_SZ_IW {centres.sz_iw()}",
         f"#define DYNFAB_SZ_W {centres.sz_w()}",
         f"static const double dynfab_radii[] = {{{radii}}};",
-        f"static const int dynfab_pairs[] = {{{pairs}}};",
+        *_groups(robot).constants(),
     ])
     return f"{generator.dump()}\n#include <math.h>\n{constants}\n{_KERNEL.read_text(encoding='utf-8')}"
 
 
-def _verified(path: Path, key: str) -> bool:
-    """Whether ``path`` exists and its bytes carry the key's digest in its side file."""
+@dataclass(frozen=True)
+class _Groups:
+    """The robot's spheres grouped by link, for the kernel's broad phase.
+
+    Attributes:
+        start: offsets (G + 1) of each group's spheres in ``members``.
+        members: sphere indices in group order.
+        radii: per group, the radius [m] of the ball about the centroid of its sphere
+            centres that holds its spheres (rigid on the link: measured at the zero
+            configuration, 1 µm added for rounding).
+        pair_start: offsets (B + 1) of each block of self-collision pairs in ``pairs``;
+            a block holds the pairs between two groups.
+        pair_groups: the two groups (2B) of each block.
+        pairs: the self-collision pairs (2P) in block order.
+    """
+
+    start: tuple[int, ...]
+    members: tuple[int, ...]
+    radii: tuple[float, ...]
+    pair_start: tuple[int, ...]
+    pair_groups: tuple[int, ...]
+    pairs: tuple[int, ...]
+
+    def constants(self) -> list[str]:
+        """The C definitions ``checker_kernel.c`` reads."""
+        def listed(values: tuple[int, ...] | tuple[float, ...], empty: str) -> str:
+            return ", ".join(map(repr, values)) or empty
+        return [f"#define DYNFAB_GROUPS {len(self.radii)}",
+                f"#define DYNFAB_BLOCKS {len(self.pair_start) - 1}",
+                f"static const int dynfab_group_start[] = {{{listed(self.start, '0')}}};",
+                f"static const int dynfab_group_spheres[] = {{{listed(self.members, '0')}}};",
+                f"static const double dynfab_group_radius[] = {{{listed(self.radii, '0.0')}}};",
+                f"static const int dynfab_block_start[] = {{{listed(self.pair_start, '0')}}};",
+                f"static const int dynfab_block_groups[] = {{{listed(self.pair_groups, '0, 0')}}};",
+                f"static const int dynfab_pairs[] = {{{listed(self.pairs, '0, 0')}}};"]
+
+
+def _groups(robot: Robot) -> _Groups:
+    """The robot's spheres and self-collision pairs grouped by link (:class:`_Groups`)."""
+    links: dict[str, list[int]] = {}
+    for index, sphere in enumerate(robot.collision_spheres):
+        links.setdefault(sphere.link, []).append(index)
+    centres = np.asarray(robot.sphere_centers(np.zeros(robot.dof)), dtype=float).reshape(-1, 3)
+    radii = np.asarray(robot.sphere_radii, dtype=float)
+    start, members, group_radii = [0], [], []
+    group_of: dict[int, int] = {}
+    for group, indices in enumerate(links.values()):
+        centroid = centres[indices].mean(axis=0)
+        group_radii.append(float(np.max(np.linalg.norm(centres[indices] - centroid, axis=1) + radii[indices])) + 1e-6)
+        members.extend(indices)
+        start.append(len(members))
+        group_of.update(dict.fromkeys(indices, group))
+    blocks: dict[tuple[int, int], list[int]] = {}
+    for a, b in robot.self_collision_pairs:
+        key = (min(group_of[a], group_of[b]), max(group_of[a], group_of[b]))
+        blocks.setdefault(key, []).extend((a, b))
+    pair_start, pair_groups, pairs = [0], [], []
+    for key, block in blocks.items():
+        pair_groups.extend(key)
+        pairs.extend(block)
+        pair_start.append(len(pairs) // 2)
+    return _Groups(tuple(start), tuple(members), tuple(group_radii), tuple(pair_start), tuple(pair_groups),
+                   tuple(pairs))
+
+
+def _verified(path: Path) -> bool:
+    """Whether ``path`` exists and its bytes hash to the digest in its side file."""
     try:
         recorded = path.with_suffix(".sha256").read_text(encoding="utf-8").strip()
-        return recorded == hashlib.sha256(path.read_bytes()).hexdigest() and path.stem == f"checker-{key}"
+        return recorded == hashlib.sha256(path.read_bytes()).hexdigest()
     except OSError:
         return False
 

@@ -14,7 +14,12 @@ checker accepts is one the fabric can follow. ``inf`` where there is nothing to 
 
 It runs compiled (``checker_kernel.c``, built per robot and cached: a broad phase by
 bounding spheres and an early exit when only validity is asked), or, without a C
-compiler, as numpy over the CasADi forward kinematics (the same numbers, slower).
+compiler, as numpy distances over the CasADi forward kinematics evaluated per
+configuration (the same numbers, slower).
+
+A straight motion ``q(s) = a + s (b − a)``, ``s ∈ [0, 1]``, is free when the
+configurations at most ``step`` apart along it are (:meth:`ConfigurationChecker.motion_free`:
+``b`` first, then coarse to fine, in one compiled call).
 """
 
 from __future__ import annotations
@@ -69,12 +74,13 @@ class ConfigurationChecker:
         self._q = np.zeros(self._n)
         self._q_pointer = as_pointer(self._q)
         self._q_address = ctypes.c_void_p(self._q.ctypes.data)
+        self._b = np.zeros(self._n)
+        self._b_pointer = as_pointer(self._b)
         self._margins = (math.nan, math.nan)
         self._margin_values = (ctypes.c_double(math.nan), ctypes.c_double(math.nan))
         self._out = np.zeros(2)
         self._out_pointer = as_pointer(self._out)
-        q = ca.SX.sym("q", self._n)
-        self._centres = ca.Function("centres", [q], [robot.sphere_centers(q)])
+        self._centres: ca.Function | None = None  # the numpy path's forward kinematics, made on first use
         self.set_obstacles(obstacles)
 
     @property
@@ -133,8 +139,27 @@ class ConfigurationChecker:
         return int(self._library.first_blocked(as_pointer(qs), qs.shape[0], self._rows_pointer,
                                                len(self._obstacles), margin, self_margin))
 
+    def motion_free(self, a: NDArray[np.float64], b: NDArray[np.float64], step: float, margin: float,
+                    self_margin: float) -> tuple[bool, int]:
+        """Whether the straight motion from ``a`` to ``b`` (n,) is free at configurations at
+        most ``step`` [rad] apart, ``b`` included and ``a`` not (module docstring), and how
+        many configurations were checked to know it."""
+        if self._library is None:
+            count = max(1, math.ceil(float(np.linalg.norm(b - a)) / step))
+            qs = a + (np.arange(count, 0, -1) / count)[:, None] * (b - a)  # b first
+            blocked = self.first_blocked(qs, margin, self_margin)
+            return blocked < 0, count if blocked < 0 else blocked + 1
+        self._q[:] = a
+        self._b[:] = b
+        checked = self._library.motion_free(self._q_pointer, self._b_pointer, step, self._rows_pointer,
+                                            len(self._obstacles), margin, self_margin)
+        return checked > 0, abs(checked)
+
     def _numpy(self, qs: NDArray[np.float64]) -> NDArray[np.float64]:
         """The clearances from the CasADi forward kinematics and numpy distances."""
+        if self._centres is None:
+            q = ca.SX.sym("q", self._n)
+            self._centres = ca.Function("centres", [q], [self.robot.sphere_centers(q)])
         radii = self.robot.sphere_radii
         out = np.full((qs.shape[0], 2), math.inf)
         pairs = np.array(self.robot.self_collision_pairs, dtype=int).reshape(-1, 2)

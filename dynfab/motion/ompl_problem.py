@@ -23,7 +23,8 @@ __all__ = ["solve_in_box"]
 def solve_in_box(validity: Callable[[ob.State], bool], start: NDArray[np.float64], goal: NDArray[np.float64],
                  low: NDArray[np.float64], high: NDArray[np.float64], resolution: float,
                  planner: Callable[[ob.SpaceInformation], ob.Planner], time_limit: float,
-                 simplify_time: float | None = None) -> tuple[NDArray[np.float64] | None, str]:
+                 simplify_time: float | None = None,
+                 motion: Callable[[ob.State, ob.State], bool] | None = None) -> tuple[NDArray[np.float64] | None, str]:
     """Plan from ``start`` to ``goal`` (n,) within ``[low, high]``.
 
     Args:
@@ -34,6 +35,8 @@ def solve_in_box(validity: Callable[[ob.State], bool], start: NDArray[np.float64
         planner: makes the planner for the space information (e.g. ``og.RRTConnect``).
         time_limit: planning time [s].
         simplify_time: time for OMPL's simplifier [s]; ``None``: until it converges.
+        motion: checks a straight motion between two states, the first valid (replaces
+            OMPL's checks of the states ``resolution`` apart along it); ``None``: OMPL's.
 
     Returns:
         The simplified path's states (k, n), or ``None`` without an exact solution; and
@@ -50,6 +53,8 @@ def solve_in_box(validity: Callable[[ob.State], bool], start: NDArray[np.float64
     setup.setStateValidityChecker(validity)
     information = setup.getSpaceInformation()
     information.setStateValidityCheckingResolution(resolution)
+    if motion is not None:
+        information.setMotionValidator(_MotionValidator(information, motion))
     setup.setStartAndGoalStates(_state(space, start), _state(space, goal))
     setup.setPlanner(planner(information))
     status = setup.solve(time_limit)
@@ -61,6 +66,17 @@ def solve_in_box(validity: Callable[[ob.State], bool], start: NDArray[np.float64
         setup.simplifySolution(simplify_time)
     states = setup.getSolutionPath().getStates()
     return np.array([state[0:n] for state in states], dtype=float), status.asString()
+
+
+class _MotionValidator(ob.MotionValidator):
+    """OMPL's motion validator calling ``motion(a, b)`` (planners that ask with two states only)."""
+
+    def __init__(self, information: ob.SpaceInformation, motion: Callable[[ob.State, ob.State], bool]) -> None:
+        super().__init__(information)
+        self._motion = motion
+
+    def checkMotion(self, a: ob.State, b: ob.State) -> bool:  # noqa: N802 (OMPL's name)
+        return self._motion(a, b)
 
 
 def _state(space: ob.RealVectorStateSpace, point: NDArray[np.float64]) -> ob.State:
