@@ -62,6 +62,24 @@ class Arm:
     joints: tuple[str, ...] | None = None
     locked: tuple[tuple[str, float], ...] = ()
 
+    def kinematics(self) -> Kinematics:
+        """Its kinematics, read from example-robot-data's URDF (active joints, locked ones).
+
+        Raises:
+            FileNotFoundError: example-robot-data is not installed.
+        """
+        path = resolve_uri(self.urdf, None)
+        if path is None:
+            raise FileNotFoundError(f"{self.urdf}: install dynfab[robots] (example-robot-data)")
+        return Kinematics(load_urdf(path), joints=self.joints, locked=dict(self.locked))
+
+    def scenario_mapping(self, planner: str, duration: float, goal: dict[str, Any],
+                         obstacles: list[dict[str, Any]]) -> dict[str, Any]:
+        """A scenario file's mapping: this arm from its home configuration at rest to ``goal``
+        among ``obstacles``, dt 0.01 s, ``duration`` [s]."""
+        return {"robot": self.robot_mapping(), "planner": planner, "dt": 0.01, "duration": duration,
+                "initial_state": {"q": list(self.home)}, "goal": [goal], "obstacles": obstacles}
+
     def robot_mapping(self) -> dict[str, Any]:
         """The ``robot:`` block of a scenario file."""
         robot: dict[str, Any] = {"urdf": self.urdf, "goal_link": self.tool,
@@ -103,11 +121,8 @@ class _ArmGeometry:
     @cache
     def of(cls, name: str) -> _ArmGeometry:
         arm = ARMS[name]
-        path = resolve_uri(arm.urdf, None)
-        if path is None:
-            raise FileNotFoundError(f"{arm.urdf}: install dynfab[robots] (example-robot-data)")
-        model = load_urdf(path)
-        kin = Kinematics(model, joints=arm.joints, locked=dict(arm.locked))
+        kin = arm.kinematics()
+        model = kin.model
         q = ca.SX.sym("q", kin.dof)
         tool = ca.Function("tool", [q], [kin.position(q, arm.tool)])
         points = []
@@ -170,12 +185,5 @@ def scenario(seed: int, planner: str = "static-fabric") -> dict[str, Any]:
                      "orientation": rounded([np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)])}
         if start_gap > START_MARGIN and goal_gap > GOAL_MARGIN and centre[2] > 0.02:
             obstacles.append(entry)
-    return {
-        "robot": geometry.arm.robot_mapping(),
-        "planner": planner,
-        "dt": 0.01,
-        "duration": DURATION,
-        "initial_state": {"q": list(geometry.arm.home)},
-        "goal": [{"type": "position", "position": rounded(goal), "tolerance": TOLERANCE}],
-        "obstacles": obstacles,
-    }
+    return geometry.arm.scenario_mapping(planner, DURATION, {"type": "position", "position": rounded(goal),
+                                                             "tolerance": TOLERANCE}, obstacles)
