@@ -24,6 +24,7 @@ JSON_KEYS = [
     "success", "goal_reached", "collision", "time_to_goal", "clearance",
     "path_length", "summed_error", "solver_time_ms", "steps", "orientation_error", "sphere_clearance",
     "self_collision", "min_self_distance", "max_velocity_ratio", "max_acceleration_ratio", "contacts",
+    "link_contacts",
     "guided", "plans", "plan_time_ms", "recovered", "fallbacks", "failure", "final_distance",
 ]
 
@@ -206,9 +207,26 @@ def test_mismatched_samples_raise() -> None:
         clearance_over_time(PATH[:, None, :], [0.1], np.zeros((3, 1, 3)), [0.1])
 
 
-def test_mujoco_contacts_are_collisions() -> None:
+@dataclasses.dataclass(frozen=True)
+class _Contact:
+    """A MuJoCo contact as dynfab.sim.mujoco_sim reports it (time [s], robot link, what it touched)."""
+
+    time: float
+    body: str
+    other: str
+
+
+def test_mujoco_contacts_are_collisions_and_link_contacts_self_collisions() -> None:
     clean = Metrics(success=True, goal_reached=True, collision=False, time_to_goal=1.0, clearance=0.1,
-                    path_length=1.0, summed_error=None, solver_time_ms=0.05, steps=100)
-    assert with_contacts(clean, ()) == dataclasses.replace(clean, contacts=0)
-    touched = with_contacts(clean, ("a", "b"))
-    assert touched.contacts == 2 and touched.collision and not touched.success
+                    path_length=1.0, summed_error=None, solver_time_ms=0.05, steps=100, self_collision=False)
+    assert with_contacts(clean, ()) == dataclasses.replace(clean, contacts=0, link_contacts=0)
+    touched = with_contacts(clean, (_Contact(0.1, "panda_hand_body", "obstacles[0]"),
+                                    _Contact(0.2, "panda_link1", "obstacles[1]")))
+    assert touched.contacts == 2 and touched.link_contacts == 0 and touched.collision and not touched.success
+    assert touched.self_collision is False
+    folded = with_contacts(clean, (_Contact(0.3, "panda_leftfinger", "panda_link5"),))
+    assert folded.contacts == 1 and folded.link_contacts == 1
+    assert folded.self_collision and not folded.collision and not folded.success
+    spheres = dataclasses.replace(clean, self_collision=None)   # a robot measured by spheres
+    assert with_contacts(spheres, ()).self_collision is None
+    assert with_contacts(spheres, (_Contact(0.3, "link3", "link1"),)).self_collision is True

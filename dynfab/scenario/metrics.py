@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, replace
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -40,15 +41,22 @@ class Metrics:
             ``R a`` and ``d`` for an axis; None without such goals.
         sphere_clearance: The sphere figure of ``clearance`` [m], kept when ``clearance``
             comes from collision meshes (scenario/exact_metrics.py); None without obstacles.
-        self_collision: Two checked links touched (collision meshes); None for robots
-            measured by spheres.
+        self_collision: Two checked links touched: on the collision meshes at every
+            control sample (scenario/exact_metrics.py; URDF robots and the built-in
+            ``panda`` / ``boxer-panda``), or, under MuJoCo, in a contact between two links
+            (``link_contacts``); None for robots measured by spheres without such a contact.
         min_self_distance: Smallest distance between checked links [m] (collision
             meshes); None for robots measured by spheres.
         max_velocity_ratio: ``max_t,i |u_i(t)| / u_max,i`` over the run's velocity
             coordinates (``robot.limits``); ≤ 1 when the limits held.
         max_acceleration_ratio: ``max_t,i |u̇_i(t)| / a_max,i`` of the commands.
         contacts: Under MuJoCo, how many contacts began (robot with an obstacle or two
-            non-adjacent robot bodies); any counts as a collision. None for the kinematic
+            robot links of a self-collision pair, at every 1 ms physics step); one with an
+            obstacle is a collision, one between two links a self-collision. None for the
+            kinematic simulator.
+        link_contacts: Under MuJoCo, how many of ``contacts`` were between two robot links
+            (on the collision meshes for a robot measured by meshes, built-in Panda included;
+            else between the spheres of a self-collision pair). None for the kinematic
             simulator.
         guided: A global joint-space plan was followed (scenario/guided_controller.py);
             None for planners without guidance (MPC).
@@ -83,6 +91,7 @@ class Metrics:
     max_velocity_ratio: float | None = None
     max_acceleration_ratio: float | None = None
     contacts: int | None = None
+    link_contacts: int | None = None
     guided: bool | None = None
     plans: int | None = None
     plan_time_ms: float | None = None
@@ -96,11 +105,23 @@ class Metrics:
         return asdict(self)
 
 
-def with_contacts(metrics: Metrics, contacts: Sequence[object]) -> Metrics:
-    """``metrics`` of a MuJoCo run: its ``contacts`` count, and a collision if there was any."""
-    collision = metrics.collision or bool(contacts)
-    return replace(metrics, contacts=len(contacts), collision=collision,
-                   success=metrics.success and not collision)
+class NamedContact(Protocol):
+    """A contact that began under MuJoCo (:class:`dynfab.sim.mujoco_sim.Contact`)."""
+
+    @property
+    def other(self) -> str:
+        """What the robot link touched: ``obstacles[k]``, or another robot link."""
+        ...
+
+
+def with_contacts(metrics: Metrics, contacts: Sequence[NamedContact]) -> Metrics:
+    """``metrics`` of a MuJoCo run: its ``contacts`` and ``link_contacts`` counts; a contact
+    with an obstacle makes a collision, one between two robot links a self-collision."""
+    links = sum(1 for contact in contacts if not contact.other.startswith("obstacles["))
+    collision = metrics.collision or len(contacts) > links
+    self_collision = True if links else metrics.self_collision
+    return replace(metrics, contacts=len(contacts), link_contacts=links, collision=collision,
+                   self_collision=self_collision, success=metrics.success and not collision and not links)
 
 
 def compute_metrics(

@@ -4,7 +4,10 @@ Builds the robot and the scenario's obstacles into a MuJoCo model
 (:mod:`dynfab.sim.mujoco_model`) and runs the controller in it
 (:mod:`dynfab.sim.mujoco_sim`) with the scenario's ``control``, ``delay`` and ``noise``.
 A robot measured by collision meshes collides by its meshes, with the link pairs its mesh
-model checks for self-collision; the others by their collision spheres and sphere pairs.
+model checks for self-collision: a URDF robot by its own, the built-in ``panda`` and
+``boxer-panda`` by Franka's (:mod:`dynfab.robots.builtin_meshes`), so that MuJoCo's contacts,
+between two links as with an obstacle, are those of the meshes the metrics measure. The
+others collide by their collision spheres and sphere pairs.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from dynfab.robots.builtin_meshes import builtin_collision_meshes
 from dynfab.robots.link_meshes import LinkMeshError
 from dynfab.robots.mesh_collision import MeshCollisionModel
 from dynfab.robots.robot import Robot
@@ -67,7 +71,7 @@ def run_mujoco(scenario: Scenario, robot: Robot, controller: Controller, centres
     # a drive's maximum speed is configured below the hardware's
     driven = dataclasses.replace(robot, limits=scenario.planning_limits(robot.limits))
     try:
-        scene = build_scene(driven, obstacles, pairs)
+        scene = build_scene(driven, obstacles, pairs, None if mesh_model is None else builtin_collision_meshes(robot))
     except (MujocoModelError, LinkMeshError) as error:
         raise ScenarioError("robot", str(error).splitlines()[0]) from None
     simulation = scenario.simulation

@@ -3,7 +3,9 @@
 MuJoCo reads STL, OBJ and MSH, not COLLADA (.dae), which many URDFs ship. Each link's
 ``<collision>`` elements are tessellated or read with trimesh
 (:func:`dynfab.robots.link_meshes.link_collision_meshes`), merged into one mesh in the
-link frame [m] and written once to ``$DYNFAB_CACHE_DIR/mujoco-meshes/<sha256>.stl``
+link frame [m] (:func:`link_mesh_file`; meshes given for a built-in robot whose description
+has none, :mod:`dynfab.robots.builtin_meshes`, go one by one through :func:`mesh_file`) and
+written once to ``$DYNFAB_CACHE_DIR/mujoco-meshes/<sha256>.stl``
 (``~/.cache/dynfab`` by default), keyed by the vertices and faces. MuJoCo collides the
 convex hull of each mesh.
 """
@@ -11,6 +13,7 @@ convex hull of each mesh.
 from __future__ import annotations
 
 import hashlib
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +23,7 @@ from dynfab.robots.collision_model import cache_dir
 from dynfab.robots.link_meshes import link_collision_meshes
 from dynfab.robots.urdf import UrdfModel
 
-__all__ = ["link_mesh_file"]
+__all__ = ["link_mesh_file", "mesh_file"]
 
 
 def link_mesh_file(model: UrdfModel, link: str) -> Path | None:
@@ -30,9 +33,18 @@ def link_mesh_file(model: UrdfModel, link: str) -> Path | None:
         LinkMeshError: A mesh file is missing or unreadable (names the link).
     """
     meshes = link_collision_meshes(model, link)
+    return mesh_file(meshes) if meshes else None
+
+
+def mesh_file(meshes: Sequence[trimesh.Trimesh]) -> Path:
+    """The STL file of ``meshes`` (at least one, in one link's frame [m]) merged into one.
+
+    Raises:
+        ValueError: ``meshes`` is empty.
+    """
     if not meshes:
-        return None
-    merged = trimesh.util.concatenate(meshes) if len(meshes) > 1 else meshes[0]
+        raise ValueError("a link's mesh file needs at least one mesh")
+    merged = trimesh.util.concatenate(list(meshes)) if len(meshes) > 1 else meshes[0]
     vertices = np.ascontiguousarray(merged.vertices, dtype=np.float64)
     faces = np.ascontiguousarray(merged.faces, dtype=np.int64)
     digest = hashlib.sha256(vertices.tobytes() + faces.tobytes()).hexdigest()

@@ -11,8 +11,11 @@ massless moving link that carries massive ones (a virtual link between two joint
 0.1 g and 1e-8 kg m^2.
 
 Collision geometry: a URDF robot's collision meshes (convex hulls, STL files from
-:mod:`dynfab.sim.mujoco_meshes`), a robot without meshes (the built-ins) its collision
-spheres. Obstacles are static geoms or, when they move, mocap bodies whose pose the
+:mod:`dynfab.sim.mujoco_meshes`), or the meshes given to :func:`build_scene` for a robot
+whose description has none (the built-in ``panda`` and ``boxer-panda`` on Franka's meshes,
+:mod:`dynfab.robots.builtin_meshes`, as :mod:`dynfab.scenario.mujoco_runner` builds them);
+a robot without meshes (the other built-ins, or the Panda without example-robot-data) its
+collision spheres. Obstacles are static geoms or, when they move, mocap bodies whose pose the
 simulation sets every physics step; for a planar robot a sphere becomes a vertical
 cylinder (the disc the planner sees). Contacts (bit masks, MuJoCo's ``contype`` /
 ``conaffinity``): robot geoms touch obstacles; robot geoms touch each other only in the
@@ -30,16 +33,17 @@ from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
+import trimesh
 
 from dynfab.geometry.shapes import Box, Capsule, Cylinder, Plane, Shape, Sphere
 from dynfab.robots.robot import BASE_JOINTS, DifferentialDriveBase, Robot
 from dynfab.robots.urdf import Joint, UrdfModel
-from dynfab.sim.mujoco_meshes import link_mesh_file
+from dynfab.sim.mujoco_meshes import link_mesh_file, mesh_file
 
 __all__ = ["ARMATURE", "PHYSICS_TIMESTEP", "MujocoModelError", "MujocoScene", "SceneObstacle", "build_scene"]
 
@@ -129,7 +133,8 @@ class MujocoScene:
 
 
 def build_scene(robot: Robot, obstacles: Sequence[SceneObstacle] = (),
-                self_collision_links: Sequence[tuple[str, str]] = ()) -> MujocoScene:
+                self_collision_links: Sequence[tuple[str, str]] = (),
+                link_meshes: Mapping[str, Sequence[trimesh.Trimesh]] | None = None) -> MujocoScene:
     """Compile ``robot`` among ``obstacles`` into a MuJoCo model (module doc).
 
     Args:
@@ -137,11 +142,14 @@ def build_scene(robot: Robot, obstacles: Sequence[SceneObstacle] = (),
         obstacles: The obstacles, in scenario order.
         self_collision_links: Link pairs whose meshes may touch (robots with meshes);
             a robot without meshes uses its ``self_collision_pairs`` of spheres.
+        link_meshes: Collision meshes by link, each in its link's frame [m], instead of
+            the URDF's (a built-in robot: :func:`dynfab.robots.builtin_meshes.builtin_collision_meshes`);
+            None: the URDF's, or the collision spheres if it has none.
 
     Raises:
         MujocoModelError: A moving link without mass; a collision mesh that is missing.
     """
-    xml = _Builder(robot).xml(obstacles, self_collision_links)
+    xml = _Builder(robot, link_meshes).xml(obstacles, self_collision_links)
     try:
         model = mujoco.MjModel.from_xml_string(xml)
     except ValueError as error:
@@ -176,15 +184,23 @@ def _scene(model: mujoco.MjModel, robot: Robot, obstacles: Sequence[SceneObstacl
                        mocap=mocap, robot_bodies=robot_bodies, obstacle_of_geom=geoms)
 
 
+def _mesh_geom(link: str, k: int) -> str:
+    """The name of ``link``'s ``k``-th collision mesh geom: ``<link>_collision``, then
+    ``<link>_collision1``, ..."""
+    return f"{link}_collision" if k == 0 else f"{link}_collision{k}"
+
+
 class _Builder:
     """Writes the MJCF document of one robot."""
 
-    def __init__(self, robot: Robot) -> None:
+    def __init__(self, robot: Robot, link_meshes: Mapping[str, Sequence[trimesh.Trimesh]] | None = None) -> None:
         self.robot = robot
+        self.link_meshes = link_meshes
         self.kin = robot.kinematics
         self.model: UrdfModel = robot.kinematics.model
         self.links = {link.name: link for link in self.model.links}
-        self.meshes = any(link.collisions for link in self.model.links)
+        self.meshes = link_meshes is not None or any(link.collisions for link in self.model.links)
+        self.mesh_geoms: dict[str, list[str]] = {}  # link -> its mesh geoms' names
         self.root = ET.Element("mujoco", model=robot.name)
         ET.SubElement(self.root, "compiler", angle="radian", inertiafromgeom="false", autolimits="true")
         ET.SubElement(self.root, "option", timestep=str(PHYSICS_TIMESTEP), integrator="implicitfast",
@@ -283,10 +299,16 @@ class _Builder:
     def _geoms(self, body: ET.Element, link: str) -> None:
         contact = {"contype": str(_ROBOT), "conaffinity": "0", "rgba": _ROBOT_RGBA}
         if self.meshes:
-            path = link_mesh_file(self.model, link)
-            if path is not None:
-                ET.SubElement(self.asset, "mesh", name=f"{link}_mesh", file=str(path))
-                ET.SubElement(body, "geom", name=f"{link}_collision", type="mesh", mesh=f"{link}_mesh", **contact)
+            if self.link_meshes is None:  # a URDF's meshes: one geom, the hull of their union
+                path = link_mesh_file(self.model, link)
+                paths = [] if path is None else [path]
+            else:  # given meshes: one geom each (MuJoCo collides each one's hull, as the metrics do)
+                paths = [mesh_file([mesh]) for mesh in self.link_meshes.get(link, ())]
+            for k, path in enumerate(paths):
+                name = _mesh_geom(link, k)
+                ET.SubElement(self.asset, "mesh", name=f"{name}_mesh", file=str(path))
+                ET.SubElement(body, "geom", name=name, type="mesh", mesh=f"{name}_mesh", **contact)
+            self.mesh_geoms[link] = [_mesh_geom(link, k) for k in range(len(paths))]
             return
         for i, sphere in enumerate(self.robot.collision_spheres):
             if sphere.link == link:
@@ -295,7 +317,8 @@ class _Builder:
 
     def _self_pairs(self, self_collision_links: Sequence[tuple[str, str]]) -> None:
         if self.meshes:
-            pairs = [(f"{a}_collision", f"{b}_collision") for a, b in self_collision_links]
+            pairs = [(a, b) for first, second in self_collision_links
+                     for a in self.mesh_geoms.get(first, ()) for b in self.mesh_geoms.get(second, ())]
         else:
             pairs = [(f"sphere{a}", f"sphere{b}") for a, b in self.robot.self_collision_pairs]
         for a, b in pairs:
