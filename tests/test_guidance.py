@@ -101,6 +101,8 @@ def test_blocked_goal_escapes_to_a_free_configuration_and_an_enclosed_one_fails(
     assert path.escaped_goal and not path.escaped_start
     assert checker.free(path.waypoints[-2], 0.01, 0.0)
     assert np.linalg.norm(path.waypoints[-2] - goal) <= JointPlannerSettings().escape_radius
+    approach = checker.batch(polyline_samples(path.waypoints[-2:], 0.005))   # goes no deeper than the goal
+    assert approach[:, 0].min() >= checker.clearances(goal)[0] - JointPlannerSettings().escape_slack
     solid = ConfigurationChecker(panda, [PlacedObstacle(Box((4.0, 4.0, 4.0)), Placement((0.0, 0.0, 0.0)))])
     with pytest.raises(NoPathError) as failure:
         plan_joint_path(solid, START, goal, kin.lower, kin.upper)
@@ -154,3 +156,34 @@ def test_a_goal_guidance_cannot_reach_falls_back_to_the_fabric_and_says_why() ->
     assert not metrics.success and metrics.guided is False
     assert metrics.failure == "no_ik_solution" and metrics.fallbacks >= 1
     assert metrics.final_distance > 0.3
+
+
+def _goal_near_the_wall(panda, clearance: float) -> np.ndarray:
+    """START turned about joint 1 toward the wall until its spheres are ``clearance`` from it."""
+    checker = ConfigurationChecker(panda, [WALL])
+    goal = START.copy()
+    for q1 in np.linspace(-1.3, 0.0, 1301):
+        goal[0] = q1
+        if checker.clearances(goal)[0] < clearance:
+            return goal
+    raise AssertionError("the wall is never that close")
+
+
+def test_a_goal_closer_to_an_obstacle_than_the_margin_is_reached_with_an_allowance_near_it(panda) -> None:
+    goal = _goal_near_the_wall(panda, 0.004)   # a grasp: the spheres 4 mm from the wall, the margin 10 mm
+    guidance = JointGuidance(panda)
+    plan = guidance.plan(START, JointTarget(tuple(goal)), [WALL])
+    assert plan.approach > 0.0
+    buffer, wanted = 0.005, guidance.settings.goal_clearance
+    clearance = ConfigurationChecker(panda, [WALL]).clearances(goal)[0]
+    np.testing.assert_allclose(guidance.allowances(goal, [WALL], [buffer]), [buffer + wanted - clearance], atol=1e-12)
+    far = [PlacedObstacle(Box((0.1, 0.1, 0.1)), Placement((-0.6, 0.0, 0.2)))]
+    assert guidance.allowances(goal, far, [buffer]).tolist() == [0.0]
+    scenario = _behind_the_wall(True, {"type": "joint", "position": goal.tolist(), "tolerance": 0.01})
+    result = run_scenario(scenario_from_dict(scenario))
+    metrics = result.metrics
+    assert metrics.success and metrics.plans == 1, metrics
+    assert result.controller.guided.allowances(goal)[0] == pytest.approx(buffer + wanted - clearance)
+    assert result.controller.guided.allowances(START).tolist() == [0.0]   # far from the goal: none
+    # the spheres went no deeper into the wall than the allowance lets them
+    assert metrics.sphere_clearance >= clearance - wanted - 1e-3

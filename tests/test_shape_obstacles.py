@@ -61,11 +61,25 @@ def test_leaf_map_value_jacobian_and_curvature(kind: str, dims: int) -> None:
         assert curvature[0] == pytest.approx((forward - backward) / (2 * h), abs=1e-4, rel=1e-4)
 
 
+@pytest.mark.parametrize("kind", list(SHAPE_DIMENSIONS))
+def test_an_allowance_adds_to_the_clearance_and_leaves_its_derivatives(kind: str) -> None:
+    function, parameters, _ = _leaf_map(kind, 3)
+    allowed = parameters.copy()
+    ParameterLayout((), 0, shape_slots=ShapeSlots(**{kind: 1})).views(allowed).shape_views(kind).allowance[0] = 0.012
+    for _ in range(10):
+        p, v = RNG.uniform(-0.6, 0.6, 3), RNG.normal(size=3)
+        plain = [np.array(value, dtype=float).ravel() for value in function(p, v, parameters)]
+        shifted = [np.array(value, dtype=float).ravel() for value in function(p, v, allowed)]
+        assert shifted[0][0] == pytest.approx(plain[0][0] + 0.012, abs=1e-12)
+        np.testing.assert_allclose(shifted[1], plain[1], atol=1e-12)
+        np.testing.assert_allclose(shifted[2], plain[2], atol=1e-12)
+
+
 def test_layout_keeps_sphere_offsets_and_views_match_symbols() -> None:
     plain = ParameterLayout((3, 2), 2, dynamic=True)
     slots = ShapeSlots(box=2, cylinder=1, capsule=1, plane=2)
     layout = ParameterLayout((3, 2), 2, dynamic=True, shape_slots=slots)
-    per_slot = {kind: 9 + 4 + n for kind, n in SHAPE_DIMENSIONS.items()}
+    per_slot = {kind: 9 + 4 + n + 1 for kind, n in SHAPE_DIMENSIONS.items()}   # origin, quaternion, sizes, allowance
     assert layout.size == plain.size + sum(per_slot[kind] * slots.count(kind) for kind in SHAPE_DIMENSIONS)
     buffer = RNG.normal(size=layout.size)
     views = layout.views(buffer)
@@ -74,7 +88,7 @@ def test_layout_keeps_sphere_offsets_and_views_match_symbols() -> None:
     outputs = []
     for slot in symbols.shapes:
         outputs += [slot.reference.position, slot.reference.velocity, slot.reference.acceleration,
-                    slot.orientation, slot.dimensions]
+                    slot.orientation, slot.dimensions, slot.allowance]
     values = [np.array(v).ravel() for v in ca.Function("f", [symbols.vector], outputs)(buffer)]
     expected = []
     for kind in SHAPE_DIMENSIONS:
@@ -82,7 +96,7 @@ def test_layout_keeps_sphere_offsets_and_views_match_symbols() -> None:
         assert group.position.shape == (slots.count(kind), 3)
         for row in range(slots.count(kind)):
             expected += [group.position[row], group.velocity[row], group.acceleration[row], group.orientation[row],
-                         group.dimensions[row]]
+                         group.dimensions[row], group.allowance[row:row + 1]]
     assert len(values) == len(expected)
     for value, view in zip(values, expected):
         np.testing.assert_array_equal(value, view)
@@ -91,7 +105,7 @@ def test_layout_keeps_sphere_offsets_and_views_match_symbols() -> None:
 
 
 def test_static_layout_has_no_shape_velocities() -> None:
-    views = ParameterLayout((3,), 0, shape_slots=ShapeSlots(plane=1)).views(np.zeros(3 + 1 + 3 + 4))
+    views = ParameterLayout((3,), 0, shape_slots=ShapeSlots(plane=1)).views(np.zeros(3 + 1 + 3 + 4 + 1))
     assert views.planes.velocity is None and views.planes.dimensions.shape == (1, 0)
     with pytest.raises(ValueError, match="ShapeSlots.box"):
         ShapeSlots(box=-1)

@@ -37,6 +37,7 @@ _MEANING = {
     "weight": "goal weights (0 deactivates a goal)", "radius": "radii [m]; 0 marks an unused slot",
     "orientation": "unit quaternions (w, x, y, z); a plane slot with a zero quaternion is unused",
     "dimensions": "sizes [m]: box (lx, ly, lz), cylinder and capsule (radius, length); <= 0: unused",
+    "allowance": "how far the robot's spheres may enter each shape [m]; 0: not at all",
     "command": "the previous command (jerk-limited planners): set it to the last output",
 }
 
@@ -80,7 +81,8 @@ def input_fields(planner: FabricPlanner) -> tuple[InputField, ...]:
     named.append(("obstacle_radius", views.obstacle_radius))
     for kind in SHAPE_DIMENSIONS:
         shapes = views.shape_views(kind)
-        named += [(f"{kind}_orientation", shapes.orientation), (f"{kind}_dimensions", shapes.dimensions)]
+        named += [(f"{kind}_orientation", shapes.orientation), (f"{kind}_dimensions", shapes.dimensions),
+                  (f"{kind}_allowance", shapes.allowance)]
     parameters = [InputField(name, n + nv + int(view.flat[0]), view.shape)
                   for name, view in named if view is not None and view.size > 0]
     fields = [InputField("q", 0, (n,)), InputField("qdot", n, (nv,))]

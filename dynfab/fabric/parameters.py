@@ -66,12 +66,15 @@ class ShapeSymbols:
             acceleration are structural zeros in a static layout.
         orientation: the frame's quaternion ``(w, x, y, z)`` (4, 1), taken as constant in time.
         dimensions: the sizes (:data:`SHAPE_DIMENSIONS` of them) [m].
+        allowance: how far the robot's spheres may enter the shape [m]: its leaves act on
+            the clearance plus this (0: none).
     """
 
     kind: str
     reference: Reference
     orientation: ca.SX
     dimensions: ca.SX
+    allowance: ca.SX
 
 
 @dataclass(frozen=True)
@@ -87,6 +90,8 @@ class ShapeViews:
             plane's frame has its z axis along the normal, pointing out of the solid).
         dimensions: (k, n) sizes [m]: box ``(lx, ly, lz)``, cylinder and capsule
             ``(radius, length)``, plane none.
+        allowance: (k,) how far the robot's spheres may enter each shape [m] (0, the
+            default: not at all; global guidance sets it near a goal that needs it).
         velocity, acceleration: (k, 3) of the origin [m/s], [m/s²] (dynamic planners only,
             else ``None``).
     """
@@ -94,6 +99,7 @@ class ShapeViews:
     position: np.ndarray
     orientation: np.ndarray
     dimensions: np.ndarray
+    allowance: np.ndarray
     velocity: np.ndarray | None = None
     acceleration: np.ndarray | None = None
 
@@ -162,7 +168,7 @@ class ParameterLayout:
     acceleration if dynamic), the goal weights, the obstacle centres (then velocities and
     accelerations if dynamic), the obstacle radii; then per shape kind (in the order of
     :data:`SHAPE_DIMENSIONS`) its origins (then velocities and accelerations if dynamic),
-    orientations and dimensions."""
+    orientations, dimensions and allowances."""
 
     goal_dimensions: tuple[int, ...]
     obstacle_slots: int
@@ -176,7 +182,7 @@ class ParameterLayout:
     @property
     def size(self) -> int:
         k = self._derivatives
-        return self._goal_and_sphere_size + sum(self.shape_slots.count(kind) * (3 * k + 4 + n)
+        return self._goal_and_sphere_size + sum(self.shape_slots.count(kind) * (3 * k + 4 + n + 1)
                                                 for kind, n in SHAPE_DIMENSIONS.items())
 
     @property
@@ -185,8 +191,8 @@ class ParameterLayout:
         k = self._derivatives
         return k * sum(self.goal_dimensions) + len(self.goal_dimensions) + (3 * k + 1) * self.obstacle_slots
 
-    def _shape_blocks(self) -> dict[str, tuple[list[slice], slice, slice]]:
-        """Per kind: its origin blocks (one per derivative), orientations, dimensions."""
+    def _shape_blocks(self) -> dict[str, tuple[list[slice], slice, slice, slice]]:
+        """Per kind: its origin blocks (one per derivative), orientations, dimensions, allowances."""
         k, start = self._derivatives, self._goal_and_sphere_size
         blocks = {}
         for kind, n in SHAPE_DIMENSIONS.items():
@@ -195,8 +201,9 @@ class ParameterLayout:
             start += 3 * k * slots
             orientations = slice(start, start + 4 * slots)
             dimensions = slice(start + 4 * slots, start + (4 + n) * slots)
-            start += (4 + n) * slots
-            blocks[kind] = (origins, orientations, dimensions)
+            allowances = slice(start + (4 + n) * slots, start + (5 + n) * slots)
+            start += (5 + n) * slots
+            blocks[kind] = (origins, orientations, dimensions, allowances)
         return blocks
 
     def _blocks(self) -> tuple[list[list[slice]], int, list[slice], int]:
@@ -236,7 +243,7 @@ class ParameterLayout:
 
     def _shape_symbols(self, vector: ca.SX) -> tuple[ShapeSymbols, ...]:
         slots = []
-        for kind, (origins, orientations, dimensions) in self._shape_blocks().items():
+        for kind, (origins, orientations, dimensions, allowances) in self._shape_blocks().items():
             n = SHAPE_DIMENSIONS[kind]
             for slot in range(self.shape_slots.count(kind)):
                 parts = [vector[block.start + 3 * slot: block.start + 3 * slot + 3] for block in origins]
@@ -244,7 +251,8 @@ class ParameterLayout:
                 slots.append(ShapeSymbols(
                     kind, Reference(*parts),
                     vector[orientations.start + 4 * slot: orientations.start + 4 * slot + 4],
-                    vector[dimensions.start + n * slot: dimensions.start + n * slot + n]))
+                    vector[dimensions.start + n * slot: dimensions.start + n * slot + n],
+                    vector[allowances.start + slot]))
         return tuple(slots)
 
     def views(self, buffer: np.ndarray) -> RuntimeParameters:
@@ -273,13 +281,14 @@ class ParameterLayout:
 
     def _shape_views(self, buffer: np.ndarray) -> dict[str, ShapeViews]:
         views = {}
-        for kind, (origins, orientations, dimensions) in self._shape_blocks().items():
+        for kind, (origins, orientations, dimensions, allowances) in self._shape_blocks().items():
             slots = self.shape_slots.count(kind)
             origin = [buffer[block].reshape(slots, 3) for block in origins]
             views[kind] = ShapeViews(
                 position=origin[0],
                 orientation=buffer[orientations].reshape(slots, 4),
                 dimensions=buffer[dimensions].reshape(slots, SHAPE_DIMENSIONS[kind]),
+                allowance=buffer[allowances],
                 velocity=origin[1] if self.dynamic else None,
                 acceleration=origin[2] if self.dynamic else None,
             )

@@ -67,6 +67,12 @@ class GuidanceSettings:
         stall_progress: progress expected within ``stall_window``, as a fraction of the
             goal's initial joint-space distance (at least ``stall_floor``) [-].
         stall_floor: smallest progress expected within ``stall_window`` [rad].
+        goal_clearance: clearance [m] the fabric's obstacle leaves should still see at a
+            goal closer to an obstacle than the planner's margin (a grasp: the spheres,
+            which bulge out of the meshes, overlap what the meshes clear); the obstacle
+            gets that much allowance near the goal (:meth:`JointGuidance.allowances`).
+        approach_slack: how much farther from the goal than the plan's unchecked last
+            segment the allowances apply [rad].
     """
 
     path: JointPlannerSettings = field(default_factory=JointPlannerSettings)
@@ -83,6 +89,8 @@ class GuidanceSettings:
     stall_rate: float = 0.25
     stall_progress: float = 0.05
     stall_floor: float = 0.02
+    goal_clearance: float = 0.015
+    approach_slack: float = 0.05
 
 
 class GuidanceError(RuntimeError):
@@ -103,12 +111,16 @@ class Plan:
         goal: the goal configuration [rad].
         time_s: wall time of inverse kinematics, planning and timing [s].
         checks: configurations checked [-].
+        approach: joint-space length of the last segment, which the planner checked only
+            against going deeper than the goal itself (the goal was closer to obstacles
+            than its margin); 0 if the goal was free [rad].
     """
 
     trajectory: JointTrajectory
     goal: NDArray[np.float64]
     time_s: float
     checks: int
+    approach: float = 0.0
 
 
 class JointGuidance:
@@ -126,6 +138,8 @@ class JointGuidance:
         self.robot = robot
         self.settings = settings
         self.checker = ConfigurationChecker(robot)
+        self._single = ConfigurationChecker(robot)  # one obstacle at a time (allowances)
+        self._ahead = ConfigurationChecker(robot)   # what moves (blocked_ahead)
         kin = robot.kinematics
         self._lower = np.where(np.isfinite(kin.lower), kin.lower, -np.pi)
         self._upper = np.where(np.isfinite(kin.upper), kin.upper, np.pi)
@@ -184,19 +198,34 @@ class JointGuidance:
                                        self.settings.speed * limits.acceleration, self.settings.timing)
             except TimingError as failure:
                 raise GuidanceError("timing", str(failure)) from None
-            return Plan(trajectory, target, time.perf_counter() - began, checks)
+            approach = float(np.linalg.norm(path.waypoints[-1] - path.waypoints[-2])) if path.escaped_goal else 0.0
+            return Plan(trajectory, target, time.perf_counter() - began, checks, approach)
         assert error is not None
         raise error
+
+    def allowances(self, q: NDArray[np.float64], obstacles: Sequence[PlacedObstacle],
+                   buffers: Sequence[float]) -> NDArray[np.float64]:
+        """How far [m] the fabric's spheres may enter each obstacle so that its leaves,
+        which keep ``buffers[k]`` of clearance, still see ``goal_clearance`` at ``q``:
+        ``a_k = max(0, buffer_k + goal_clearance − c_k(q))``, with ``c_k`` the clearance of
+        the robot's spheres from obstacle ``k`` alone."""
+        clearances = np.array([self._single_clearance(q, obstacle) for obstacle in obstacles])
+        return np.maximum(0.0, np.asarray(buffers, dtype=float) + self.settings.goal_clearance - clearances) \
+            if len(obstacles) else np.zeros(0)
+
+    def _single_clearance(self, q: NDArray[np.float64], obstacle: PlacedObstacle) -> float:
+        self._single.set_obstacles((obstacle,))
+        return self._single.clearances(q)[0]
 
     def blocked_ahead(self, plan: Plan, tau: float, obstacles: Sequence[PlacedObstacle]) -> bool:
         """Whether the reference within ``check_horizon`` after its time ``tau`` [s] meets
         ``obstacles`` (things that moved since the plan) closer than touching."""
         if not obstacles:
             return False
-        self.checker.set_obstacles(obstacles)
+        self._ahead.set_obstacles(obstacles)
         times = np.linspace(tau, tau + self.settings.check_horizon, 11)
         positions = plan.trajectory.sample(times)[0]
-        return self.checker.first_blocked(positions, 0.0, -np.inf) >= 0
+        return self._ahead.first_blocked(positions, 0.0, -np.inf) >= 0
 
     def _ik_settings(self, seed: int) -> IkSettings:
         return replace(self.settings.ik, seed=seed)

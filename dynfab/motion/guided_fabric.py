@@ -26,7 +26,15 @@ It replans from where the robot is (at most ``replans`` times) when
   (``d₀``: its distance when the goal was set, so the test scales with the motion asked
   for). A detour that leads away from the goal is progress as long as it is followed.
 
-Replans plan among the static obstacles and the moving ones where they are now. If no
+Replans plan among the static obstacles and the moving ones where they are now.
+
+A goal closer to a static obstacle than the planner's margin (a grasp, where the
+spheres overlap what the meshes clear) ends the plan with a segment the planner checked
+only against going deeper than the goal (:attr:`~dynfab.motion.guidance.Plan.approach`).
+Within that distance of the goal (plus ``approach_slack``), :meth:`GuidedFabric.allowances`
+gives each static obstacle the allowance its leaves need to let the spheres reach the goal
+(:meth:`~dynfab.motion.guidance.JointGuidance.allowances`); the caller writes them into the
+obstacles' slots (``allowance`` of a shape, a smaller radius for a sphere). If no
 plan can be made the reference holds the configuration the robot had (the fabric then
 brakes and keeps avoiding), and :attr:`GuidedFabric.status` says why.
 """
@@ -42,6 +50,7 @@ from numpy.typing import NDArray
 
 from dynfab.fabric.leaves.goal import GoalAttractor
 from dynfab.fabric.planner import FabricPlanner, GoalConfig
+from dynfab.geometry.shapes import Sphere
 from dynfab.motion.configuration_checker import PlacedObstacle
 from dynfab.motion.guidance import GoalTargets, GuidanceError, GuidanceSettings, JointGuidance, Plan
 
@@ -109,6 +118,7 @@ class GuidedFabric:
         self._ended_seen = False
         self._progress_needed = settings.stall_floor
         self._seed = 0
+        self._allowances = np.zeros(0)
 
     @property
     def plan(self) -> Plan | None:
@@ -118,6 +128,17 @@ class GuidedFabric:
     def set_obstacles(self, obstacles: Sequence[PlacedObstacle]) -> None:
         """The obstacles plans avoid (those that do not move; moving ones go to :meth:`update`)."""
         self._static = tuple(obstacles)
+        self._allowances = np.zeros(len(self._static))
+
+    def allowances(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Per static obstacle (:meth:`set_obstacles` order), how far [m] the fabric's
+        spheres may enter it with the robot at ``q``: the goal's allowances within the
+        plan's approach of the goal, else zeros (module docstring)."""
+        plan = self._plan
+        if plan is None or plan.approach == 0.0 or \
+                np.linalg.norm(np.asarray(q) - plan.goal) > plan.approach + self._settings.approach_slack:
+            return np.zeros(len(self._static))
+        return self._allowances.copy()
 
     def set_goal(self, goal: GoalTargets, t: float, q: NDArray[np.float64],
                  moving: Sequence[PlacedObstacle] = ()) -> None:
@@ -206,9 +227,18 @@ class GuidedFabric:
                 self._hold(q)
             return  # a failed replan keeps following the old reference
         self._plan = plan
+        self._allowances = (self.guidance.allowances(plan.goal, self._static, self._buffers()) if plan.approach > 0
+                            else np.zeros(len(self._static)))
         self._tau = 0.0
         self._last_t = t
         self._hold(plan.trajectory.evaluate(0.0).position)   # the new reference's start, at rest
+
+    def _buffers(self) -> list[float]:
+        """Per static obstacle, the clearance its fabric leaves keep (their barrier's offset) [m]."""
+        config = self.fabric.config
+        spheres, shapes = config.obstacle_avoidance, config.shape_avoidance
+        return [(spheres.barrier.offset if spheres else 0.0) if isinstance(o.shape, Sphere)
+                else (shapes.barrier.offset if shapes else 0.0) for o in self._static]
 
     def _hold(self, q: NDArray[np.float64]) -> None:
         """Write the reference ``q`` at rest into the fabric's first goal."""

@@ -11,9 +11,10 @@ start to the goal through free configurations, checking straight motions every
 Endpoints that are not free (a start pressed against an object, a grasp goal a few
 millimetres from it, where the spheres already overlap what the meshes clear) are
 handled as manipulation planners handle grasps: the nearest free configuration within
-``escape_radius`` (random samples of growing radius) becomes the planned endpoint, and the
-short straight segment to the real endpoint is appended unchecked; the fabric, whose
-leaves keep the spheres from penetrating further, tracks it.
+``escape_radius`` (random samples of growing radius) from which the straight segment to
+the real endpoint goes no deeper into obstacles (and into the robot itself) than the
+endpoint does, ``escape_slack`` aside, becomes the planned endpoint; the segment is
+appended, and the fabric tracks it.
 """
 
 from __future__ import annotations
@@ -56,6 +57,9 @@ class JointPlannerSettings:
         simplify_time: time given to OMPL's path simplifier [s].
         escape_radius: farthest a free endpoint is looked for around a blocked one [rad].
         escape_samples: samples tried per endpoint [-].
+        escape_slack: how much deeper [m] than the blocked endpoint itself the straight
+            segment from the free configuration to it may reach into obstacles (or into
+            the robot, for self-collision pairs).
         step: longest motion the planner adds to its trees at once (OMPL's ``range``;
             planners without one ignore it) [rad]. OMPL's default, a fifth of the joint
             space's diagonal (1.9 rad on the Panda), failed 5 of 9 plans into MBM's cage
@@ -70,6 +74,7 @@ class JointPlannerSettings:
     simplify_time: float = 0.05
     escape_radius: float = 0.4
     escape_samples: int = 400
+    escape_slack: float = 0.002
     step: float = 0.7
 
 
@@ -153,8 +158,8 @@ def plan_joint_path(checker: ConfigurationChecker, start: NDArray[np.float64], g
     n = start.size
     validity = _Validity(checker, settings, n)
     rng = np.random.default_rng(seed)
-    planned_start = _free_near(start, validity, lower, upper, settings, rng, "start")
-    planned_goal = _free_near(goal, validity, lower, upper, settings, rng, "goal")
+    planned_start = _free_near(start, validity, checker, lower, upper, settings, rng, "start")
+    planned_goal = _free_near(goal, validity, checker, lower, upper, settings, rng, "goal")
     if np.linalg.norm(planned_goal - planned_start) < 1e-9:
         middle = np.array([planned_start])
     else:
@@ -178,18 +183,23 @@ def polyline_samples(waypoints: NDArray[np.float64], step: float) -> NDArray[np.
     return np.vstack(samples)
 
 
-def _free_near(q: NDArray[np.float64], validity: _Validity, lower: NDArray[np.float64], upper: NDArray[np.float64],
-               settings: JointPlannerSettings, rng: np.random.Generator, name: str) -> NDArray[np.float64]:
-    """``q`` itself if free, else the free sample nearest it within ``escape_radius``."""
+def _free_near(q: NDArray[np.float64], validity: _Validity, checker: ConfigurationChecker,
+               lower: NDArray[np.float64], upper: NDArray[np.float64], settings: JointPlannerSettings,
+               rng: np.random.Generator, name: str) -> NDArray[np.float64]:
+    """``q`` itself if free, else the free sample nearest it within ``escape_radius`` whose
+    straight segment to ``q`` goes no deeper than ``q`` (module docstring)."""
     if validity.free(q):
         return q
+    obstacle, itself = checker.clearances(q)
+    deep = min(settings.margin, obstacle) - settings.escape_slack
+    deep_self = min(settings.self_margin, itself) - settings.escape_slack
     count = settings.escape_samples
     radii = settings.escape_radius * (np.arange(1, count + 1) / count)
     directions = rng.normal(size=(count, q.size))
     directions /= np.linalg.norm(directions, axis=1, keepdims=True)
     candidates = np.clip(q + radii[:, None] * directions, lower, upper)
     for candidate in candidates:  # nearest first: radii grow
-        if validity.free(candidate):
+        if validity.free(candidate) and checker.motion_free(candidate, q, settings.resolution, deep, deep_self)[0]:
             return candidate
     reason = f"{name}_in_collision"
     raise NoPathError(reason, f"the {name} is in collision on the collision spheres and no free configuration "

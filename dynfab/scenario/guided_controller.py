@@ -19,7 +19,7 @@ Anything else (MPC, mobile bases, planar robots, path goals, moving goals) runs 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -27,6 +27,7 @@ from dynfab.fabric.leaves.barrier import Barrier
 from dynfab.fabric.leaves.goal import GoalAttractor
 from dynfab.fabric.leaves.obstacle import SphereObstacleAvoidance
 from dynfab.fabric.leaves.shape_obstacle import ShapeObstacleAvoidance
+from dynfab.fabric.parameters import RuntimeParameters
 from dynfab.fabric.planner import FabricPlanner, PlannerConfig
 from dynfab.geometry.shapes import quaternion_matrix
 from dynfab.motion.configuration_checker import PlacedObstacle
@@ -43,7 +44,7 @@ from dynfab.scenario.recovering_controller import with_recovery
 from dynfab.scenario.references import goal_axes
 from dynfab.scenario.schema import GoalSpec, Scenario
 
-__all__ = ["GuidedController", "guidance_refusal", "guided_planner_config", "make_scenario_controller"]
+__all__ = ["AllowanceSlot", "GuidedController", "guidance_refusal", "guided_planner_config", "make_scenario_controller"]
 
 #: The guided fabric's constants below were chosen on MBM problems 10-11 (gain, range) and 13-16
 #: (energy, buffer) of the shared set, object removed; results are reported on problems 17 on.
@@ -71,9 +72,11 @@ class GuidedController:
     """
 
     def __init__(self, inner: FabricController, guided: GuidedFabric, goal: GoalTargets,
-                 moving: Callable[[float], tuple[PlacedObstacle, ...]], fallback: Callable[[], Controller]) -> None:
+                 moving: Callable[[float], tuple[PlacedObstacle, ...]], fallback: Callable[[], Controller],
+                 static_slots: tuple[AllowanceSlot, ...] = ()) -> None:
         self.inner = inner
         self.guided = guided
+        self._static_slots = static_slots
         self.fallback: Controller | None = None
         self._goal = goal
         self._moving = moving
@@ -114,7 +117,36 @@ class GuidedController:
                 self.fallback = self._make_fallback()
                 return self.fallback(t, q, qdot)
         self.guided.update(t, q, moving)
+        for slot, allowance in zip(self._static_slots, self.guided.allowances(q)):
+            slot.write(self.inner.planner.parameters, float(allowance))
         return self.inner(t, q, qdot)
+
+
+@dataclass(frozen=True)
+class AllowanceSlot:
+    """Where a static obstacle's allowance goes: a shape slot's ``allowance``, or for a
+    sphere slot a radius that much smaller (at least :data:`SMALLEST_RADIUS`).
+
+    Attributes:
+        kind: the obstacle's type (``sphere``, ``box``, ...).
+        row: its slot among those of its kind.
+        radius: a sphere's radius [m] (0 for other shapes).
+    """
+
+    kind: str
+    row: int
+    radius: float = 0.0
+
+    def write(self, params: RuntimeParameters, allowance: float) -> None:
+        """Let the fabric's spheres enter the obstacle by ``allowance`` [m]."""
+        if self.kind == "sphere":
+            params.obstacle_radius[self.row] = max(SMALLEST_RADIUS, self.radius - allowance)
+        else:
+            params.shape_views(self.kind).allowance[self.row] = allowance
+
+
+#: smallest radius a sphere obstacle's slot is given under an allowance (0 would free the slot) [m]
+SMALLEST_RADIUS = 1e-3
 
 
 def guidance_refusal(scenario: Scenario, robot: Robot) -> str | None:
@@ -152,8 +184,10 @@ def make_scenario_controller(scenario: Scenario, robot: Robot, references: Refer
                              (), moving_indices, slots)
     guided = GuidedFabric(fabric, settings)
     guided.set_obstacles(_placed(scenario, references, 0.0, static=True))
+    static_slots = tuple(AllowanceSlot(obstacle.type, slot.row, obstacle.radius if obstacle.type == "sphere" else 0.0)
+                         for obstacle, slot in zip(scenario.obstacles, slots) if obstacle.trajectory is None)
     return GuidedController(inner, guided, goal_targets(scenario, robot),
-                            lambda t: _placed(scenario, references, t, static=False), plain)
+                            lambda t: _placed(scenario, references, t, static=False), plain, static_slots)
 
 
 def guided_planner_config(robot: Robot, scenario: Scenario) -> PlannerConfig:

@@ -3,11 +3,12 @@
 Task map, for one robot sphere (centre ``p``, radius ``r_s``) and one shape slot (frame
 origin ``c(t)``, rotation ``R`` from the slot's quaternion, sizes ``s``):
 
-    x = d_ε(Rᵀ (p − c), s) − r_s    [m],
+    x = d_ε(Rᵀ (p − c), s) − r_s + a    [m],
 
 the smoothed signed distance of :mod:`dynfab.geometry.smooth_distance` (conservative: it
 under-estimates the exact distance by at most ``δ`` of the shape, a few millimetres for the
-default smoothing ``ε = 0.01 m``). ``J`` and ``J̇ ṗ`` are in closed form for a box
+default smoothing ``ε = 0.01 m``) and ``a`` the slot's allowance, how far the spheres may
+enter the shape (a runtime parameter, 0 by default). ``J`` and ``J̇ ṗ`` are in closed form for a box
 (:func:`~dynfab.geometry.smooth_distance.smooth_box_distance_derivatives`) and follow by
 automatic differentiation for the other shapes.
 The leaf is the :class:`~dynfab.fabric.leaves.barrier.Barrier` on ``x``, written in the
@@ -73,7 +74,7 @@ class ShapeObstacleAvoidance:
 
     def clearance_map(self, relative: ca.SX, relative_velocity: ca.SX, slot: ShapeSymbols,
                       sphere_radius: float) -> DifferentialMap:
-        """``x = d_ε(Rᵀ p̄_rel, s) − r_s`` [m] with ``J``, ``J̇ ṗ_rel`` by automatic
+        """``x = d_ε(Rᵀ p̄_rel, s) − r_s + a`` [m] with ``J``, ``J̇ ṗ_rel`` by automatic
         differentiation; ``p̄_rel`` is ``p_rel`` (d, 1) padded with zeros to 3-D."""
         d = relative.shape[0]
         rotation = quaternion_rotation(slot.orientation)
@@ -83,8 +84,9 @@ class ShapeObstacleAvoidance:
             distance, gradient, curvature = smooth_box_distance_derivatives(
                 local, local_velocity, slot.dimensions, self.smoothing)
             jacobian = ca.mtimes(rotation, gradient)[:d].T
-            return DifferentialMap(distance - sphere_radius, jacobian, curvature, relative, relative_velocity)
-        clearance = self.distance(slot.kind, local, slot.dimensions) - sphere_radius
+            return DifferentialMap(distance - sphere_radius + slot.allowance, jacobian, curvature, relative,
+                                   relative_velocity)
+        clearance = self.distance(slot.kind, local, slot.dimensions) - sphere_radius + slot.allowance
         return DifferentialMap.from_expression(clearance, relative, relative_velocity)
 
     def on_point(self, point: ca.SX, point_velocity: ca.SX, slot: ShapeSymbols,
