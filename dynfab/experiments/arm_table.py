@@ -40,13 +40,12 @@ class ArmRow:
                 failures[reason] = failures.get(reason, 0) + 1
         times = [m["time_to_goal"] for m in self.runs if m["time_to_goal"] is not None]
         plans = [m["plan_time_ms"] for m in self.runs if m.get("plan_time_ms") is not None]
+        time_text = f"{np.mean(times):.2f} ± {np.std(times):.2f}" if times else "-"
+        plan_text = f"{np.median(plans):.0f} ({np.max(plans):.0f})" if plans else "-"
         return (f"| {self.name} | {count('success')}/{n} | {count('collision')} | {count('self_collision')} "
                 f"| {count('guided')}/{n} | {', '.join(f'{k} {v}' for k, v in sorted(failures.items())) or '-'} "
                 f"| {_minimum(self.runs, 'clearance')} | {_minimum(self.runs, 'min_self_distance')} "
-                f"| {np.mean(times):.2f} ± {np.std(times):.2f} | "
-                f"{np.median(plans):.0f} ({np.max(plans):.0f}) |" if times and plans else
-                f"| {self.name} | {count('success')}/{n} | - | - | - | - | - | - | - | - |")
-
+                f"| {time_text} | {plan_text} |")
 
 def _minimum(runs: Sequence[dict[str, Any]], key: str) -> str:
     values = [m[key] for m in runs if m.get(key) is not None]
