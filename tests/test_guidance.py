@@ -13,6 +13,7 @@ from dynfab.motion.guidance import GuidanceError, JointGuidance, JointTarget
 from dynfab.motion.inverse_kinematics import AxisTarget, PointTarget, solve_ik
 from dynfab.motion.joint_planning import JointPlannerSettings, NoPathError, plan_joint_path, polyline_samples
 from dynfab.motion.joint_trajectory import TimingSettings, _spline, _timed, time_path
+from dynfab.motion.phased_trajectory import PhasedTrajectory
 from dynfab.robots import load_robot
 from dynfab.scenario.runner import run_scenario
 from dynfab.scenario.schema import scenario_from_dict
@@ -187,3 +188,26 @@ def test_a_goal_closer_to_an_obstacle_than_the_margin_is_reached_with_an_allowan
     assert result.controller.guided.allowances(START).tolist() == [0.0]   # far from the goal: none
     # the spheres went no deeper into the wall than the allowance lets them
     assert metrics.sphere_clearance >= clearance - wanted - 1e-3
+
+
+def test_an_escaped_goal_is_approached_slowly_in_a_phase_of_its_own_after_a_stop(panda) -> None:
+    goal = _goal_near_the_wall(panda, 0.004)
+    guidance = JointGuidance(panda)
+    plan = guidance.plan(START, JointTarget(tuple(goal)), [WALL])
+    trajectory = plan.trajectory
+    assert isinstance(trajectory, PhasedTrajectory) and len(trajectory.phases) == 2
+    assert plan.approach_start == pytest.approx(trajectory.starts[1]) and 0.0 < plan.approach_start < trajectory.duration
+    stop = trajectory.evaluate(plan.approach_start)
+    np.testing.assert_allclose(stop.position, trajectory.waypoints[-2], atol=1e-9)
+    assert np.abs(stop.velocity).max() < 1e-9
+    np.testing.assert_allclose(trajectory.end, goal, atol=1e-9)
+    times = np.linspace(0.0, trajectory.duration, 3001)
+    position, velocity, _ = trajectory.sample(times)
+    assert np.abs(np.diff(position, axis=0)).max() < 0.01   # continuous across the phases
+    approaching = times >= plan.approach_start
+    settings, limits = guidance.settings, panda.limits
+    assert (np.abs(velocity[approaching]) <= settings.approach_speed * limits.velocity + 1e-9).all()
+    assert (np.abs(velocity[~approaching]) <= settings.speed * limits.velocity + 1e-9).all()
+    for phase, start in zip(trajectory.phases, trajectory.starts):
+        inside = (times >= start) & (times < start + phase.duration)
+        np.testing.assert_allclose(position[inside], phase.sample(times[inside] - start)[0], atol=1e-12)

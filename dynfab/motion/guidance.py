@@ -25,8 +25,9 @@ from numpy.typing import NDArray
 
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.inverse_kinematics import AxisTarget, IkSettings, PointTarget, solve_ik
-from dynfab.motion.joint_planning import JointPlannerSettings, NoPathError, plan_joint_path
+from dynfab.motion.joint_planning import JointPath, JointPlannerSettings, NoPathError, plan_joint_path
 from dynfab.motion.joint_trajectory import JointTrajectory, TimingError, TimingSettings, time_path
+from dynfab.motion.phased_trajectory import PhasedTrajectory
 from dynfab.robots.robot import Robot
 
 __all__ = ["GuidanceError", "GuidanceSettings", "JointGuidance", "JointTarget", "Plan"]
@@ -73,6 +74,11 @@ class GuidanceSettings:
             gets that much allowance near the goal (:meth:`JointGuidance.allowances`).
         approach_slack: how much farther from the goal than the plan's unchecked last
             segment the allowances apply [rad].
+        approach_speed: fraction of the velocity and acceleration limits the approach
+            (that last segment, a phase of its own after a stop) uses [-].
+        approach_lag_slow, approach_lag_stop: ``lag_slow`` and ``lag_stop`` during the
+            approach: it is followed closely, so that the robot does not cut into what
+            the goal is close to [rad].
     """
 
     path: JointPlannerSettings = field(default_factory=JointPlannerSettings)
@@ -91,6 +97,9 @@ class GuidanceSettings:
     stall_floor: float = 0.02
     goal_clearance: float = 0.015
     approach_slack: float = 0.05
+    approach_speed: float = 0.1
+    approach_lag_slow: float = 0.01
+    approach_lag_stop: float = 0.03
 
 
 class GuidanceError(RuntimeError):
@@ -107,20 +116,24 @@ class Plan:
     """A timed reference to a goal configuration.
 
     Attributes:
-        trajectory: ``q_r`` from its start at time 0 (rest at both ends).
+        trajectory: ``q_r`` from its start at time 0 (rest at both ends); with an approach,
+            two phases (:class:`PhasedTrajectory`), at rest between them.
         goal: the goal configuration [rad].
         time_s: wall time of inverse kinematics, planning and timing [s].
         checks: configurations checked [-].
         approach: joint-space length of the last segment, which the planner checked only
             against going deeper than the goal itself (the goal was closer to obstacles
             than its margin); 0 if the goal was free [rad].
+        approach_start: when the approach begins on the reference's clock [s] (its
+            duration without one).
     """
 
-    trajectory: JointTrajectory
+    trajectory: JointTrajectory | PhasedTrajectory
     goal: NDArray[np.float64]
     time_s: float
     checks: int
     approach: float = 0.0
+    approach_start: float = 0.0
 
 
 class JointGuidance:
@@ -192,14 +205,15 @@ class JointGuidance:
                     break
                 continue
             checks += path.checks
-            limits = self.robot.limits
             try:
-                trajectory = time_path(path.waypoints, self.settings.speed * limits.velocity,
-                                       self.settings.speed * limits.acceleration, self.settings.timing)
+                trajectory = self._timed(path)
             except TimingError as failure:
                 raise GuidanceError("timing", str(failure)) from None
-            approach = float(np.linalg.norm(path.waypoints[-1] - path.waypoints[-2])) if path.escaped_goal else 0.0
-            return Plan(trajectory, target, time.perf_counter() - began, checks, approach)
+            if isinstance(trajectory, PhasedTrajectory):
+                approach = float(np.linalg.norm(path.waypoints[-1] - path.waypoints[-2]))
+                return Plan(trajectory, target, time.perf_counter() - began, checks, approach,
+                            float(trajectory.starts[-1]))
+            return Plan(trajectory, target, time.perf_counter() - began, checks, 0.0, trajectory.duration)
         assert error is not None
         raise error
 
@@ -226,6 +240,19 @@ class JointGuidance:
         times = np.linspace(tau, tau + self.settings.check_horizon, 11)
         positions = plan.trajectory.sample(times)[0]
         return self._ahead.first_blocked(positions, 0.0, -np.inf) >= 0
+
+    def _timed(self, path: JointPath) -> JointTrajectory | PhasedTrajectory:
+        """The path timed at ``speed``; an escaped goal's last segment as a second phase at
+        ``approach_speed``."""
+        limits, settings = self.robot.limits, self.settings
+        if not path.escaped_goal:
+            return time_path(path.waypoints, settings.speed * limits.velocity,
+                             settings.speed * limits.acceleration, settings.timing)
+        way = time_path(path.waypoints[:-1], settings.speed * limits.velocity, settings.speed * limits.acceleration,
+                        settings.timing)
+        approach = time_path(path.waypoints[-2:], settings.approach_speed * limits.velocity,
+                             settings.approach_speed * limits.acceleration, settings.timing)
+        return PhasedTrajectory((way, approach))
 
     def _ik_settings(self, seed: int) -> IkSettings:
         return replace(self.settings.ik, seed=seed)

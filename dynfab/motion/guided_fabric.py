@@ -10,7 +10,8 @@ the fabric (paper section IV) track it, while the fabric's obstacle, limit and
 self-collision leaves keep acting on everything the user writes into its slots.
 
 The reference runs on its own clock ``τ``, which slows while the robot lags behind it
-(a moving obstacle in the way):
+(a moving obstacle in the way; during a grasp's approach, below, ``approach_lag_slow`` and
+``approach_lag_stop`` take the place of ``e_slow`` and ``e_stop``):
 
     ρ = clip((e_stop − e) / (e_stop − e_slow), 0, 1),   e = ‖q − q_r(τ)‖,
     τ ← τ + ρ Δt,   q̇_r ← ρ q̇_r(τ),   q̈_r ← ρ² q̈_r(τ).
@@ -30,7 +31,8 @@ Replans plan among the static obstacles and the moving ones where they are now.
 
 A goal closer to a static obstacle than the planner's margin (a grasp, where the
 spheres overlap what the meshes clear) ends the plan with a segment the planner checked
-only against going deeper than the goal (:attr:`~dynfab.motion.guidance.Plan.approach`).
+only against going deeper than the goal (:attr:`~dynfab.motion.guidance.Plan.approach`),
+timed as a slow phase of its own after a stop, and followed closely.
 Within that distance of the goal (plus ``approach_slack``), :meth:`GuidedFabric.allowances`
 gives each static obstacle the allowance its leaves need to let the spheres reach the goal
 (:meth:`~dynfab.motion.guidance.JointGuidance.allowances`); the caller writes them into the
@@ -165,7 +167,10 @@ class GuidedFabric:
         self._last_t = t
         params = self.fabric.parameters
         lag = float(np.linalg.norm(q - params.goal_position[0]))   # the reference at τ, written last tick
-        rate = float(np.clip((settings.lag_stop - lag) / (settings.lag_stop - settings.lag_slow), 0.0, 1.0))
+        slow, stop = ((settings.approach_lag_slow, settings.approach_lag_stop)
+                      if self._plan.approach > 0.0 and self._tau >= self._plan.approach_start
+                      else (settings.lag_slow, settings.lag_stop))
+        rate = float(np.clip((stop - lag) / (stop - slow), 0.0, 1.0))
         self._tau += rate * dt
         point = self._plan.trajectory.evaluate(self._tau)
         params.goal_position[0][:] = point.position
