@@ -183,9 +183,11 @@ def test_a_goal_closer_to_an_obstacle_than_the_margin_is_reached_with_an_allowan
     scenario = _behind_the_wall(True, {"type": "joint", "position": goal.tolist(), "tolerance": 0.01})
     result = run_scenario(scenario_from_dict(scenario))
     metrics = result.metrics
-    assert metrics.success and metrics.plans == 1, metrics
-    assert result.controller.guided.allowances(goal)[0] == pytest.approx(buffer + wanted - clearance)
-    assert result.controller.guided.allowances(START).tolist() == [0.0]   # far from the goal: none
+    assert metrics.success and metrics.guided and metrics.failure is None, metrics
+    guided = result.controller.guided
+    assert guided.approaching and guided.allowances()[0] == pytest.approx(buffer + wanted - clearance)
+    guided.set_goal(JointTarget(tuple(goal)), 0.0, START)
+    assert not guided.approaching and guided.allowances().tolist() == [0.0]   # not before the approach
     # the spheres went no deeper into the wall than the allowance lets them
     assert metrics.sphere_clearance >= clearance - wanted - 1e-3
 

@@ -54,7 +54,10 @@ class GuidanceSettings:
         path: the joint-space planner (OMPL planner, time limit, resolution, margins).
         ik: inverse kinematics of task goals.
         timing: how the path is timed.
-        speed: fraction of the velocity and acceleration limits the reference uses [-].
+        speed: fraction of the velocity limits the reference uses [-].
+        acceleration: fraction of the acceleration limits the reference uses [-]: the
+            fabric tracks it with a lag that grows with it, and a lag as it brakes at a
+            grasp's approach overshoots into the object.
         attempts: plans tried per request, each with the next seed and twice the previous
             one's time limit (1, 2, 4 s by default) [-].
         replans: plans at most in one run after the first [-].
@@ -72,8 +75,6 @@ class GuidanceSettings:
             goal closer to an obstacle than the planner's margin (a grasp: the spheres,
             which bulge out of the meshes, overlap what the meshes clear); the obstacle
             gets that much allowance near the goal (:meth:`JointGuidance.allowances`).
-        approach_slack: how much farther from the goal than the plan's unchecked last
-            segment the allowances apply [rad].
         approach_speed: fraction of the velocity and acceleration limits the approach
             (that last segment, a phase of its own after a stop) uses [-].
         approach_lag_slow, approach_lag_stop: ``lag_slow`` and ``lag_stop`` during the
@@ -85,6 +86,7 @@ class GuidanceSettings:
     ik: IkSettings = field(default_factory=IkSettings)
     timing: TimingSettings = field(default_factory=TimingSettings)
     speed: float = 0.5
+    acceleration: float = 0.25
     attempts: int = 3
     replans: int = 4
     lag_slow: float = 0.1
@@ -96,7 +98,6 @@ class GuidanceSettings:
     stall_progress: float = 0.05
     stall_floor: float = 0.02
     goal_clearance: float = 0.015
-    approach_slack: float = 0.05
     approach_speed: float = 0.1
     approach_lag_slow: float = 0.01
     approach_lag_stop: float = 0.03
@@ -247,8 +248,8 @@ class JointGuidance:
         limits, settings = self.robot.limits, self.settings
         if not path.escaped_goal:
             return time_path(path.waypoints, settings.speed * limits.velocity,
-                             settings.speed * limits.acceleration, settings.timing)
-        way = time_path(path.waypoints[:-1], settings.speed * limits.velocity, settings.speed * limits.acceleration,
+                             settings.acceleration * limits.acceleration, settings.timing)
+        way = time_path(path.waypoints[:-1], settings.speed * limits.velocity, settings.acceleration * limits.acceleration,
                         settings.timing)
         approach = time_path(path.waypoints[-2:], settings.approach_speed * limits.velocity,
                              settings.approach_speed * limits.acceleration, settings.timing)

@@ -32,9 +32,10 @@ Replans plan among the static obstacles and the moving ones where they are now.
 A goal closer to a static obstacle than the planner's margin (a grasp, where the
 spheres overlap what the meshes clear) ends the plan with a segment the planner checked
 only against going deeper than the goal (:attr:`~dynfab.motion.guidance.Plan.approach`),
-timed as a slow phase of its own after a stop, and followed closely.
-Within that distance of the goal (plus ``approach_slack``), :meth:`GuidedFabric.allowances`
-gives each static obstacle the allowance its leaves need to let the spheres reach the goal
+timed as a slow phase of its own after a stop, and followed closely. Once the robot is
+on it (the clock in the approach, the robot within ``approach_lag_stop`` of the
+reference), :meth:`GuidedFabric.allowances` gives each static obstacle, until the next
+plan, the allowance its leaves need to let the spheres reach the goal
 (:meth:`~dynfab.motion.guidance.JointGuidance.allowances`); the caller writes them into the
 obstacles' slots (``allowance`` of a shape, a smaller radius for a sphere). If no
 plan can be made the reference holds the configuration the robot had (the fabric then
@@ -121,6 +122,7 @@ class GuidedFabric:
         self._progress_needed = settings.stall_floor
         self._seed = 0
         self._allowances = np.zeros(0)
+        self._approaching = False
 
     @property
     def plan(self) -> Plan | None:
@@ -132,15 +134,17 @@ class GuidedFabric:
         self._static = tuple(obstacles)
         self._allowances = np.zeros(len(self._static))
 
-    def allowances(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
+    @property
+    def approaching(self) -> bool:
+        """Whether the robot is on the plan's approach to a goal closer to obstacles than
+        the planner's margin (module docstring)."""
+        return self._approaching
+
+    def allowances(self) -> NDArray[np.float64]:
         """Per static obstacle (:meth:`set_obstacles` order), how far [m] the fabric's
-        spheres may enter it with the robot at ``q``: the goal's allowances within the
-        plan's approach of the goal, else zeros (module docstring)."""
-        plan = self._plan
-        if plan is None or plan.approach == 0.0 or \
-                np.linalg.norm(np.asarray(q) - plan.goal) > plan.approach + self._settings.approach_slack:
-            return np.zeros(len(self._static))
-        return self._allowances.copy()
+        spheres may enter it now: the goal's allowances while :attr:`approaching`, else
+        zeros (module docstring)."""
+        return self._allowances.copy() if self._approaching else np.zeros(len(self._static))
 
     def set_goal(self, goal: GoalTargets, t: float, q: NDArray[np.float64],
                  moving: Sequence[PlacedObstacle] = ()) -> None:
@@ -167,9 +171,10 @@ class GuidedFabric:
         self._last_t = t
         params = self.fabric.parameters
         lag = float(np.linalg.norm(q - params.goal_position[0]))   # the reference at τ, written last tick
-        slow, stop = ((settings.approach_lag_slow, settings.approach_lag_stop)
-                      if self._plan.approach > 0.0 and self._tau >= self._plan.approach_start
+        in_approach = self._plan.approach > 0.0 and self._tau >= self._plan.approach_start
+        slow, stop = ((settings.approach_lag_slow, settings.approach_lag_stop) if in_approach
                       else (settings.lag_slow, settings.lag_stop))
+        self._approaching = self._approaching or (in_approach and lag <= settings.approach_lag_stop)
         rate = float(np.clip((stop - lag) / (stop - slow), 0.0, 1.0))
         self._tau += rate * dt
         point = self._plan.trajectory.evaluate(self._tau)
@@ -232,6 +237,7 @@ class GuidedFabric:
                 self._hold(q)
             return  # a failed replan keeps following the old reference
         self._plan = plan
+        self._approaching = False
         self._allowances = (self.guidance.allowances(plan.goal, self._static, self._buffers()) if plan.approach > 0
                             else np.zeros(len(self._static)))
         self._tau = 0.0

@@ -124,7 +124,7 @@ class GuidedController:
                 self.fallback = self._make_fallback()
                 return self.fallback(t, q, qdot)
         self.guided.update(t, q, moving)
-        for slot, allowance in zip(self._static_slots, self.guided.allowances(q)):
+        for slot, allowance in zip(self._static_slots, self.guided.allowances()):
             slot.write(self.inner.planner.parameters, float(allowance))
         return self.inner(t, q, qdot)
 
