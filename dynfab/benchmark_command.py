@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from dynfab.cli_arguments import at_least_one, requested_cluster
+from dynfab.cli_arguments import ExitStatus, at_least_one, requested_cluster, reported
 
 __all__ = ["add_benchmark_parser", "benchmark_command"]
 
@@ -53,24 +53,17 @@ def benchmark_command(args: argparse.Namespace) -> int:
     from dynfab.benchmarks.mbm.benchmark import BenchmarkError, BenchmarkSettings, run_benchmark
     from dynfab.benchmarks.mbm.moveit import ProblemError
     from dynfab.experiments.cluster import ClusterError
-    from dynfab.experiments.series import RunError
     from dynfab.scenario.schema import ScenarioError
 
     out = args.out or Path("dynfab-benchmarks") / f"mbm-{args.variant}"
     settings = BenchmarkSettings(args.variant, args.types, args.problems, args.planner, args.guidance, args.seed,
                                  args.first - 1)
-    try:
-        records = run_benchmark(settings, out, args.jobs, requested_cluster(args.workers, args.scheduler), sys.stderr)
-    except (BenchmarkError, ClusterError, ProblemError, ScenarioError) as error:
-        print(f"dynfab: error: {error}", file=sys.stderr)
-        return 2
-    except RunError as error:
-        print(f"dynfab: run failed: {error}", file=sys.stderr)
-        return 1
-    except KeyboardInterrupt:
-        print(f"\ndynfab: interrupted; finished runs are in {out / 'runs.jsonl'}, rerun the same command to resume",
-              file=sys.stderr)
-        return 130
+    records = reported(lambda: run_benchmark(settings, out, args.jobs, requested_cluster(args.workers, args.scheduler),
+                                             sys.stderr),
+                       (BenchmarkError, ClusterError, ProblemError, ScenarioError),
+                       f"finished runs are in {out / 'runs.jsonl'}, rerun the same command to resume")
+    if isinstance(records, ExitStatus):
+        return records.code
     print((out / "summary.md").read_text(encoding="utf-8"), end="")
     print(f"dynfab: {len(records)} problems; wrote {out}/runs.jsonl, runs.csv, summary.md, summary.json and "
           f"scenarios/", file=sys.stderr)

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from dynfab.benchmark_command import add_benchmark_parser, benchmark_command
-from dynfab.cli_arguments import at_least_one, positive_number, requested_cluster
+from dynfab.cli_arguments import ExitStatus, at_least_one, positive_number, requested_cluster, reported
 from dynfab.fabric.backends import BACKENDS
 from dynfab.plot_command import add_plot_parser, plot_command
 from dynfab.scenario.recording import RecordingError, load_recording, run_recording, save_recording
@@ -187,7 +187,7 @@ def _experiment(args: argparse.Namespace) -> int:
     from dynfab.experiments.cluster import ClusterError
     from dynfab.experiments.settings import setting_name, with_setting
     from dynfab.experiments.registry import EXPERIMENTS
-    from dynfab.experiments.series import RunError, SeriesError, run_series
+    from dynfab.experiments.series import SeriesError, run_series
     from dynfab.scenario.simulation_schema import Simulation
 
     name, runs, seed, out, jobs, record = args.name, args.runs, args.seed, args.out, args.jobs, args.record
@@ -207,19 +207,12 @@ def _experiment(args: argparse.Namespace) -> int:
     if out is None:
         suffix = "" if simulation == Simulation() and not args.recovery else "-" + setting_name(simulation, args.recovery)
         out = Path("dynfab-experiments") / (name + suffix)
-    try:
-        result = run_series(experiment, runs, seed, out, jobs, progress=sys.stderr, record=record,
-                            cluster=requested_cluster(args.workers, args.scheduler))
-    except (SeriesError, ClusterError) as error:
-        print(f"dynfab: error: {error}", file=sys.stderr)
-        return 2
-    except RunError as error:
-        print(f"dynfab: run failed: {error}", file=sys.stderr)
-        return 1
-    except KeyboardInterrupt:
-        print(f"\ndynfab: interrupted; finished runs are in {out / 'runs.jsonl'}, rerun the same command to resume",
-              file=sys.stderr)
-        return 130
+    result = reported(lambda: run_series(experiment, runs, seed, out, jobs, progress=sys.stderr, record=record,
+                                         cluster=requested_cluster(args.workers, args.scheduler)),
+                      (SeriesError, ClusterError),
+                      f"finished runs are in {out / 'runs.jsonl'}, rerun the same command to resume")
+    if isinstance(result, ExitStatus):
+        return result.code
     print((out / "summary.md").read_text(encoding="utf-8"), end="")
     print("\n" + (out / "timings.md").read_text(encoding="utf-8"), end="")
     print(f"dynfab: {result.executed} runs executed; wrote {out}/runs.jsonl, runs.csv, summary.md, summary.json, "

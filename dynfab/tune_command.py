@@ -17,7 +17,7 @@ from typing import Any
 
 import yaml
 
-from dynfab.cli_arguments import at_least_one, requested_cluster
+from dynfab.cli_arguments import ExitStatus, at_least_one, requested_cluster, reported
 from dynfab.experiments.tuning_objective import Evaluation
 
 __all__ = ["add_tune_parser", "comparison_table", "tune_command"]
@@ -50,8 +50,7 @@ def tune_command(args: argparse.Namespace) -> int:
     """Run ``dynfab tune`` (module docstring for the exit codes)."""
     from dynfab.experiments.cluster import ClusterError
     from dynfab.experiments.registry import EXPERIMENTS
-    from dynfab.experiments.series import RunError
-    from dynfab.experiments.tuning import TuningError, TuningSetup, tune
+    from dynfab.experiments.tuning import TuningError, TuningResult, TuningSetup, tune
 
     if args.name not in EXPERIMENTS:
         return _error(f"unknown experiment {args.name!r} (expected one of {', '.join(EXPERIMENTS)})")
@@ -64,20 +63,17 @@ def tune_command(args: argparse.Namespace) -> int:
     if args.out is not None and not out.parent.is_dir():
         return _error(f"--out: folder {out.parent} does not exist")
     cluster = requested_cluster(args.workers, args.scheduler)
-    try:
+    def run() -> tuple[TuningSetup, TuningResult]:
         setup = TuningSetup(experiment, args.planner or fabric[0], args.train, args.train_seed, args.held_out,
                             args.held_out_seed, args.duration, args.seed)
-        result = tune(setup, args.trials, study, args.jobs, cluster,
-                      progress=lambda line: print(f"dynfab: {line}", file=sys.stderr, flush=True))
-    except (TuningError, ClusterError) as error:
-        return _error(str(error))
-    except RunError as error:
-        print(f"dynfab: run failed: {error}", file=sys.stderr)
-        return 1
-    except KeyboardInterrupt:
-        print(f"\ndynfab: interrupted; the finished trials are in {study}, rerun the same command to resume",
-              file=sys.stderr)
-        return 130
+        return setup, tune(setup, args.trials, study, args.jobs, cluster,
+                           progress=lambda line: print(f"dynfab: {line}", file=sys.stderr, flush=True))
+
+    outcome = reported(run, (TuningError, ClusterError),
+                       f"the finished trials are in {study}, rerun the same command to resume")
+    if isinstance(outcome, ExitStatus):
+        return outcome.code
+    setup, result = outcome
     print(f"{args.name}, {setup.planner}: best of {result.trials} trials is trial {result.best_trial}")
     print(comparison_table(result.training, result.held_out, setup.train, setup.held_out))
     header = (f"# dynfab tune {args.name} --trials {result.trials}: trial {result.best_trial}, planner {setup.planner}, "
