@@ -1,5 +1,7 @@
 """``dynfab benchmark mbm``: run MotionBenchMaker's Panda problems (dynfab/benchmarks/mbm)
-and print the per-type table.
+and print the per-type table; ``--robot ur5`` runs their scenes with example-robot-data's
+UR5 and gripper instead (object removed, a pose goal at the Panda's grasp pose:
+:mod:`dynfab.benchmarks.mbm.ur5_case`).
 
 Exit codes: 0 the benchmark finished (whatever its success rate), 2 invalid options, an
 output directory of other results or an unusable cluster, 1 a run raised, 130 on Ctrl-C

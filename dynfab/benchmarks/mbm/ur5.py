@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from dynfab.benchmarks.mbm.franka import TCP_LINK, Franka
-from dynfab.motion.inverse_kinematics import AxisTarget, IkSettings, PointTarget, solve_ik
+from dynfab.motion.inverse_kinematics import AxisTarget, IkResult, IkSettings, PointTarget, solve_ik
 from dynfab.robots.mesh_collision import MeshCollisionModel
 from dynfab.robots.mesh_sweep import PlacedShape, sweep_meshes
 from dynfab.robots.robot import Robot
@@ -114,17 +114,17 @@ class Ur5:
             return f"{contact.first} touches {contact.second} (self-collision, distance {contact.depth:.3g} m)"
         return None
 
-    def free_ik(self, grasp: GraspPose, shapes: Sequence[PlacedShape], settings: IkSettings) -> NDArray[np.float64] | None:
-        """A configuration within the limits that puts the grasp frame on ``grasp`` and is
-        free of ``shapes`` and of self-collision on the meshes (nearest :data:`HOME`); None
-        if none of the seeds finds one."""
+    def free_ik(self, grasp: GraspPose, shapes: Sequence[PlacedShape], settings: IkSettings) -> IkResult:
+        """IK of ``grasp``: its ``q`` is a configuration within the limits that puts the
+        grasp frame on ``grasp`` and is free of ``shapes`` and of self-collision on the
+        meshes (nearest :data:`HOME`), or None if none of the seeds finds one (then
+        ``converged`` says whether any solution within the limits was found at all)."""
         rotation = tool_rotation(grasp)
         targets: list[PointTarget | AxisTarget] = [
             PointTarget(TOOL_LINK, tuple(float(v) for v in grasp.position), GRASP_OFFSET)]
         targets += [AxisTarget(TOOL_LINK, tuple(float(v) for v in np.eye(3)[k]),
                                tuple(float(v) for v in rotation[:, k])) for k in range(3)]
-        result = solve_ik(self.robot, targets, np.array(HOME), lambda q: self.contact(q, shapes) is None, settings)
-        return result.q
+        return solve_ik(self.robot, targets, np.array(HOME), lambda q: self.contact(q, shapes) is None, settings)
 
 
 @cache

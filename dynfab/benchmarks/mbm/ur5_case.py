@@ -16,7 +16,8 @@ derived from the Panda's goal:
 
 The case is **invalid** (counted, not run) when neither start is free on the UR5's meshes,
 or when no IK solution of the goal pose within the joint limits is free of the scene and
-of self-collision on its meshes (:data:`IK_SETTINGS`: up to 40 seeds, HOME first).
+of self-collision on its meshes (:data:`IK_SETTINGS`: up to 200 seeds, HOME first); the
+reason says whether the pose is out of reach or every solution found touches.
 """
 
 from __future__ import annotations
@@ -72,15 +73,17 @@ def prepare_ur5_case(problem: Problem, panda: Franka, arm: Ur5, planner: str = P
     start: Sequence[float] | None = HOME
     home_contact = arm.contact(HOME, shapes)
     if home_contact is not None:
-        start = arm.free_ik(panda_grasp_pose(panda, panda.clipped(problem.start)), shapes, IK_SETTINGS)
+        start = arm.free_ik(panda_grasp_pose(panda, panda.clipped(problem.start)), shapes, IK_SETTINGS).q
         if start is None:
             invalid = (f"start: HOME has {_named(home_contact, names)} and no IK solution of the Panda's start grasp "
                        f"pose is free on the UR5's meshes")
         else:
             mapping = _mapping(tuple(round(float(v), 6) for v in start), goal, mapping["obstacles"], planner)
-    if invalid is None and arm.free_ik(grasp, shapes, IK_SETTINGS) is None:
-        invalid = (f"goal: no IK solution of the grasp pose within the UR5's limits is free of the scene and itself "
-                   f"on its meshes ({IK_SETTINGS.seeds} seeds)")
+    result = arm.free_ik(grasp, shapes, IK_SETTINGS) if invalid is None else None
+    if result is not None and result.q is None:
+        invalid = ("goal: no IK solution of the grasp pose within the UR5's limits (out of reach)" if not result.converged
+                   else f"goal: no IK solution of the grasp pose within the UR5's limits is free on its meshes "
+                        f"({result.converged} found, all touching the scene or itself)")
     return Case(problem, VARIANT, mapping, names, problem.objects[index].id, invalid)
 
 
