@@ -29,7 +29,8 @@ import numpy as np
 from dynfab.benchmarks.mbm.conversion import DT, DURATION, PLANNER, obstacle_mapping
 from dynfab.benchmarks.mbm.franka import Franka
 from dynfab.benchmarks.mbm.problems import Problem
-from dynfab.benchmarks.mbm.ur5 import GRASP_OFFSET, HOME, GraspPose, Ur5, panda_grasp_pose, tool_rotation, ur5_robot_mapping
+from dynfab.benchmarks.mbm.ur5 import (GRASP_OFFSET, HOME, GraspPose, Ur5, panda_grasp_pose, tool_rotation,
+                                       ur5_robot_mapping)
 from dynfab.benchmarks.mbm.validity import static_shapes
 from dynfab.benchmarks.mbm.variants import Case, grasped_object
 from dynfab.motion.inverse_kinematics import IkSettings
@@ -81,9 +82,9 @@ def prepare_ur5_case(problem: Problem, panda: Franka, arm: Ur5, planner: str = P
             mapping = _mapping(tuple(round(float(v), 6) for v in start), goal, mapping["obstacles"], planner)
     result = arm.free_ik(grasp, shapes, IK_SETTINGS) if invalid is None else None
     if result is not None and result.q is None:
-        invalid = ("goal: no IK solution of the grasp pose within the UR5's limits (out of reach)" if not result.converged
-                   else f"goal: no IK solution of the grasp pose within the UR5's limits is free on its meshes "
-                        f"({result.converged} found, all touching the scene or itself)")
+        unreached = "goal: no IK solution of the grasp pose within the UR5's limits"
+        invalid = (f"{unreached} (out of reach)" if not result.converged else
+                   f"{unreached} is free on its meshes ({result.converged} found, all touching the scene or itself)")
     return Case(problem, VARIANT, mapping, names, problem.objects[index].id, invalid)
 
 
