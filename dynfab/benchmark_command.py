@@ -1,5 +1,7 @@
 """``dynfab benchmark mbm``: run MotionBenchMaker's Panda problems (dynfab/benchmarks/mbm)
-and print the per-type table.
+and print the per-type table; ``--robot ur5`` runs their scenes with example-robot-data's
+UR5 and gripper instead (object removed, a pose goal at the Panda's grasp pose:
+:mod:`dynfab.benchmarks.mbm.ur5_case`).
 
 Exit codes: 0 the benchmark finished (whatever its success rate), 2 invalid options, an
 output directory of other results or an unusable cluster, 1 a run raised, 130 on Ctrl-C
@@ -27,9 +29,14 @@ def add_benchmark_parser(commands: Any) -> None:
     parser = commands.add_parser("benchmark", help="run a standard benchmark (mbm: MotionBenchMaker's Panda problems) "
                                                    "in parallel, resumable, and write per-type tables")
     parser.add_argument("name", choices=["mbm"], help="mbm: MotionBenchMaker (Chamzas et al., RA-L 2022)")
-    parser.add_argument("--variant", choices=VARIANTS, default="as-posed",
-                        help="as-posed (default); object-removed: the object to grasp removed; moving-sphere: "
-                             "object removed and a sphere crossing the hand's path")
+    parser.add_argument("--robot", choices=("panda", "ur5"), default="panda",
+                        help="panda (default): the problems as posed; ur5: example-robot-data's UR5 with its gripper "
+                             "at the Panda's base, the object removed, a pose goal at the Panda's grasp pose "
+                             "(object-removed only)")
+    parser.add_argument("--variant", choices=VARIANTS,
+                        help="as-posed (default for panda); object-removed: the object to grasp removed (default "
+                             "and only one for ur5); moving-sphere: object removed and a sphere crossing the hand's "
+                             "path")
     parser.add_argument("--types", type=_types, default=PROBLEM_TYPES, metavar="T1,T2",
                         help=f"problem types, comma-separated (default all: {','.join(PROBLEM_TYPES)})")
     parser.add_argument("--problems", type=at_least_one, metavar="N", help="the first N problems of each type")
@@ -55,9 +62,13 @@ def benchmark_command(args: argparse.Namespace) -> int:
     from dynfab.experiments.cluster import ClusterError
     from dynfab.scenario.schema import ScenarioError
 
-    out = args.out or Path("dynfab-benchmarks") / f"mbm-{args.variant}"
-    settings = BenchmarkSettings(args.variant, args.types, args.problems, args.planner, args.guidance, args.seed,
-                                 args.first - 1)
+    variant = args.variant or ("as-posed" if args.robot == "panda" else "object-removed")
+    if args.robot == "ur5" and variant != "object-removed":
+        print(f"dynfab: error: --robot ur5 runs the object-removed variant only, not {variant}", file=sys.stderr)
+        return 2
+    settings = BenchmarkSettings(variant, args.types, args.problems, args.planner, args.guidance, args.seed,
+                                 args.first - 1, args.robot)
+    out = args.out or Path("dynfab-benchmarks") / f"mbm-{settings.label}"
     records = reported(lambda: run_benchmark(settings, out, args.jobs, requested_cluster(args.workers, args.scheduler),
                                              sys.stderr),
                        (BenchmarkError, ClusterError, ProblemError, ScenarioError),

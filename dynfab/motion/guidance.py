@@ -53,6 +53,11 @@ class GuidanceSettings:
     Attributes:
         path: the joint-space planner (OMPL planner, time limit, resolution, margins).
         ik: inverse kinematics of task goals.
+        ik_retry: the second inverse kinematics search when ``ik`` finds no solution
+            clear of obstacles by the planner's margin: with these settings (more seeds:
+            a 6-joint arm has few discrete solutions, most blocked near a grasp) and
+            margin 0, the spheres merely clear (a grasp pose closer than the margin; the
+            planner then escapes it and approaches it as a blocked joint goal).
         timing: how the path is timed.
         speed: fraction of the velocity limits the reference uses [-].
         acceleration: fraction of the acceleration limits the reference uses [-]: the
@@ -84,6 +89,7 @@ class GuidanceSettings:
 
     path: JointPlannerSettings = field(default_factory=JointPlannerSettings)
     ik: IkSettings = field(default_factory=IkSettings)
+    ik_retry: IkSettings = field(default_factory=lambda: IkSettings(seeds=240, time_limit=2.0))
     timing: TimingSettings = field(default_factory=TimingSettings)
     speed: float = 0.5
     acceleration: float = 0.25
@@ -160,7 +166,8 @@ class JointGuidance:
 
     def goal_configuration(self, goal: GoalTargets, q: NDArray[np.float64], seed: int = 0) -> NDArray[np.float64]:
         """The configuration to plan to: a joint goal (clipped into the limits when within
-        :data:`LIMIT_SLACK`), or the collision-free IK solution nearest ``q``.
+        :data:`LIMIT_SLACK`), or the collision-free IK solution nearest ``q`` (clear by the
+        planner's margin, else by ``ik_retry`` merely free).
 
         Raises:
             GuidanceError: ``goal_outside_limits`` or ``no_ik_solution``.
@@ -177,6 +184,9 @@ class JointGuidance:
         margin, self_margin = self.settings.path.margin, self.settings.path.self_margin
         result = solve_ik(self.robot, list(goal), q, lambda x: self.checker.free(x, margin, self_margin),
                           self._ik_settings(seed), self._lower, self._upper)
+        if result.q is None:
+            result = solve_ik(self.robot, list(goal), q, lambda x: self.checker.free(x, 0.0, self_margin),
+                              replace(self.settings.ik_retry, seed=seed), self._lower, self._upper)
         if result.q is None:
             found = (f"{result.converged} solutions within the limits, all in collision" if result.converged
                      else "no solution within the joint limits")

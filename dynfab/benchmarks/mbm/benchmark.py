@@ -32,6 +32,9 @@ from dynfab.benchmarks.mbm.franka import franka
 from dynfab.benchmarks.mbm.problem_run import run_case
 from dynfab.benchmarks.mbm.problems import PROBLEM_TYPES, load_problems
 from dynfab.benchmarks.mbm.tables import write_tables
+from dynfab.benchmarks.mbm.ur5 import ur5
+from dynfab.benchmarks.mbm.ur5_case import VARIANT as UR5_VARIANT
+from dynfab.benchmarks.mbm.ur5_case import prepare_ur5_case
 from dynfab.benchmarks.mbm.variants import Case, prepare_case
 from dynfab.experiments.cluster import Cluster, series_executor
 from dynfab.experiments.series import Progress, RunError, SeriesError, exclusive, log_lines
@@ -48,7 +51,9 @@ class BenchmarkSettings:
     """What to run.
 
     Attributes:
-        variant: ``as-posed``, ``object-removed`` or ``moving-sphere``.
+        variant: ``as-posed``, ``object-removed`` or ``moving-sphere`` (``robot`` panda);
+            ``object-removed`` only for the UR5.
+        robot: ``panda`` (the problems as posed) or ``ur5`` (:mod:`dynfab.benchmarks.mbm.ur5_case`).
         types: Problem types, in report order.
         per_type: The first this many problems of each type; None: all.
         planner: The scenario's planner.
@@ -64,6 +69,12 @@ class BenchmarkSettings:
     guidance: bool | None = None
     seed: int = 0
     skip: int = 0
+    robot: str = "panda"
+
+    @property
+    def label(self) -> str:
+        """The variant's name in records and tables: ``variant``, or ``ur5-object-removed``."""
+        return self.variant if self.robot == "panda" else UR5_VARIANT
 
 
 def run_benchmark(settings: BenchmarkSettings, out_dir: str | Path, jobs: int | None = None,
@@ -80,15 +91,13 @@ def run_benchmark(settings: BenchmarkSettings, out_dir: str | Path, jobs: int | 
     jobs = (os.cpu_count() or 1) if jobs is None else jobs
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    robot = franka()
-    cases = [prepare_case(problem, settings.variant, robot, settings.planner, settings.seed)
-             for problem in load_problems(settings.types, settings.per_type, skip=settings.skip)]
+    cases = _cases(settings)
     if settings.guidance is not None:
         cases = [dataclasses.replace(case, mapping={**case.mapping, "guidance": settings.guidance}) for case in cases]
     log = out / "runs.jsonl"
     try:
         with exclusive(out):
-            done = _load_records(log, settings.variant)
+            done = _load_records(log, settings.label)
             records = {case.problem.name: _fresh(case, done) for case in cases}
             pending = [case for case in cases if records[case.problem.name] is None and case.invalid is None]
             _write_scenarios(out / "scenarios", pending)
@@ -96,15 +105,33 @@ def run_benchmark(settings: BenchmarkSettings, out_dir: str | Path, jobs: int | 
                 for case in cases:
                     if case.invalid is not None and records[case.problem.name] is None:
                         records[case.problem.name] = _append(file, _record(case, None))
-                bar = None if progress is None else Progress(progress, f"mbm {settings.variant}", len(cases),
+                bar = None if progress is None else Progress(progress, f"mbm {settings.label}", len(cases),
                                                              len(cases) - len(pending))
                 for case, outcome in _execute(pending, min(jobs, max(len(pending), 1)), cluster, bar):
                     records[case.problem.name] = _append(file, _record(case, outcome))
             ordered = [records[case.problem.name] for case in cases]
-            write_tables(out, settings.variant, settings.types, ordered)
+            write_tables(out, settings.label, settings.types, ordered)
     except SeriesError as error:
         raise BenchmarkError(str(error)) from None
     return ordered
+
+
+def _cases(settings: BenchmarkSettings) -> list[Case]:
+    """Every problem of ``settings`` prepared as a case of its robot and variant.
+
+    Raises:
+        ValueError: An unknown robot, or a variant the UR5 does not have.
+    """
+    problems = load_problems(settings.types, settings.per_type, skip=settings.skip)
+    if settings.robot == "panda":
+        return [prepare_case(problem, settings.variant, franka(), settings.planner, settings.seed)
+                for problem in problems]
+    if settings.robot != "ur5":
+        raise ValueError(f"unknown robot {settings.robot!r} (expected panda or ur5)")
+    if settings.variant != "object-removed":
+        raise ValueError(f"the UR5 runs the object-removed variant only (its goal is the Panda's grasp pose without "
+                         f"the object), not {settings.variant}")
+    return [prepare_ur5_case(problem, franka(), ur5(), settings.planner) for problem in problems]
 
 
 def _digest(mapping: dict[str, Any]) -> str:

@@ -1,5 +1,6 @@
-"""One benchmark run, in a worker process: the scenario on dynfab's built-in Panda, then
-its recording checked on Franka's meshes as ``dynfab check`` checks URDF robots
+"""One benchmark run, in a worker process: the scenario on dynfab's built-in Panda (or the
+URDF robot it names, e.g. the UR5), then its recording checked on Franka's meshes (the
+URDF robot's own meshes) as ``dynfab check`` checks URDF robots
 (:func:`dynfab.scenario.recording_check.check_recording`: collisions, self-collisions,
 joint limits at every sample).
 
@@ -25,13 +26,14 @@ __all__ = ["run_case"]
 
 
 def run_case(mapping: dict[str, Any]) -> dict[str, Any]:
-    """Run the scenario ``mapping`` and check it on Franka's meshes (module doc)."""
+    """Run the scenario ``mapping`` and check it on the meshes (module doc)."""
     start = time.perf_counter()
     try:
         result = run_scenario(scenario_from_dict(mapping))
     except ScenarioError as error:
         return {"metrics": None, "check": None, "refused": str(error), "wall_time_s": time.perf_counter() - start}
     recording = run_recording(result.robot, result.record, result.scenario.dt)
-    check = check_recording(scenario_from_dict({**mapping, "robot": franka_robot_mapping()}), recording)
+    measured = franka_robot_mapping() if mapping["robot"] == "panda" else mapping["robot"]
+    check = check_recording(scenario_from_dict({**mapping, "robot": measured}), recording)
     return {"metrics": result.metrics.to_dict(), "check": check.to_dict(), "refused": None,
             "wall_time_s": time.perf_counter() - start}

@@ -2,7 +2,7 @@
 :mod:`dynfab.benchmarks.mbm.benchmark`.
 
 A valid case succeeds when the goal was reached (dynfab's metrics) and Franka's meshes
-find no collision, no self-collision and no joint beyond its limits over the whole run.
+(the UR5's for ``ur5-*`` variants) find no collision, no self-collision and no joint beyond its limits over the whole run.
 A run whose metrics claim success while the meshes find one of those is *contradicted*:
 counted and listed. Invalid cases count neither as success nor as failure.
 
@@ -174,9 +174,12 @@ def write_tables(out: Path, variant: str, types: Sequence[str], records: Sequenc
 
 
 def _markdown(variant: str, rows: Sequence[TypeRow], outcomes: Sequence[CaseOutcome]) -> str:
-    lines = [f"# MotionBenchMaker (Panda), {variant}", "",
-             "Success: goal reached with no collision, self-collision or joint-limit violation on Franka's meshes "
-             "(fingers open 0.04 m), in % of the valid problems.", "",
+    ur5 = variant.startswith("ur5-")
+    robot, meshes = (("UR5 with gripper", "the UR5's meshes (ur5_gripper.urdf)") if ur5
+                     else ("Panda", "Franka's meshes (fingers open 0.04 m)"))
+    lines = [f"# MotionBenchMaker ({robot}), {variant}", "",
+             f"Success: goal reached with no collision, self-collision or joint-limit violation on {meshes}, in % "
+             f"of the valid problems.", "",
              "| type | problems | invalid | success | mesh collisions | self-collisions | joint limits "
              "| contradicted | refused | time to goal [s] | plan time [ms] | path length [m] | plans | guided "
              "| failures |",
