@@ -25,7 +25,7 @@ from dynfab.motion.trajectory_mapping import trajectory_from_mapping
 
 RUNS, JOBS = 2, 2
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
-TIMING_KEYS = {"solver_time_ms"}  # wall-clock metrics, the only ones allowed to differ on replay
+TIMING_KEYS = {"solver_time_ms", "plan_time_ms"}  # wall-clock metrics, the only ones allowed to differ on replay
 
 
 @pytest.fixture(scope="module", params=list(EXPERIMENTS))
@@ -159,7 +159,7 @@ def test_a_directory_another_series_is_running_in_is_refused(tmp_path: Path) -> 
 
 
 def test_registry_figures_belong_to_the_planners_compared() -> None:
-    assert list(EXPERIMENTS) == ["exp1", "exp2a", "exp2b", "exp3", "exp4", "exp5", "exp6", "arms"]
+    assert list(EXPERIMENTS) == ["exp1", "exp2a", "exp2b", "exp3", "exp4", "exp5", "exp6", "arms", "arms-pose"]
     for name, experiment in EXPERIMENTS.items():
         assert experiment.name == name and experiment.planners
         for figure in experiment.figures:
