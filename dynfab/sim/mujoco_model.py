@@ -43,6 +43,7 @@ import trimesh
 from dynfab.geometry.shapes import Box, Capsule, Cylinder, Plane, Shape, Sphere
 from dynfab.robots.robot import BASE_JOINTS, DifferentialDriveBase, Robot
 from dynfab.robots.urdf import Joint, UrdfModel
+from dynfab.sim.mjcf_values import joint_motion, mjcf_numbers, origin_matrix, pose_attributes
 from dynfab.sim.mujoco_meshes import link_mesh_file, mesh_file
 
 __all__ = ["ARMATURE", "PHYSICS_TIMESTEP", "MujocoModelError", "MujocoScene", "SceneObstacle", "build_scene"]
@@ -242,10 +243,10 @@ class _Builder:
     def _child(self, body: ET.Element, joint: Joint) -> None:
         """The body of ``joint``'s child, its pose and its joint."""
         value = self._folded_value(joint)
-        transform = _origin_matrix(joint)
+        transform = origin_matrix(joint)
         if value is not None:
-            transform = transform @ _motion(joint, value)
-        child_attributes = _pose_attributes(transform)
+            transform = transform @ joint_motion(joint, value)
+        child_attributes = pose_attributes(transform)
         self._subtree(body, joint.child, child_attributes)
         child = body.find(f"body[@name='{joint.child}']")
         if value is None:
@@ -253,7 +254,7 @@ class _Builder:
             self._joint(child, joint)
             if child.find("inertial") is None:
                 ET.SubElement(child, "inertial", pos="0 0 0", mass=repr(_VIRTUAL_MASS),
-                              diaginertia=_numbers((_VIRTUAL_INERTIA,) * 3))
+                              diaginertia=mjcf_numbers((_VIRTUAL_INERTIA,) * 3))
 
     def _folded_value(self, joint: Joint) -> float | None:
         """The constant value of a fixed, locked or led-by-a-locked joint; None if it moves."""
@@ -267,9 +268,9 @@ class _Builder:
 
     def _joint(self, body: ET.Element, joint: Joint) -> None:
         kind = "slide" if joint.type == "prismatic" else "hinge"
-        attributes = {"name": joint.name, "type": kind, "axis": _numbers(joint.axis)}
+        attributes = {"name": joint.name, "type": kind, "axis": mjcf_numbers(joint.axis)}
         if joint.limit is not None and math.isfinite(joint.limit.lower) and joint.type != "continuous":
-            attributes["range"] = _numbers((joint.limit.lower - LIMIT_MARGIN, joint.limit.upper + LIMIT_MARGIN))
+            attributes["range"] = mjcf_numbers((joint.limit.lower - LIMIT_MARGIN, joint.limit.upper + LIMIT_MARGIN))
         if kind == "hinge":
             attributes["armature"] = str(ARMATURE)
         element = ET.Element("joint", **attributes)
@@ -277,7 +278,7 @@ class _Builder:
         if joint.mimic is not None:
             mimic = joint.mimic
             ET.SubElement(self.equality, "joint", joint1=joint.name, joint2=mimic.joint,
-                          polycoef=_numbers((mimic.offset, mimic.multiplier, 0.0, 0.0, 0.0)))
+                          polycoef=mjcf_numbers((mimic.offset, mimic.multiplier, 0.0, 0.0, 0.0)))
             return
         ET.SubElement(self.actuator, "motor", name=f"{joint.name}_motor", joint=joint.name, gear="1")
 
@@ -293,8 +294,8 @@ class _Builder:
             return
         tensor = inertial.link_frame_inertia()
         full = (tensor[0, 0], tensor[1, 1], tensor[2, 2], tensor[0, 1], tensor[0, 2], tensor[1, 2])
-        ET.SubElement(body, "inertial", pos=_numbers(inertial.origin.xyz), mass=repr(inertial.mass),
-                      fullinertia=_numbers(full))
+        ET.SubElement(body, "inertial", pos=mjcf_numbers(inertial.origin.xyz), mass=repr(inertial.mass),
+                      fullinertia=mjcf_numbers(full))
 
     def _geoms(self, body: ET.Element, link: str) -> None:
         contact = {"contype": str(_ROBOT), "conaffinity": "0", "rgba": _ROBOT_RGBA}
@@ -313,7 +314,7 @@ class _Builder:
         for i, sphere in enumerate(self.robot.collision_spheres):
             if sphere.link == link:
                 ET.SubElement(body, "geom", name=f"sphere{i}", type="sphere", size=repr(sphere.radius),
-                              pos=_numbers(sphere.center), **contact)
+                              pos=mjcf_numbers(sphere.center), **contact)
 
     def _self_pairs(self, self_collision_links: Sequence[tuple[str, str]]) -> None:
         if self.meshes:
@@ -337,12 +338,12 @@ class _Builder:
         body.insert(0, ET.Element("freejoint", name="base_free"))
         for side, sign in (("left", 1.0), ("right", -1.0)):
             link = f"wheel_{side}_link"
-            wheel = ET.SubElement(body, "body", name=link, pos=_numbers((0.0, sign * base.wheel_separation / 2,
+            wheel = ET.SubElement(body, "body", name=link, pos=mjcf_numbers((0.0, sign * base.wheel_separation / 2,
                                                                           base.wheel_radius)))
             inertial = self.links[link].inertial if link in self.links else None
             mass = inertial.mass if inertial is not None and inertial.mass > 0 else _DEFAULT_WHEEL_MASS
             axial, radial = 0.5 * mass * base.wheel_radius ** 2, 0.25 * mass * base.wheel_radius ** 2
-            ET.SubElement(wheel, "inertial", pos="0 0 0", mass=repr(mass), diaginertia=_numbers((radial, axial, radial)))
+            ET.SubElement(wheel, "inertial", pos="0 0 0", mass=repr(mass), diaginertia=mjcf_numbers((radial, axial, radial)))
             ET.SubElement(wheel, "joint", name=f"wheel_{side}", type="hinge", axis="0 1 0")
             ET.SubElement(wheel, "geom", name=f"wheel_{side}", type="sphere", size=repr(base.wheel_radius),
                           friction="1 0.005 0.0001",
@@ -368,7 +369,7 @@ class _Builder:
         elif isinstance(shape, Sphere):
             attributes.update(type="sphere", size=repr(shape.radius))
         elif isinstance(shape, Box):
-            attributes.update(type="box", size=_numbers(np.array(shape.size) / 2))
+            attributes.update(type="box", size=mjcf_numbers(np.array(shape.size) / 2))
         elif isinstance(shape, Cylinder):
             attributes.update(type="cylinder", size=f"{shape.radius} {shape.length / 2}")
         elif isinstance(shape, Capsule):
@@ -377,7 +378,7 @@ class _Builder:
             attributes.update(type="box", size="5 5 5", pos="0 0 -5")  # the solid half-space, 10 m wide
         else:
             raise MujocoModelError(f"obstacle {k}: unsupported shape {type(shape).__name__}")
-        pose = {"pos": _numbers(obstacle.position), "quat": _numbers(obstacle.orientation)}
+        pose = {"pos": mjcf_numbers(obstacle.position), "quat": mjcf_numbers(obstacle.orientation)}
         if obstacle.moving:
             body = ET.SubElement(self.world, "body", name=f"obstacle{k}", mocap="true", **pose)
             ET.SubElement(body, "geom", **attributes)
@@ -392,32 +393,3 @@ def _subtree_mass(model: UrdfModel, link: str) -> float:
     inertial = links[link].inertial
     mass = 0.0 if inertial is None else inertial.mass
     return mass + sum(_subtree_mass(model, j.child) for j in model.child_joints(link))
-
-
-def _origin_matrix(joint: Joint) -> np.ndarray:
-    transform = np.eye(4)
-    transform[:3, :3] = np.array(joint.origin.rotation)
-    transform[:3, 3] = joint.origin.xyz
-    return transform
-
-
-def _motion(joint: Joint, value: float) -> np.ndarray:
-    """The joint's motion ``M(value)``: rotation about or translation along its axis."""
-    motion = np.eye(4)
-    axis = np.array(joint.axis)
-    if joint.type == "prismatic":
-        motion[:3, 3] = value * axis
-    elif joint.type in ("revolute", "continuous"):
-        cross = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-        motion[:3, :3] = np.eye(3) + math.sin(value) * cross + (1 - math.cos(value)) * cross @ cross
-    return motion
-
-
-def _pose_attributes(transform: np.ndarray) -> dict[str, str]:
-    quaternion = np.zeros(4)
-    mujoco.mju_mat2Quat(quaternion, np.ascontiguousarray(transform[:3, :3]).reshape(-1))
-    return {"pos": _numbers(transform[:3, 3]), "quat": _numbers(quaternion)}
-
-
-def _numbers(values: Sequence[float] | np.ndarray) -> str:
-    return " ".join(repr(float(v)) for v in values)
