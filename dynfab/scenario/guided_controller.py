@@ -84,6 +84,7 @@ class GuidedController:
         self.inner = inner
         self.guided = guided
         self._static_slots = static_slots
+        self._written = np.zeros(len(static_slots))  # the allowances in the slots now (none at first)
         self.fallback: Controller | None = None
         self._goal = goal
         self._moving = moving
@@ -124,8 +125,11 @@ class GuidedController:
                 self.fallback = self._make_fallback()
                 return self.fallback(t, q, qdot)
         self.guided.update(t, q, moving)
-        for slot, allowance in zip(self._static_slots, self.guided.allowances()):
-            slot.write(self.inner.planner.parameters, float(allowance))
+        allowances = self.guided.allowances()
+        if not np.array_equal(allowances, self._written):  # they change once per plan: not every tick
+            for slot, allowance in zip(self._static_slots, allowances):
+                slot.write(self.inner.planner.parameters, float(allowance))
+            self._written = allowances
         return self.inner(t, q, qdot)
 
 
