@@ -234,9 +234,10 @@ class JointGuidance:
         which keep ``buffers[k]`` of clearance, still see ``goal_clearance`` at ``q``:
         ``a_k = max(0, buffer_k + goal_clearance − c_k(q))``, with ``c_k`` the clearance of
         the robot's spheres from obstacle ``k`` alone."""
+        if not obstacles:
+            return np.zeros(0)
         clearances = np.array([self._single_clearance(q, obstacle) for obstacle in obstacles])
-        return np.maximum(0.0, np.asarray(buffers, dtype=float) + self.settings.goal_clearance - clearances) \
-            if len(obstacles) else np.zeros(0)
+        return np.maximum(0.0, np.asarray(buffers, dtype=float) + self.settings.goal_clearance - clearances)
 
     def _single_clearance(self, q: NDArray[np.float64], obstacle: PlacedObstacle) -> float:
         self._single.set_obstacles((obstacle,))
@@ -256,11 +257,10 @@ class JointGuidance:
         """The path timed at ``speed``; an escaped goal's last segment as a second phase at
         ``approach_speed``."""
         limits, settings = self.robot.limits, self.settings
+        cruise = (settings.speed * limits.velocity, settings.acceleration * limits.acceleration)
         if not path.escaped_goal:
-            return time_path(path.waypoints, settings.speed * limits.velocity,
-                             settings.acceleration * limits.acceleration, settings.timing)
-        way = time_path(path.waypoints[:-1], settings.speed * limits.velocity, settings.acceleration * limits.acceleration,
-                        settings.timing)
+            return time_path(path.waypoints, *cruise, settings.timing)
+        way = time_path(path.waypoints[:-1], *cruise, settings.timing)
         approach = time_path(path.waypoints[-2:], settings.approach_speed * limits.velocity,
                              settings.approach_speed * limits.acceleration, settings.timing)
         return PhasedTrajectory((way, approach))
