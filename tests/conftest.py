@@ -11,6 +11,12 @@ import pytest
 # imported, which test collection does before any CLI call could choose it.
 os.environ.setdefault("MUJOCO_GL", "egl")
 
+# Planners on CasADi's VM unless the caller says otherwise: the suite builds hundreds of
+# planners once each, and compiling each to C (the library's default) would cost more than
+# it saves. tests/test_c_backend.py checks the C backend against the VM output for output,
+# and tests/test_public_api.py that "c" is the default outside the suite.
+os.environ.setdefault("DYNFAB_BACKEND", "vm")
+
 
 @pytest.fixture(autouse=True, scope="session")
 def collision_model_cache(request: pytest.FixtureRequest) -> Iterator[None]:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from dynfab.fabric.leaves.shape_obstacle import ShapeObstacleAvoidance
-from dynfab.fabric.parameters import SHAPE_DIMENSIONS, ParameterLayout, ShapeSlots
+from dynfab.fabric.parameters import SHAPE_DIMENSIONS, ParameterError, ParameterLayout, ShapeSlots
 from dynfab.fabric.planner import FabricPlanner, GoalConfig, PlannerConfig
 from dynfab.geometry.distance import placed_distance
 from dynfab.geometry.shapes import Box, Capsule, Cylinder, Placement, Plane, quaternion_from_rpy
@@ -106,7 +106,9 @@ def test_layout_keeps_sphere_offsets_and_views_match_symbols() -> None:
 
 def test_static_layout_has_no_shape_velocities() -> None:
     views = ParameterLayout((3,), 0, shape_slots=ShapeSlots(plane=1)).views(np.zeros(3 + 1 + 3 + 4 + 1))
-    assert views.planes.velocity is None and views.planes.dimensions.shape == (1, 0)
+    assert not views.planes.velocity and views.planes.dimensions.shape == (1, 0)
+    with pytest.raises(ParameterError, match=r"planes.velocity: .*dynamic=True"):
+        views.planes.velocity[0] = [0.0, 0.0, 1.0]
     with pytest.raises(ValueError, match="ShapeSlots.box"):
         ShapeSlots(box=-1)
 

@@ -1,5 +1,12 @@
 """How a planner's function is evaluated: the CasADi virtual machine or compiled C.
 
+The default is ``"c"``: a planner step costs several times less compiled (``./run bench``
+measures both), and the first build of a planner pays the compiler once (seconds to a
+minute, with a line on stderr; the library is cached). ``DYNFAB_BACKEND=vm`` in the
+environment makes the VM the default (the test suite does that: it builds hundreds of
+planners once each); ``PlannerConfig(backend=...)`` and a scenario's ``backend:`` choose
+per planner.
+
 ``"vm"`` builds the SX function (or loads it from the cache folder, by the planner's
 inputs) and lets CasADi interpret it. ``"c"`` compiles it
 (:mod:`dynfab.fabric.c_backend`), and on a cache hit by the planner's inputs
@@ -11,6 +18,7 @@ back to the VM with one warning line on stderr.
 from __future__ import annotations
 
 import hashlib
+import os
 import sys
 import zlib
 from collections.abc import Callable
@@ -23,6 +31,21 @@ from dynfab.fabric.fingerprint import UnknownValueError, inputs_digest
 
 #: the evaluation backends a planner can ask for
 BACKENDS: tuple[str, ...] = ("vm", "c")
+
+#: the environment variable that sets :func:`default_backend`
+BACKEND_VARIABLE = "DYNFAB_BACKEND"
+
+
+def default_backend() -> str:
+    """``$DYNFAB_BACKEND`` if set, else ``"c"``.
+
+    Raises:
+        ValueError: ``$DYNFAB_BACKEND`` is not one of :data:`BACKENDS`.
+    """
+    backend = os.environ.get(BACKEND_VARIABLE, "c").strip() or "c"
+    if backend not in BACKENDS:
+        raise ValueError(f"${BACKEND_VARIABLE} must be one of {', '.join(BACKENDS)}, got {backend!r}")
+    return backend
 
 
 @dataclass(frozen=True)

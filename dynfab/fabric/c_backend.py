@@ -39,11 +39,14 @@ import casadi as ca
 from dynfab.robots.collision_model import cache_dir
 
 #: the flags the planner library is compiled with. No fused multiply-adds, so that the C
-#: outputs round exactly like the CasADi VM's. Measured on the Panda with 5 spheres (2-core
-#: AMD znver3, median of blocks): -O2 3.0 us per call, -O3 3.0 us, -O2 -march=native 2.6 us;
-#: compile 2.4 / 2.8 / 2.7 s. -march=native is left out: a library built with it crashes
-#: (illegal instruction) on an older CPU that shares the cache folder.
-COMPILE_FLAGS: tuple[str, ...] = ("-O2", "-ffp-contract=off", "-shared", "-fPIC")
+#: outputs round exactly like the CasADi VM's. -O1: the dynamic Panda planner of the
+#: default robot (75 spheres, 5 obstacle slots, 87,608 instructions; 2-core machine under
+#: load, 2026-11-26, best of 5 blocks) costs 74 us per call at -O1, 76 us at -O2 and 156 us
+#: at -O0, and compiles in 17 s at -O1, 33 s at -O2 and 5 s at -O0 (earlier, a 22-sphere
+#: Panda: -O2 3.0 us, -O3 3.0 us, -O2 -march=native 2.6 us). -march=native is left out: a
+#: library built with it crashes (illegal instruction) on an older CPU that shares the
+#: cache folder.
+COMPILE_FLAGS: tuple[str, ...] = ("-O1", "-ffp-contract=off", "-shared", "-fPIC")
 #: format of the cache entries; bump when their layout changes
 _FORMAT = 1
 _FUNCTION_NAME = "fabric"

@@ -14,7 +14,9 @@ layout has none, and its planner treats them as structurally zero.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, fields
+from typing import NoReturn
 
 import casadi as ca
 import numpy as np
@@ -25,6 +27,68 @@ from dynfab.fabric.maps import Reference
 #: Obstacle shapes that have slots of their own, and how many numbers size each
 #: (box ``(lx, ly, lz)``, cylinder and capsule ``(radius, length)``, plane none) [m].
 SHAPE_DIMENSIONS: dict[str, int] = {"box": 3, "cylinder": 2, "capsule": 2, "plane": 0}
+
+#: the :class:`RuntimeParameters` field of each shape kind
+_PLURAL: dict[str, str] = {"box": "boxes", "cylinder": "cylinders", "capsule": "capsules", "plane": "planes"}
+
+
+class ParameterError(ValueError):
+    """A runtime parameter the planner was not built with, or a value of the wrong shape."""
+
+
+@dataclass(frozen=True)
+class AbsentParameter:
+    """A field the planner was not built with: reading a slot, writing one or turning it
+    into an array raises :class:`ParameterError` with ``name`` and ``remedy``; it is falsy.
+
+    Attributes:
+        name: the field, e.g. ``"obstacle_velocity"``.
+        remedy: how to build a planner that has it.
+    """
+
+    name: str
+    remedy: str
+
+    def _refuse(self) -> NoReturn:
+        raise ParameterError(f"{self.name}: this planner has no such parameter; {self.remedy}")
+
+    def __getitem__(self, index: object) -> NoReturn:
+        self._refuse()
+
+    def __setitem__(self, index: object, value: object) -> NoReturn:
+        self._refuse()
+
+    def __array__(self, *args: object, **kwargs: object) -> NoReturn:
+        self._refuse()
+
+    def __bool__(self) -> bool:
+        return False
+
+
+_STATIC = "build it with PlannerConfig(..., dynamic=True)"
+
+
+class GoalViews(tuple[np.ndarray, ...]):
+    """One writable view per goal (goals differ in dimension, so this is not one array).
+
+    ``views[i] = value`` copies ``value`` into goal ``i``'s view (as ``views[i][:] = value``
+    does), after checking its shape.
+    """
+
+    name: str
+
+    def __new__(cls, views: Sequence[np.ndarray], name: str) -> GoalViews:
+        made = super().__new__(cls, views)
+        made.name = name
+        return made
+
+    def __setitem__(self, index: int, value: object) -> None:
+        view = self[index]
+        array = np.asarray(value, dtype=float)
+        if array.shape != view.shape:
+            raise ParameterError(f"{self.name}[{index}] must have shape {view.shape} "
+                                 f"(the goal's dimension), got {array.shape}")
+        view[:] = array
 
 
 @dataclass(frozen=True)
@@ -92,16 +156,16 @@ class ShapeViews:
             ``(radius, length)``, plane none.
         allowance: (k,) how far the robot's spheres may enter each shape [m] (0, the
             default: not at all; global guidance sets it near a goal that needs it).
-        velocity, acceleration: (k, 3) of the origin [m/s], [m/s²] (dynamic planners only,
-            else ``None``).
+        velocity, acceleration: (k, 3) of the origin [m/s], [m/s²] (dynamic planners only;
+            an :class:`AbsentParameter` in a static one).
     """
 
     position: np.ndarray
     orientation: np.ndarray
     dimensions: np.ndarray
     allowance: np.ndarray
-    velocity: np.ndarray | None = None
-    acceleration: np.ndarray | None = None
+    velocity: np.ndarray | AbsentParameter
+    acceleration: np.ndarray | AbsentParameter
 
 
 @dataclass(frozen=True)
@@ -132,19 +196,19 @@ class RuntimeParameters:
 
     Attributes:
         goal_position: one view per goal, of the goal's dimension [m or rad; unit
-            directions for orientation goals].
+            directions for orientation goals]; ``goal_position[i] = value`` writes goal ``i``.
         goal_weight: (n_goals,) weights; 0 deactivates a goal.
         obstacle_position: (slots, 3) sphere centres [m] (z ignored by planar robots).
         obstacle_radius: (slots,) radii [m]; 0 marks an unused slot.
         goal_velocity, goal_acceleration: per goal ``ẋ̃`` [m/s], ``ẍ̃`` [m/s²]
-            (dynamic planners only, else ``None``).
+            (dynamic planners only; an :class:`AbsentParameter` in a static one).
         obstacle_velocity, obstacle_acceleration: (slots, 3) [m/s], [m/s²]
-            (dynamic planners only, else ``None``).
+            (dynamic planners only; an :class:`AbsentParameter` in a static one).
         boxes, cylinders, capsules, planes: the shape slots of each kind (zero rows if
             the planner has none).
     """
 
-    goal_position: tuple[np.ndarray, ...]
+    goal_position: GoalViews
     goal_weight: np.ndarray
     obstacle_position: np.ndarray
     obstacle_radius: np.ndarray
@@ -152,14 +216,14 @@ class RuntimeParameters:
     cylinders: ShapeViews
     capsules: ShapeViews
     planes: ShapeViews
-    goal_velocity: tuple[np.ndarray, ...] | None = None
-    goal_acceleration: tuple[np.ndarray, ...] | None = None
-    obstacle_velocity: np.ndarray | None = None
-    obstacle_acceleration: np.ndarray | None = None
+    goal_velocity: GoalViews | AbsentParameter
+    goal_acceleration: GoalViews | AbsentParameter
+    obstacle_velocity: np.ndarray | AbsentParameter
+    obstacle_acceleration: np.ndarray | AbsentParameter
 
     def shape_views(self, kind: str) -> ShapeViews:
         """The views of the slots of ``kind`` (a key of :data:`SHAPE_DIMENSIONS`)."""
-        return {"box": self.boxes, "cylinder": self.cylinders, "capsule": self.capsules, "plane": self.planes}[kind]
+        return getattr(self, _PLURAL[kind])
 
 
 @dataclass(frozen=True)
@@ -261,7 +325,8 @@ class ParameterLayout:
             raise ValueError(f"parameter buffer must have shape ({self.size},), got {buffer.shape}")
         goals, weights, obstacle_blocks, radii = self._blocks()
         n_goals = len(self.goal_dimensions)
-        goal_views = [tuple(buffer[slices[i]] for slices in goals) for i in range(self._derivatives)]
+        names = ("goal_position", "goal_velocity", "goal_acceleration")
+        goal_views = [GoalViews([buffer[slices[i]] for slices in goals], names[i]) for i in range(self._derivatives)]
         obstacle_views = [buffer[block].reshape(self.obstacle_slots, 3) for block in obstacle_blocks]
         shapes = self._shape_views(buffer)
         return RuntimeParameters(
@@ -273,10 +338,12 @@ class ParameterLayout:
             cylinders=shapes["cylinder"],
             capsules=shapes["capsule"],
             planes=shapes["plane"],
-            goal_velocity=goal_views[1] if self.dynamic else None,
-            goal_acceleration=goal_views[2] if self.dynamic else None,
-            obstacle_velocity=obstacle_views[1] if self.dynamic else None,
-            obstacle_acceleration=obstacle_views[2] if self.dynamic else None,
+            goal_velocity=goal_views[1] if self.dynamic else AbsentParameter("goal_velocity", _STATIC),
+            goal_acceleration=goal_views[2] if self.dynamic else AbsentParameter("goal_acceleration", _STATIC),
+            obstacle_velocity=(obstacle_views[1] if self.dynamic
+                               else AbsentParameter("obstacle_velocity", _STATIC)),
+            obstacle_acceleration=(obstacle_views[2] if self.dynamic
+                                   else AbsentParameter("obstacle_acceleration", _STATIC)),
         )
 
     def _shape_views(self, buffer: np.ndarray) -> dict[str, ShapeViews]:
@@ -289,7 +356,7 @@ class ParameterLayout:
                 orientation=buffer[orientations].reshape(slots, 4),
                 dimensions=buffer[dimensions].reshape(slots, SHAPE_DIMENSIONS[kind]),
                 allowance=buffer[allowances],
-                velocity=origin[1] if self.dynamic else None,
-                acceleration=origin[2] if self.dynamic else None,
+                velocity=origin[1] if self.dynamic else AbsentParameter(f"{_PLURAL[kind]}.velocity", _STATIC),
+                acceleration=origin[2] if self.dynamic else AbsentParameter(f"{_PLURAL[kind]}.acceleration", _STATIC),
             )
         return views

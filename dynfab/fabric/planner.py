@@ -43,6 +43,7 @@ from dynfab.robots.robot import Robot
 from dynfab.fabric.spec import Spec
 from dynfab.fabric.speed_control import EnvironmentMotion
 from dynfab.fabric.planner_config import GoalConfig, PlannerConfig
+from dynfab.sim.models import motion_model_for
 
 __all__ = ["FabricPlanner", "GoalConfig", "PlannerConfig"]
 
@@ -91,6 +92,7 @@ class FabricPlanner:
             self.parameters.goal_weight[i] = goal.weight
         self._batch = BatchEvaluator(self.function, self._n, self._nv, self._layout.size)
         self.fallback_count = 0
+        self._motion = motion_model_for(robot.base is not None)
         self.build_time_s = time.perf_counter() - start
 
     @property
@@ -134,6 +136,29 @@ class FabricPlanner:
         if self._remembers_command:
             self._previous_command[:] = command
         return command
+
+    def step(self, q: np.ndarray, qdot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The state one control period later, for a loop without a simulator.
+
+        Holds ``q̈ = compute(q, q̇)`` for ``Δt = config.control_period`` and integrates it
+        exactly: ``q' = q + q̇ Δt + ½ q̈ Δt²``, ``q̇' = q̇ + q̈ Δt`` (on a differential-drive
+        base, the unicycle arc of :class:`dynfab.sim.models.DifferentialDrive`). With
+        ``bound_command`` (the default) ``q'`` and ``q̇'`` are within the joint, velocity and
+        acceleration limits, because the command is bounded over exactly this period.
+
+        Args:
+            q: configuration (n,).
+            qdot: velocity coordinates (n,), or (n − 1,) on a base.
+
+        Returns:
+            ``(q', q̇')``, new arrays.
+
+        Raises:
+            ValueError: as :meth:`compute`.
+        """
+        command = self.compute(q, qdot)
+        return self._motion.step(np.asarray(q, dtype=float), np.asarray(qdot, dtype=float), command,
+                                 self.config.control_period)
 
     def compute_batch(self, Q: np.ndarray, Qdot: np.ndarray, P: np.ndarray | None = None,
                       previous: np.ndarray | None = None, threads: int | None = None) -> np.ndarray:

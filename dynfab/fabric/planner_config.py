@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from dynfab.fabric.backends import BACKENDS
+from dynfab.fabric.backends import BACKENDS, default_backend
 from dynfab.fabric.leaves.barrier import Barrier
 from dynfab.fabric.leaves.goal import GoalAttractor
 from dynfab.fabric.leaves.limits import JointLimitAvoidance
@@ -86,8 +86,10 @@ class PlannerConfig:
             position bounds look one period ahead (:mod:`dynfab.fabric.command_bounds`).
         bound_command: make every command executable (:mod:`dynfab.fabric.command_bounds`);
             ``False`` returns the fabric's raw acceleration (for studying the theory).
-        backend: ``"vm"`` interprets the function in CasADi's virtual machine; ``"c"``
-            compiles it to C and caches the library (:mod:`dynfab.fabric.backends`).
+        backend: ``"c"`` (the default, unless ``$DYNFAB_BACKEND`` says ``vm``) compiles the
+            function to C and caches the library, falling back to the VM without a
+            compiler; ``"vm"`` interprets it in CasADi's virtual machine
+            (:mod:`dynfab.fabric.backends`).
     """
 
     goals: tuple[GoalConfig | OrientationGoalConfig, ...]
@@ -106,7 +108,7 @@ class PlannerConfig:
     limits: MotionLimits | None = None
     control_period: float = 0.01
     bound_command: bool = True
-    backend: str = "vm"
+    backend: str = field(default_factory=default_backend)
 
     @classmethod
     def for_robot(cls, robot: Robot, goals: tuple[GoalConfig | OrientationGoalConfig, ...], obstacle_slots: int = 0,

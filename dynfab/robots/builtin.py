@@ -6,9 +6,11 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Mapping, Sequence
 from importlib import resources
+from typing import Literal
 
 import numpy as np
 
+from .collision_model import auto_collision_model
 from .franka import FINGER_JOINT, FINGER_RANGE, OPEN, PANDA_JOINTS
 from .kinematics import Kinematics
 from .panda_spheres import PANDA_FITTED_PAIRS, PANDA_FITTED_SPHERES
@@ -139,22 +141,29 @@ def load_robot(name: str, fingers: float | None = None) -> Robot:
     return FINGERED_ROBOTS[name](fingers)
 
 
-def robot_from_urdf(path: str | os.PathLike[str], goal_link: str,
-                    spheres: Sequence[CollisionSphere],
-                    self_collision_pairs: Sequence[tuple[int, int]] = (),
+def robot_from_urdf(path: str | os.PathLike[str], goal_link: str | None = None,
+                    spheres: Sequence[CollisionSphere] | Literal["auto"] = "auto",
+                    self_collision_pairs: Sequence[tuple[int, int]] | Literal["auto"] | None = None,
                     planar: bool = False,
                     default_q: Sequence[float] | np.ndarray | None = None,
                     base: DifferentialDriveBase | None = None,
                     joints: Sequence[str] | None = None,
                     locked: Mapping[str, float] | None = None,
                     package_dirs: Sequence[str | os.PathLike[str]] = ()) -> Robot:
-    """A robot from a URDF file as it ships, with given collision spheres.
+    """A robot from a URDF file as it ships: ``robot_from_urdf("package://example-robot-data/
+    robots/ur_description/urdf/ur5_robot.urdf")`` fits its collision spheres to its meshes
+    and selects its self-collision pairs (:func:`~dynfab.robots.collision_model.auto_collision_model`,
+    cached: the first call for a robot takes seconds, later ones milliseconds).
 
     Args:
-        path: URDF file.
-        goal_link: End-effector link for position goals.
-        spheres: Collision spheres; every ``sphere.link`` must be a link of the URDF.
-        self_collision_pairs: Index pairs into ``spheres`` kept apart.
+        path: URDF file, or a ``package://NAME/...`` or ``file://`` URI of it.
+        goal_link: End-effector link for position goals; ``None``: the child link of the
+            last active joint.
+        spheres: Collision spheres (every ``sphere.link`` a link of the URDF), or
+            ``"auto"``: fitted to the links' collision meshes.
+        self_collision_pairs: Index pairs into ``spheres`` kept apart, or ``"auto"``
+            (selected from the spheres); ``None``: ``"auto"`` with automatic spheres, none
+            with given ones.
         planar: True if the robot moves in the xy-plane.
         default_q: Default configuration; zeros clipped into the joint limits if None.
         base: The robot's differential-drive base, if it has one; then its URDF must
@@ -168,14 +177,26 @@ def robot_from_urdf(path: str | os.PathLike[str], goal_link: str,
             ``DYNFAB_PACKAGE_PATH`` and the URDF's own folder and its parents).
 
     Raises:
-        OSError: The file cannot be read.
+        OSError: The file cannot be read (or a URI names no file).
         UrdfError: The file is not a valid URDF.
+        LinkMeshError: ``"auto"`` spheres, and a moving link's mesh is missing or unreadable.
         UnknownLinkError: ``goal_link`` or a sphere's link is not in the URDF.
         ValueError: Unknown names in ``joints`` or ``locked``, wrong ``default_q`` size,
             a pair index out of range, or a ``base`` without the three base joints first.
     """
     model = load_urdf(path, package_dirs)
     kinematics = Kinematics(model, joints=joints, locked=locked)
+    if spheres == "auto" or self_collision_pairs == "auto" or (self_collision_pairs is None and spheres == "auto"):
+        fitted = auto_collision_model(path, joints=joints, locked=locked, package_dirs=package_dirs,
+                                      spheres=None if spheres == "auto" else spheres)
+        spheres = fitted.spheres
+        if self_collision_pairs in (None, "auto"):
+            self_collision_pairs = fitted.self_collision_pairs
+    if self_collision_pairs is None:
+        self_collision_pairs = ()
+    if goal_link is None:
+        last = kinematics.joint_names[-1]
+        goal_link = next(joint.child for joint in model.joints if joint.name == last)
     if default_q is None:
         default_q = np.clip(np.zeros(kinematics.dof), kinematics.lower, kinematics.upper)
     return Robot(name=model.name or os.path.basename(os.fspath(path)),

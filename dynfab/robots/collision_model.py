@@ -13,6 +13,8 @@ import dataclasses
 import hashlib
 import json
 import os
+import sys
+import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,7 +29,7 @@ from .kinematics import Kinematics
 from .link_meshes import LinkMeshError, link_collision_meshes
 from .robot import CollisionSphere
 from .self_collision import PairSelection, bodies, select_pairs
-from .urdf import MeshFile, UrdfModel, load_urdf
+from .urdf import MeshFile, UrdfModel, load_urdf, urdf_path
 
 __all__ = ["CollisionModel", "LinkFit", "auto_collision_model", "cache_dir", "fit_body_spheres", "fit_link_spheres"]
 
@@ -141,8 +143,11 @@ def auto_collision_model(path: str | os.PathLike[str], joints: Sequence[str] | N
                          cache: Path | None = None) -> CollisionModel:
     """Fitted spheres (unless ``spheres`` are given) and selected pairs of a URDF robot.
 
+    The result is cached by content (the URDF, its meshes, the parameters); a fit, which
+    takes seconds to a minute, prints one line on stderr before and one after.
+
     Args:
-        path: URDF file.
+        path: URDF file, or a ``package://`` / ``file://`` URI of it.
         joints: Active joints (see :class:`~dynfab.robots.kinematics.Kinematics`).
         locked: Values of the other movable joints [rad or m].
         package_dirs: Where ``package://`` mesh URIs resolve.
@@ -159,7 +164,7 @@ def auto_collision_model(path: str | os.PathLike[str], joints: Sequence[str] | N
     """
     model = load_urdf(path, package_dirs)
     kinematics = Kinematics(model, joints=joints, locked=locked)
-    key = _key(Path(path), model, kinematics, parameters, selection, spheres)
+    key = _key(urdf_path(path, package_dirs), model, kinematics, parameters, selection, spheres)
     entry = (cache_dir() if cache is None else cache) / f"collision-{key}.json"
     if entry.is_file():
         try:
@@ -171,8 +176,13 @@ def auto_collision_model(path: str | os.PathLike[str], joints: Sequence[str] | N
                 _check_not_empty(cached.links, path, kinematics)
             return cached
     if spheres is None:
+        print(f"dynfab: fitting collision spheres to the meshes of {model.name or Path(path).name} "
+              f"(once; cached in {entry.parent}) ...", file=sys.stderr, flush=True)
+        start = time.perf_counter()
         links = fit_link_spheres(kinematics, parameters)
         _check_not_empty(links, path, kinematics)
+        print(f"dynfab: fitted {sum(len(fit.spheres) for fit in links)} spheres in "
+              f"{time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
     else:
         links = tuple(LinkFit(s.link, (s,), float("nan"), float("nan")) for s in spheres)
     all_spheres = [s for fit in links for s in fit.spheres]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import casadi as ca
@@ -200,6 +201,20 @@ class Robot:
     def dof(self) -> int:
         """Number of configuration variables."""
         return self.kinematics.dof
+
+    def link_position(self, q: object, link: str, offset: Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:
+        """Root-frame position of a point fixed in ``link``, shape (3,) [m].
+
+        Args:
+            q: Configuration, shape (dof,), numbers.
+            link: A link of the robot.
+            offset: The point in ``link`` coordinates [m] (default: the link origin).
+
+        Raises:
+            UnknownLinkError: ``link`` is not a link of the robot.
+        """
+        return np.array(self.kinematics.position(np.asarray(q, dtype=float), link, offset=offset),
+                        dtype=float).reshape(3)
 
     @property
     def sphere_radii(self) -> np.ndarray:

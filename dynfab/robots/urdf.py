@@ -55,16 +55,38 @@ def load_urdf(path: str | os.PathLike[str], package_dirs: Sequence[str | os.Path
               ) -> UrdfModel:
     """Read a URDF file; mesh URIs resolve against its folder, its parents and ``package_dirs``.
 
+    Args:
+        path: The file, or a ``package://NAME/...`` or ``file://`` URI of it (found as
+            :func:`~dynfab.robots.mesh_paths.resolve_uri` finds meshes).
+        package_dirs: Extra folders for ``package://`` URIs.
+
     Raises:
-        OSError: The file cannot be read.
+        OSError: The file cannot be read (FileNotFoundError: a URI that names no file).
         UrdfError: The file is not a valid URDF; the message starts with the path.
     """
-    path = Path(path)
+    path = urdf_path(path, package_dirs)
     text = path.read_bytes()
     try:
         return parse_urdf(text, base_dir=path.parent, package_dirs=package_dirs)
     except UrdfError as exc:
         raise UrdfError(f"{os.fspath(path)}: {exc}") from None
+
+
+def urdf_path(path: str | os.PathLike[str], package_dirs: Sequence[str | os.PathLike[str]] = ()) -> Path:
+    """The file ``path`` names: itself, or the file a ``package://`` / ``file://`` URI names.
+
+    Raises:
+        FileNotFoundError: a URI that names no file; the message says where it looked.
+    """
+    text = os.fspath(path)
+    if not text.startswith(("package://", "file://")):
+        return Path(text)
+    found = resolve_uri(text, None, package_dirs)
+    if found is None:
+        raise FileNotFoundError(f"{text}: no such file; package://NAME/... is looked up in package_dirs, "
+                                "$DYNFAB_PACKAGE_PATH and the robot data installed from PyPI "
+                                "(example-robot-data, pybullet_data)")
+    return found
 
 
 def parse_urdf(text: str | bytes, base_dir: str | os.PathLike[str] | None = None,

@@ -27,7 +27,7 @@ from typing import Protocol
 import numpy as np
 
 from dynfab.fabric.leaves.orientation import FRAME_AXES, OrientationGoalConfig
-from dynfab.fabric.parameters import RuntimeParameters, ShapeSlots
+from dynfab.fabric.parameters import AbsentParameter, RuntimeParameters, ShapeSlots
 from dynfab.fabric.planner import FabricPlanner, GoalConfig, PlannerConfig
 from dynfab.motion.references import References
 from dynfab.motion.trajectories import StaticPoint, Trajectory, TrajectoryPoint
@@ -49,11 +49,11 @@ class Controller(Protocol):
 @dataclass(frozen=True)
 class ObstacleSlot:
     """Where one obstacle's centre goes in the planner's parameters: row ``row`` of the
-    (slots, 3) views of its kind (velocity and acceleration ``None`` in a static planner)."""
+    (slots, 3) views of its kind (velocity and acceleration absent in a static planner)."""
 
     position: np.ndarray
-    velocity: np.ndarray | None
-    acceleration: np.ndarray | None
+    velocity: np.ndarray | AbsentParameter
+    acceleration: np.ndarray | AbsentParameter
     row: int
 
 
@@ -100,7 +100,7 @@ class FabricController:
 
     def _write(self, t: float, goals: tuple[int, ...], obstacles: tuple[int, ...]) -> None:
         params = self.planner.parameters
-        dynamic = params.goal_velocity is not None
+        dynamic = self.planner.config.dynamic
         for i in goals:
             point = _finite_point(self.references.goals[i], t, f"the reference of planner goal {i}")
             params.goal_position[i][:] = point.position

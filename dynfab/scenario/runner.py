@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -28,8 +29,8 @@ from dynfab.robots.collision_model import auto_collision_model
 from dynfab.robots.limits import LimitsError
 from dynfab.robots.link_meshes import LinkMeshError
 from dynfab.robots.robot import CollisionSphere, Robot
-from dynfab.scenario.schema import Scenario, ScenarioError, UrdfRobotSpec, validate_for_robot
-from dynfab.sim import DifferentialDrive, DoubleIntegrator, Record, simulate
+from dynfab.scenario.schema import Scenario, ScenarioError, UrdfRobotSpec, load_scenario, validate_for_robot
+from dynfab.sim import Record, motion_model_for, simulate
 
 if TYPE_CHECKING:
     from dynfab.robots.mesh_collision import MeshCollisionModel
@@ -154,16 +155,30 @@ def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None
     if scenario.simulation.simulator == "mujoco":
         from dynfab.scenario.mujoco_runner import run_mujoco
 
-        run = run_mujoco(scenario, robot, controller, lambda times: obstacle_centres(references, times),
-                         mesh_model, progress, observer)
-        record, contacts, stop_reason = run.record, run.contacts, run.stop_reason
+        physics = run_mujoco(scenario, robot, controller, lambda times: obstacle_centres(references, times),
+                             mesh_model, progress, observer)
+        record, contacts, stop_reason = physics.record, physics.contacts, physics.stop_reason
     else:
-        model = DoubleIntegrator() if robot.base is None else DifferentialDrive()
+        model = motion_model_for(robot.base is not None)
         substeps = 1 if robot.base is None else BASE_SUBSTEPS
         record = simulate(controller, state.q, state.qdot, scenario.dt, scenario.duration, substeps=substeps,
                           model=model, progress=progress)
         stop_reason = record.stop_reason
     return measure_run(scenario, robot, references, record, controller, mesh_model, contacts, stop_reason)
+
+
+def run(scenario: Scenario | str | os.PathLike[str],
+        progress: Callable[[int, int], None] | None = None) -> RunResult:
+    """Run a scenario (a :class:`Scenario`, or the path of a scenario file: loaded with
+    :func:`~dynfab.scenario.schema.load_scenario`) as ``dynfab run`` does, and measure it.
+
+    Raises:
+        ScenarioError: the file or the scenario is invalid (the message names the field).
+        OSError: the file cannot be read.
+    """
+    if not isinstance(scenario, Scenario):
+        scenario = load_scenario(scenario)
+    return run_scenario(scenario, progress)
 
 
 def measure_run(scenario: Scenario, robot: Robot, references: References, record: Record,

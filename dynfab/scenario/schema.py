@@ -17,13 +17,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
-from pydantic import ValidationError, model_validator
+from pydantic import Field, ValidationError, model_validator
 
-from dynfab.fabric.backends import BACKENDS
+from dynfab.fabric.backends import BACKENDS, default_backend
 from dynfab.scenario import fields
 from dynfab.scenario.fabric_schema import FabricMapping, FabricSpec
 from dynfab.scenario.fields import TRAJECTORY_TYPES, ScenarioError
@@ -98,8 +98,9 @@ class Scenario:
             ``recovery: false`` turns it off.
         guidance: Plan a global joint-space reference that a dynamic fabric tracks
             (scenario/guided_controller.py); ``guidance: false`` runs the fabric alone.
-        backend: How a fabric planner is evaluated: ``"vm"`` (CasADi's virtual machine)
-            or ``"c"`` (compiled C, cached; :mod:`dynfab.fabric.backends`).
+        backend: How a fabric planner is evaluated: ``"c"`` (compiled C, cached; the
+            default unless ``$DYNFAB_BACKEND`` says ``vm``) or ``"vm"`` (CasADi's virtual
+            machine; :mod:`dynfab.fabric.backends`).
         fabric: Leaf and root parameters of a fabric planner (``fabric:``,
             :mod:`dynfab.scenario.fabric_schema`); the planner's defaults where unset.
     """
@@ -115,7 +116,7 @@ class Scenario:
     limits: LimitsSpec = LimitsSpec()
     simulation: Simulation = Simulation()
     recovery: bool = True
-    backend: str = "vm"
+    backend: str = field(default_factory=default_backend)
     fabric: FabricSpec = FabricSpec()
     guidance: bool = True
 
@@ -157,7 +158,7 @@ class ScenarioDocument(ScenarioModel):
     noise: Annotated[float, NOISE] = 0.0
     recovery: Annotated[bool, Flag()] = True
     guidance: Annotated[bool, Flag()] = True
-    backend: Annotated[str, Choice(BACKENDS)] = "vm"
+    backend: Annotated[str, Choice(BACKENDS)] = Field(default_factory=default_backend)
     fabric: FabricMapping = FabricMapping()
 
     @model_validator(mode="after")

@@ -1,6 +1,6 @@
 """Embedded simulators that close the loop around a controller."""
 
-from dynfab.sim.models import DifferentialDrive, DoubleIntegrator, MotionModel
+from dynfab.sim.models import DifferentialDrive, DoubleIntegrator, MotionModel, motion_model_for
 from dynfab.sim.simulator import (
     Controller,
     ControllerError,
@@ -22,6 +22,7 @@ __all__ = [
     "Record",
     "RunStopped",
     "StopPredicate",
+    "motion_model_for",
     "n_steps_for",
     "simulate",
 ]

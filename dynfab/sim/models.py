@@ -67,3 +67,9 @@ class DifferentialDrive:
         position = (x + chord * np.cos(middle), y + chord * np.sin(middle), heading + turn)
         arm = q[3:] + velocity[2:] * h + 0.5 * acceleration[2:] * h * h
         return np.concatenate([position, arm]), velocity + acceleration * h
+
+
+def motion_model_for(on_base: bool) -> MotionModel:
+    """The model of a robot: :class:`DifferentialDrive` if it stands on a
+    differential-drive base, else :class:`DoubleIntegrator`."""
+    return DifferentialDrive() if on_base else DoubleIntegrator()

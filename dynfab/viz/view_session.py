@@ -33,7 +33,7 @@ from dynfab.scenario.metrics import clearance_over_time, shape_clearance_over_ti
 from dynfab.scenario.references import goal_axes
 from dynfab.scenario.runner import BASE_SUBSTEPS
 from dynfab.scenario.schema import Scenario, ScenarioError
-from dynfab.sim import DifferentialDrive, DoubleIntegrator, RunStopped
+from dynfab.sim import RunStopped, motion_model_for
 from dynfab.viz.view_world import SceneState, ViewWorld
 
 #: Planners the view offers; ``mpc`` only for scenarios whose obstacles are all spheres.
@@ -96,7 +96,7 @@ class ViewSession:
         self._step_times: deque[float] = deque(maxlen=STEP_TIME_WINDOW)
         self._budget = 0.0
         robot = self.world.robot
-        self._model = DoubleIntegrator() if robot.base is None else DifferentialDrive()
+        self._model = motion_model_for(robot.base is not None)
         self._substeps = 1 if robot.base is None else BASE_SUBSTEPS
         self._measures = _Measures(self.world)
         self.reset()
