@@ -72,8 +72,11 @@ def test_the_readme_library_example_is_the_quickstart_example() -> None:
     section = text.index("## The library")
     start = text.index("```python", section) + len("```python")
     shown = text[start:text.index("```", start)].strip()
-    assert shown == _code_of(ROOT / "examples" / "quickstart.py"), \
-        "README.md's library example differs from examples/quickstart.py"
+    code = _code_of(ROOT / "examples" / "quickstart.py")
+    assert shown == code, "README.md's library example differs from examples/quickstart.py"
+    for page in (DOCS / "getting-started.md", DOCS / "guides" / "library.md"):
+        assert f"```python\n{code}\n```" in page.read_text(encoding="utf-8"), \
+            f"{page.relative_to(ROOT)} does not show examples/quickstart.py as it is"
 
 
 @pytest.mark.parametrize("path", _markdown_files(), ids=lambda path: path.relative_to(ROOT).as_posix())
