@@ -14,7 +14,7 @@ import yaml
 
 from dynfab.cli import main
 
-#: Keys of the ``--json`` object promised by DESIGN.md section 5.
+#: Keys of the ``--json`` object promised by docs/design.md section 5.5.
 JSON_KEYS = {"success", "goal_reached", "collision", "time_to_goal", "clearance", "path_length",
              "summed_error", "solver_time_ms", "steps", "orientation_error", "max_velocity_ratio",
              "max_acceleration_ratio"}

@@ -2,7 +2,7 @@
 
 Path goals (a circle in free space, the paper's Experiment 2) and moving obstacles (the
 paper's Experiment 3, a disc driving at the point robot) run through
-``run_scenario(scenario_from_dict(...))``; the tests assert on the metrics of DESIGN.md
+``run_scenario(scenario_from_dict(...))``; the tests assert on the metrics of docs/design.md
 section 6. SF = static fabrics (the reference's or obstacle's position only), DF =
 dynamic fabrics (also its velocity and acceleration, through the dynamic pullback).
 """

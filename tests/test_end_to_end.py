@@ -1,7 +1,7 @@
 """End to end: scenario mappings through ``run_scenario`` and the metrics of the runs.
 
 Every run is a real closed-loop simulation of the static fabric planner; the tests
-assert on the metrics of DESIGN.md section 6 and on the final state.
+assert on the metrics of docs/design.md section 6 and on the final state.
 """
 
 from __future__ import annotations

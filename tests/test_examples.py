@@ -62,15 +62,16 @@ def test_the_api_example_with_a_shipped_urdf_reaches_its_pose() -> None:
     assert float(match.group(1)) < 0.01 and float(match.group(2)) < 2.0
 
 
-def test_the_readme_scenario_reference_is_a_valid_scenario() -> None:
-    """The annotated file in the README's "Scenario files" section parses and validates
-    (its MuJoCo-only keys with ``simulator: mujoco``)."""
+def test_the_documented_scenario_reference_is_a_valid_scenario() -> None:
+    """The annotated file of docs/guides/scenario-files.md ("Annotated reference") parses and
+    validates (its MuJoCo-only keys with ``simulator: mujoco``)."""
     import yaml
 
     from dynfab.scenario.schema import scenario_from_dict
 
-    text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
-    start = text.index("```yaml", text.index("## Scenario files")) + len("```yaml")
+    page = Path(__file__).resolve().parents[1] / "docs" / "guides" / "scenario-files.md"
+    text = page.read_text(encoding="utf-8")
+    start = text.index("```yaml", text.index("## Annotated reference")) + len("```yaml")
     document = yaml.safe_load(text[start:text.index("```", start)])
     scenario = scenario_from_dict({**document, "simulator": "mujoco"})
     assert scenario.obstacles and scenario.limits.headroom == 0.05

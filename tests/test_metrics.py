@@ -1,4 +1,4 @@
-"""Run metrics against hand-computed values (DESIGN.md section 6)."""
+"""Run metrics against hand-computed values (docs/design.md section 6)."""
 
 from __future__ import annotations
 

@@ -31,7 +31,7 @@ DURATION = 20.0
 
 
 def scenario(seed: int, planner: str = "static-fabric") -> dict[str, Any]:
-    """The scenario of run ``seed`` as a scenario-file mapping (DESIGN.md section 5)."""
+    """The scenario of run ``seed`` as a scenario-file mapping (docs/design.md section 5)."""
     rng = np.random.default_rng(seed)
     sampler = PandaSampler.create()
     goal = sampler.reachable_goal(rng, GOAL_LOW, GOAL_HIGH)

@@ -19,7 +19,7 @@
   redrawn.
 
 Both: tolerance 0.05 m; summed error = mean distance between hand and reference from the
-first time within tolerance (DESIGN.md section 6).
+first time within tolerance (docs/design.md section 6).
 """
 
 from __future__ import annotations

@@ -44,7 +44,7 @@ DURATION = 20.0
 
 
 def scenario(seed: int, planner: str = "static-fabric") -> dict[str, Any]:
-    """The scenario of run ``seed`` as a scenario-file mapping (DESIGN.md section 5).
+    """The scenario of run ``seed`` as a scenario-file mapping (docs/design.md section 5).
 
     Args:
         seed: Seed of the random generator; the same seed gives the same scenario.

@@ -16,7 +16,7 @@ Sampler = Callable[[int, str], dict[str, Any]]
 
 Quantity = Literal["success", "collisions", "deadlocks", "clearance", "path_length", "time_to_goal",
                    "summed_error", "solver_time_ms"]
-"""What a figure measures: an outcome count or one of the run metrics of DESIGN.md section 6."""
+"""What a figure measures: an outcome count or one of the run metrics of docs/design.md section 6."""
 
 SF, DF, MPC = "static-fabric", "dynamic-fabric", "mpc"
 

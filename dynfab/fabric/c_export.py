@@ -110,7 +110,8 @@ def export_planner(planner: FabricPlanner, folder: Path, name: str, source: str,
         folder: created if missing.
         name: C identifier used as the prefix of every exported symbol.
         source: where the planner came from (quoted in the header).
-        q, qdot: the state exported as the default (a start state).
+        q: the joint positions exported as the default (a start state).
+        qdot: the joint velocities exported as the default.
 
     Raises:
         ValueError: for a name that is not a C identifier, or a compiled planner (its

@@ -1,6 +1,6 @@
 """Global path planning for the goal link among static spheres (OMPL RRT).
 
-Scenario trajectories of type ``rrt`` (DESIGN.md section 5, Experiment 2(b)) need a
+Scenario trajectories of type ``rrt`` (docs/design.md section 5, Experiment 2(b)) need a
 collision-free polyline for the goal link from its start to a goal position, which a
 spline then turns into a timed reference. :func:`plan_path` plans that polyline for a
 POINT in R^d (d = 3 for arms, 2 for planar robots) with OMPL's RRT-Connect or RRT,

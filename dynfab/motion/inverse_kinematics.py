@@ -149,7 +149,8 @@ def solve_ik(robot: Robot, targets: Sequence[Target], current: NDArray[np.float6
         current: the current configuration (n,).
         is_free: whether a configuration is free of collision.
         settings: seeds, iterations, tolerance.
-        lower, upper: joint bounds (default: the robot's limits).
+        lower: lower joint bounds (default: the robot's limits).
+        upper: upper joint bounds (default: the robot's limits).
     """
     start = time.perf_counter()
     residual = ResidualFunction(robot, targets)

@@ -145,8 +145,10 @@ def plan_joint_path(checker: ConfigurationChecker, start: NDArray[np.float64], g
 
     Args:
         checker: the configuration checker with the obstacles set.
-        start, goal: configurations (n,) within ``[lower, upper]`` [rad].
-        lower, upper: joint bounds (n,) [rad].
+        start: start configuration (n,) within ``[lower, upper]`` [rad].
+        goal: goal configuration (n,) within ``[lower, upper]`` [rad].
+        lower: lower joint bounds (n,) [rad].
+        upper: upper joint bounds (n,) [rad].
         settings: planner, time limit, resolution, margins.
         seed: random seed (OMPL's sampler and the endpoint escape).
 

@@ -9,7 +9,7 @@ Every trajectory is a frozen dataclass whose fields are validated on constructio
 invalid field raises :class:`~dynfab.motion.trajectory_values.TrajectoryError` naming it,
 e.g. ``velocity: expected 3 numbers, got 2``.
 :func:`dynfab.motion.trajectory_mapping.trajectory_from_mapping` builds one from a scenario
-mapping (DESIGN.md section 5) and prefixes that name with the mapping's field path.
+mapping (docs/design.md section 5) and prefixes that name with the mapping's field path.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Trajectories from a scenario's ``trajectory:`` mapping (DESIGN.md section 5)."""
+"""Trajectories from a scenario's ``trajectory:`` mapping (docs/design.md section 5.2)."""
 
 from __future__ import annotations
 
@@ -33,7 +33,7 @@ _ARGUMENTS: dict[str, str] = {"x": "expressions"}
 
 
 def trajectory_from_mapping(data: Mapping[str, Any], field: str) -> Trajectory:
-    """Build a trajectory from a scenario's ``trajectory:`` mapping (DESIGN.md section 5).
+    """Build a trajectory from a scenario's ``trajectory:`` mapping (docs/design.md section 5.2).
 
     - ``{type: linear, start: P, velocity: V}``: :class:`LinearTrajectory`;
     - ``{type: circle, center: C, radius: R, angular_velocity: W, normal: N, phase: A}``
@@ -44,8 +44,8 @@ def trajectory_from_mapping(data: Mapping[str, Any], field: str) -> Trajectory:
       :class:`ExpressionTrajectory`;
     - ``{type: spline, waypoints: [P0, P1, ...], duration: T}``: :class:`SplineTrajectory`.
 
-    ``polynomial`` is an addition to the DESIGN.md table. ``rrt`` needs the scenario's
-    obstacles and is rejected here: the caller plans the path and builds a spline.
+    ``rrt`` needs the scenario's obstacles and is rejected here: the caller plans the path
+    and builds a spline.
 
     Args:
         data: The mapping, as read from YAML (lists or tuples for sequences).

@@ -1,4 +1,4 @@
-"""Collision metrics of URDF robots measured on their collision meshes (DESIGN.md section 6).
+"""Collision metrics of URDF robots measured on their collision meshes (docs/design.md section 6).
 
 Which robots: a robot that is not planar and has at least one link with ``<collision>``
 geometry (a URDF robot as it ships), and the built-in ``panda`` and ``boxer-panda``

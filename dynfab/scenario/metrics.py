@@ -1,4 +1,4 @@
-"""Run metrics of DESIGN.md section 6 (as in the paper and localPlannerBench).
+"""Run metrics of docs/design.md section 6 (as in the paper and localPlannerBench).
 
 All functions are pure numpy. Positions are in metres, times in seconds. For planar
 robots distances are measured in the xy-plane: only the first two coordinates count
@@ -101,7 +101,7 @@ class Metrics:
     final_distance: float | None = None
 
     def to_dict(self) -> dict[str, bool | int | float | None]:
-        """The metrics as a JSON-ready dict with the keys of DESIGN.md section 5."""
+        """The metrics as a JSON-ready dict with the keys of docs/design.md section 5.5."""
         return asdict(self)
 
 

@@ -1,6 +1,6 @@
 """Building blocks of the scenario's pydantic models: a base model that refuses anything
 but a mapping with known text keys, and field types whose errors are the one-line
-problems of DESIGN.md section 5 (``expected a number, got str 'x'``, ``must be positive,
+problems of docs/design.md section 5.4 (``expected a number, got str 'x'``, ``must be positive,
 got -0.1``), each with its documented range in the JSON Schema.
 
 Every problem is raised as ``PydanticCustomError("scenario", ...)``; its context may name

@@ -1,5 +1,5 @@
 """How a run went, in its metrics: guidance, recovery, fallbacks and, for a failure, why
-(DESIGN.md section 5c: ``guided``, ``plans``, ``plan_time_ms``, ``recovered``, ``fallbacks``,
+(docs/design.md section 5.5: ``guided``, ``plans``, ``plan_time_ms``, ``recovered``, ``fallbacks``,
 ``failure``)."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The goal and obstacle trajectories of a scenario (DESIGN.md section 5).
+"""The goal and obstacle trajectories of a scenario (docs/design.md section 5).
 
 Static goals and obstacles become trajectories at rest; ``trajectory:`` mappings are built
 by :func:`dynfab.motion.trajectory_mapping.trajectory_from_mapping`, except ``{type: rrt, goal: P,

@@ -1,4 +1,4 @@
-"""Run a scenario in the embedded simulator and measure it (DESIGN.md sections 5 and 6)."""
+"""Run a scenario in the embedded simulator and measure it (docs/design.md sections 5 and 6)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Scenario files: load and validate the YAML contract of DESIGN.md section 5.
+"""Scenario files: load and validate the YAML contract of docs/design.md section 5.
 
 A scenario names a robot, a planner, the control period ``dt`` [s], the simulated
 ``duration`` [s], the initial state, one or more weighted goals and the obstacles.
@@ -139,7 +139,7 @@ class InitialStateMapping(ScenarioModel):
 
 
 class ScenarioDocument(ScenarioModel):
-    """A scenario file (DESIGN.md section 5); every number has its documented range
+    """A scenario file (docs/design.md section 5); every number has its documented range
     (:mod:`dynfab.scenario.ranges`), ``duration / dt`` is at most ``MAX_STEPS``."""
 
     model_config = {"title": "dynfab scenario"}

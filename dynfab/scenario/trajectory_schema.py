@@ -1,4 +1,4 @@
-"""The ``trajectory:`` mappings of path goals and moving obstacles (DESIGN.md section 5):
+"""The ``trajectory:`` mappings of path goals and moving obstacles (docs/design.md section 5.2):
 their keys and the documented ranges of their numbers (:mod:`dynfab.scenario.ranges`).
 
 The trajectory itself is built later, by

@@ -107,7 +107,8 @@ def direction_map(rotation: ca.SX, link_axes: Sequence[Vector3], q: ca.SX, qdot:
     Args:
         rotation: ``R(q)`` (3, 3), link frame to world, an expression in ``q``.
         link_axes: unit axes ``a_i`` in the link frame.
-        q, qdot: joint position and velocity symbols.
+        q: joint position symbols.
+        qdot: joint velocity symbols.
     """
     directions = [ca.mtimes(rotation, ca.DM(list(axis))) for axis in link_axes]
     return DifferentialMap.from_expression(ca.vertcat(*directions), q, qdot)
