@@ -32,7 +32,8 @@ from dynfab.scenario.joint_limits import check_within_limits, clipped_to_limits
 from dynfab.scenario.limits_schema import LimitsMapping, LimitsSpec
 from dynfab.scenario.model_errors import scenario_error
 from dynfab.scenario.model_types import Choice, Flag, Items, Range, ScenarioModel, fail
-from dynfab.scenario.obstacle_schema import OBSTACLE_TYPES, ObstacleMapping, ObstacleSpec, ObstacleType, obstacle_spec
+from dynfab.scenario.obstacle_schema import OBSTACLE_TYPES, ObstacleMapping, ObstacleSpec, ObstacleType
+from dynfab.scenario.scene_files import obstacle_specs
 from dynfab.scenario.ranges import (
     MAX_DT,
     MAX_DURATION,
@@ -178,10 +179,12 @@ class ScenarioDocument(ScenarioModel):
         return self
 
     def scenario(self, base_dir: Path) -> Scenario:
-        """The scenario value; a URDF path is resolved against ``base_dir``.
+        """The scenario value; a URDF path, a mesh or a scene file is resolved against
+        ``base_dir``; a URDF scene becomes one obstacle per collision geometry
+        (:mod:`dynfab.scenario.scene_files`).
 
         Raises:
-            ScenarioError: The URDF file is not found.
+            ScenarioError: The URDF file is not found, or a mesh or scene file is bad.
         """
         return Scenario(
             robot=robot_spec(self.robot, "robot", base_dir),
@@ -190,7 +193,8 @@ class ScenarioDocument(ScenarioModel):
             duration=self.duration,
             initial_state=InitialState(self.initial_state.q, self.initial_state.qdot),
             goals=tuple(goal_spec(goal) for goal in self.goal),
-            obstacles=tuple(obstacle_spec(obstacle) for obstacle in self.obstacles),
+            obstacles=tuple(spec for k, obstacle in enumerate(self.obstacles)
+                            for spec in obstacle_specs(obstacle, base_dir, f"obstacles[{k}]")),
             limits=self.limits.spec(),
             simulation=Simulation(self.simulator, self.control, self.delay, self.noise),
             recovery=self.recovery,
