@@ -31,7 +31,8 @@ class Mesh:
 
     Attributes:
         vertices: (V, 3) vertex coordinates [m], finite (read-only).
-        faces: (F, 3) vertex indices of each triangle, F >= 1 (read-only).
+        faces: (F, 3) vertex indices of each triangle, F >= 1 (read-only); triangles without
+            area (collinear corners) are dropped on construction.
         source: Where it came from (a file name), for messages.
     """
 
@@ -48,6 +49,11 @@ class Mesh:
             raise ValueError(f"mesh {self.source} has NaN or infinite vertices")
         if faces.min() < 0 or faces.max() >= len(vertices):
             raise ValueError(f"mesh {self.source} has faces that index missing vertices")
+        corners = vertices[faces]
+        areas = np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
+        faces = faces[areas > 1e-12]  # degenerate triangles bound nothing, and coal's distances fail on them
+        if len(faces) == 0:
+            raise ValueError(f"mesh {self.source} has no triangles with an area")
         vertices.setflags(write=False)
         faces.setflags(write=False)
         object.__setattr__(self, "vertices", vertices)
