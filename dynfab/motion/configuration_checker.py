@@ -9,7 +9,7 @@ For a configuration ``q`` the checker gives
 over the robot's collision spheres ``(p_i, r_i)``, the obstacles ``k`` (centre ``c_k``,
 rotation ``R_k``, the exact signed distance ``d_k`` of a sphere, box, cylinder, capsule or
 plane in its own frame, :mod:`dynfab.geometry.distance`; for a mesh, compiled, a lower bound
-of it from a grid, :mod:`dynfab.geometry.distance_grid`, at most ``h√3/2`` = 8.7 mm below it
+of it from a grid, :mod:`dynfab.geometry.distance_grid`, at most ``h√3`` = 1.7 cm below it
 within 4 cm of the surface) and the robot's self-collision
 pairs: the same spheres, shapes and pairs the fabric's leaves avoid, so a path the
 checker accepts is one the fabric can follow. ``inf`` where there is nothing to check.
