@@ -9,9 +9,9 @@ code path: :func:`dynfab.scenario.guided_controller.make_scenario_controller`):
   joint-space reference that OMPL's plan feeds it, one slot per sphere of the scene,
   bounded command, C backend). The per-step figure is the fabric step
   (``FabricPlanner.compute``); the OMPL plan made at the first tick is not in it;
-- ``paper``: ``guidance: false, recovery: false`` (what ``dynfab experiment exp1`` runs,
-  the paper's setup and the planner the reference builds): static fabric, the hand's
-  position goal.
+- ``paper``: ``guidance: false, recovery: false`` (the paper's setup, the planner the
+  reference builds, and what ``dynfab experiment exp1`` runs, on the VM there unless
+  ``$DYNFAB_BACKEND`` says c): static fabric, the hand's position goal.
 
 Two robot models, each given to both sides:
 
@@ -207,7 +207,7 @@ def summary(results: dict) -> list[str]:
                           "pairs hand-link2, hand-link3",
              "builtin": "the built-in model: 75 spheres (centres offset in link frames), 123 pairs, hand open"}
     settings = {"default": "`dynfab run` default (guided: dynamic fabric, joint-space reference goal)",
-                "paper": "guidance off = `dynfab experiment exp1` (static fabric, position goal)"}
+                "paper": "`guidance: false`, the paper's setup (static fabric, position goal)"}
     for model, data in results["models"].items():
         ref = data["reference"]
         ref_ms = statistics.median(r["step_ms_median"] for r in ref)
@@ -235,4 +235,7 @@ def summary(results: dict) -> list[str]:
                          f"[{min(blocks):.2f}-{max(blocks):.2f}] over {len(measured)}; {m0['n_instructions']} SX "
                          f"instructions; {build}; reference / ours = {1e3 * ref_ms / us:6.1f}x")
         lines.append(f"    (same model checked: sphere centres at q0 agree within {data['centre_error_m']:.1e} m)")
+    lines.append("  ours: the fabric step (FabricPlanner.compute) of the planner `dynfab run` builds for the scene; "
+                 "with guidance a run also plans with OMPL at its first tick (not in the step). `dynfab experiment "
+                 "exp1` runs the `guidance: false` planner on the VM.")
     return lines
