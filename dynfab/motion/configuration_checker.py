@@ -39,6 +39,7 @@ from dynfab.geometry.distance import placed_distance
 from dynfab.geometry.distance_grid import distance_grid
 from dynfab.geometry.shapes import Box, Capsule, Cylinder, Mesh, Placement, Plane, Shape, Sphere
 from dynfab.motion.checker_library import as_pointer, load_checker_library
+from dynfab.robots.collision_model import cache_dir
 from dynfab.robots.robot import Robot
 
 __all__ = ["ConfigurationChecker", "PlacedObstacle"]
@@ -186,7 +187,7 @@ def _buffer(obstacles: Sequence[PlacedObstacle]) -> NDArray[np.float64]:
     end = rows.size
     for k, obstacle in enumerate(obstacles):
         if isinstance(obstacle.shape, Mesh):
-            grid = distance_grid(obstacle.shape).packed()
+            grid = distance_grid(obstacle.shape, cache=cache_dir() / "distance-grids").packed()
             rows[k, 13] = end - _ROW * k
             grids.append(grid)
             end += grid.size

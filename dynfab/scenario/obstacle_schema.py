@@ -179,16 +179,21 @@ class MeshMapping(_Placed):
         return _check_rotation(self)
 
 
+JointValue = Annotated[float, Range(-1e3, 1e3)]
+
+
 class UrdfMapping(ScenarioModel):
-    """``{type: urdf, file: kitchen.urdf, position, orientation, package_dirs: [...]}``: every
-    link's collision geometry at the pose of the scene's joints at zero, the scene's root
-    placed at ``position`` (static)."""
+    """``{type: urdf, file: kitchen.urdf, position, orientation, package_dirs: [...], joints: {name: value}}``:
+    every link's collision geometry at the pose of the scene's joints (``joints``: values of
+    its movable joints [rad or m], within their limits; the others at zero), the scene's
+    root placed at ``position`` (static)."""
 
     type: Literal["urdf"]
     file: FileName
     position: Point3 = (0.0, 0.0, 0.0)
     orientation: Quaternion = IDENTITY_QUATERNION
     package_dirs: Annotated[tuple[FileName, ...], Items(what="folders", allow_empty=True)] = ()
+    joints: dict[Annotated[str, Text(256)], JointValue] = {}
 
     @model_validator(mode="after")
     def _rotation(self) -> UrdfMapping:
