@@ -48,19 +48,18 @@ static double dynfab_grid_distance(const double* grid, double x, double y, doubl
     cell[a] -= (double)base[a];
   }
   const double* values = grid + 13;
-  double total = 0.0;
+  double best = -INFINITY;
   for (int c = 0; c < 8; ++c) {
     const int o[3] = {c >> 2 & 1, c >> 1 & 1, c & 1};
-    double weight = 1.0, d2 = 0.0;
+    double d2 = 0.0;
     for (int a = 0; a < 3; ++a) {
-      weight *= o[a] ? cell[a] : 1.0 - cell[a];
       const double d = (cell[a] - (double)o[a]) * h;
       d2 += d * d;
     }
     const long index = ((long)(base[0] + o[0]) * n[1] + (base[1] + o[1])) * n[2] + (base[2] + o[2]);
-    total += weight * (values[index] - sqrt(d2));
+    best = dynfab_max(best, values[index] - sqrt(d2));
   }
-  return total;
+  return best;
 }
 
 static double dynfab_distance(const double* o, const double* p) {
