@@ -156,6 +156,7 @@ def test_a_goal_guidance_cannot_reach_falls_back_to_the_fabric_and_says_why() ->
     metrics = run_scenario(scenario_from_dict(data)).metrics
     assert not metrics.success and metrics.guided is False
     assert metrics.failure == "no_ik_solution" and metrics.fallbacks >= 1
+    assert metrics.plans == metrics.recovered and metrics.plan_time_ms > 0.0   # the plan that failed is no plan
     assert metrics.final_distance > 0.3
 
 

@@ -7,7 +7,7 @@ Every controller a run can have fills these keys:
 
 | controller | `guided` | `plans` | `recovered` | `fallbacks` |
 |---|---|---|---|---|
-| guided fabric | true (false once guidance found no plan and the scenario's own fabric took over) | first plan, replans, recovery paths | replans (blocked, stalled), recovery paths | braking actions, plus 1 if the fabric took over |
+| guided fabric | true (false once guidance found no plan and the scenario's own fabric took over) | first plan, replans, recovery paths (a first plan that failed is not counted; its wall time is `plan_time_ms`) | replans (blocked, stalled), recovery paths | braking actions, plus 1 if the fabric took over |
 | fabric, with or without stall recovery | false | recovery paths | recovery paths | braking actions |
 | MPC | false | 0 | 0 | failed solves (the last plan or braking executed) |
 
@@ -38,11 +38,12 @@ def with_outcome(metrics: Metrics, controller: Controller | None, goal_positions
     if isinstance(controller, GuidedController):
         status = controller.status
         recoveries = len(controller.recovery_times)
-        outcome.update(guided=status.guided and controller.fallback is None,
-                       plans=status.plans + recoveries, plan_time_ms=status.plan_time_ms,
+        fell_back = controller.fallback is not None   # the first plan failed: it is in status.plans
+        outcome.update(guided=status.guided and not fell_back,
+                       plans=status.plans - fell_back + recoveries, plan_time_ms=status.plan_time_ms,
                        recovered=status.replans_blocked + status.replans_stalled + recoveries,
-                       fallbacks=controller.fallback_count + (controller.fallback is not None))
-        if controller.fallback is not None and not metrics.success:
+                       fallbacks=controller.fallback_count + fell_back)
+        if fell_back and not metrics.success:
             outcome["failure"] = status.failure
     elif isinstance(controller, MpcController):
         outcome.update(guided=False, plans=0, recovered=0, fallbacks=controller.failures)

@@ -47,8 +47,9 @@ def plot_run(
     base_path: ArrayLike | None = None,
     shapes: Sequence[ShapeTrack] = (),
     robot: RobotSnapshots | None = None,
-) -> None:
-    """Save a PNG of a run.
+    clearance_label: str = "clearance",
+) -> Figure:
+    """Save a PNG of a run; returns its figure.
 
     3-D robots get a 3-D view plus top (x-y) and side (x-z) projections; planar robots a
     top view. Obstacles are drawn at their start (faint) and end positions with the path
@@ -70,6 +71,8 @@ def plot_run(
             end position (with the path of their origin if they move).
         robot: The robot's skeleton and collision spheres at a few instants, drawn in
             every view (the closest approach with the sphere obstacles where they were then).
+        clearance_label: What ``clearance_over_time`` measures (e.g. ``"mesh clearance"``),
+            the clearance panel's title and axis label.
     """
     positions = np.asarray(goal_link_positions, dtype=float)
     obstacles = np.asarray(obstacles_over_time, dtype=float)
@@ -108,11 +111,12 @@ def plot_run(
                 ax.legend(loc="best", fontsize="small")
         extra = [grid[1, 1], grid[1, 2]]
     if clearance_over_time is not None:
-        _draw_clearance(figure.add_subplot(extra.pop(0)), clearance_over_time, times)
+        _draw_clearance(figure.add_subplot(extra.pop(0)), clearance_over_time, times, clearance_label)
     if reference is not None:
         _draw_tracking_error(figure.add_subplot(extra.pop(0)), positions, reference, markers[0][1], times)
     figure.suptitle(title)
     figure.savefig(Path(path), dpi=100)
+    return figure
 
 
 def _goal_points(markers: list[tuple[NDArray[np.float64], float]], dimension: int) -> NDArray[np.float64]:
@@ -219,6 +223,7 @@ def _draw_3d(
     radii: NDArray[np.float64],
     tracks: list[tuple[Shape, Sequence[float], NDArray[np.float64]]],
     robot: RobotSnapshots | None = None,
+    clearance_label: str = "clearance",
 ) -> None:
     """Draw the path, goals (with tolerance spheres), obstacles, shapes and the robot in 3-D."""
     extent = [positions]
@@ -259,17 +264,16 @@ def _draw_3d(
     ax.set_title("3-D view")
 
 
-def _draw_clearance(ax: Axes, clearance: ArrayLike, times: ArrayLike | None) -> None:
-    """Plot clearance over time with the collision threshold at zero."""
+def _draw_clearance(ax: Axes, clearance: ArrayLike, times: ArrayLike | None, label: str) -> None:
+    """Plot clearance over time with the collision threshold at zero; ``label`` names it."""
     values = np.asarray(clearance, dtype=float)
     x = np.arange(values.shape[0]) if times is None else np.asarray(times, dtype=float)
-    ax.plot(x, values, color=_PATH_COLOR)
+    ax.plot(x, values, color=_PATH_COLOR, label=label)
     ax.axhline(0.0, color=_OBSTACLE_COLOR, linestyle="--", linewidth=1, label="collision")
     finite = values[np.isfinite(values)]
-    if finite.size:
-        ax.set_title(f"clearance (min {finite.min():.3f} m)")
+    ax.set_title(f"{label} (min {finite.min():+.3f} m)" if finite.size else label)
     ax.set_xlabel("step" if times is None else "time [s]")
-    ax.set_ylabel("clearance [m]")
+    ax.set_ylabel(f"{label} [m]")
     ax.legend(loc="best", fontsize="small")
     ax.grid(True, alpha=0.3)
 

@@ -1,20 +1,29 @@
 """The PNG of a finished run (``dynfab run --plot``, ``dynfab plot run.npz``, the example
 of an experiment series): the robot's body at a few instants, the goal link's path, the
-goals, the obstacles and the clearance over time."""
+goals, the obstacles and the clearance over time: the clearance the run's metrics report
+(on the collision meshes for a robot measured by meshes, else on the collision spheres),
+named so in the plot."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+from matplotlib.figure import Figure
+from numpy.typing import NDArray
+
+from dynfab.robots.mesh_sweep import clearance_per_sample
+from dynfab.scenario.exact_metrics import mesh_model_for, obstacle_shapes
 from dynfab.scenario.runner import RunResult, link_path
 from dynfab.viz.plots import plot_run
 from dynfab.viz.robot_snapshots import robot_snapshots
 
 
-def plot_result(result: RunResult, path: str | Path, title: str | None = None) -> None:
-    """Plot ``result`` to ``path``. The goal link's path is drawn in the goal's workspace
-    coordinates; a goal in other coordinates (joint goals, a subset of axes) or without
-    a point (axis goals) is not drawn, the link's full path is.
+def plot_result(result: RunResult, path: str | Path, title: str | None = None) -> Figure:
+    """Plot ``result`` to ``path`` and return the figure. The goal link's path is drawn in
+    the goal's workspace coordinates; a goal in other coordinates (joint goals, a subset of
+    axes) or without a point (axis goals) is not drawn, the link's full path is. The
+    clearance panel shows :func:`reported_clearance`.
 
     Args:
         result: The run.
@@ -37,8 +46,23 @@ def plot_result(result: RunResult, path: str | Path, title: str | None = None) -
               if o.type != "sphere"]
     metrics = result.metrics
     outcome = "success" if metrics.success else "collision" if metrics.collision else "goal not reached"
-    snapshots = robot_snapshots(robot, result.record.q, result.record.t, result.clearance if obstacles else None)
-    plot_run(path, positions, markers, result.obstacle_centers[:, spheres], [obstacles[k].radius for k in spheres],
-             robot.planar, clearance_over_time=result.clearance if obstacles else None, times=result.record.t,
-             title=f"{title or robot.name}: {outcome}",
-             base_path=None if robot.base is None else result.record.q[:, :2], shapes=shapes, robot=snapshots)
+    clearance, clearance_label = reported_clearance(result)
+    snapshots = robot_snapshots(robot, result.record.q, result.record.t, clearance if obstacles else None)
+    return plot_run(path, positions, markers, result.obstacle_centers[:, spheres],
+                    [obstacles[k].radius for k in spheres], robot.planar,
+                    clearance_over_time=clearance if obstacles else None, times=result.record.t,
+                    clearance_label=clearance_label, title=f"{title or robot.name}: {outcome}",
+                    base_path=None if robot.base is None else result.record.q[:, :2], shapes=shapes,
+                    robot=snapshots)
+
+
+def reported_clearance(result: RunResult) -> tuple[NDArray[np.float64], str]:
+    """The clearance over time (T,) [m] whose minimum the run's ``clearance`` metric is, and
+    its name: ``"mesh clearance"`` (collision meshes against the obstacles' exact shapes,
+    :func:`~dynfab.robots.mesh_sweep.clearance_per_sample`) where the metrics are measured
+    on meshes, else ``"sphere clearance"`` (the planner's collision spheres)."""
+    if result.mesh_sweep is None or not result.scenario.obstacles:
+        return result.clearance, "sphere clearance"
+    model = mesh_model_for(result.robot)
+    shapes = obstacle_shapes(result.scenario.obstacles, result.obstacle_centers)
+    return clearance_per_sample(model, result.record.q, shapes), "mesh clearance"
