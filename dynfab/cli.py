@@ -175,7 +175,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"dynfab: error: --record: cannot write {args.record} ({error.strerror})", file=sys.stderr)
             return 2
     if args.plot is not None:
-        _plot(results[0], args.plot)
+        _plot(results, args.plot)
         print(f"dynfab: plot written to {args.plot}", file=sys.stderr)
     if args.command == "run" and not results[0].metrics.success:
         return 1  # ran, but the goal was not reached without collision (the metrics say why)
@@ -353,10 +353,15 @@ def _shown(value: object) -> str:
     return f"{value:.4g}" if isinstance(value, float) else str(value)
 
 
-def _plot(result: RunResult, path: Path) -> None:
-    from dynfab.viz.result_plot import plot_result
+def _plot(results: list[RunResult], path: Path) -> None:
+    """One run's plot, or the runs of a comparing demo one above the other."""
+    from dynfab.viz.result_plot import plot_result, plot_results
 
-    plot_result(result, path)
+    if len(results) == 1:
+        plot_result(results[0], path)
+    else:
+        plot_results(results, path)
+
 
 if __name__ == "__main__":
     sys.exit(main())

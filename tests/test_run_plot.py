@@ -118,3 +118,28 @@ def test_a_robot_measured_by_spheres_plots_its_sphere_clearance(tmp_path: Path) 
     panel = _clearance_panel(plot_result(result, tmp_path / "run.png"))
     assert panel.lines[0].get_ydata().min() == pytest.approx(result.metrics.clearance, abs=1e-12)
     assert panel.get_title().startswith("sphere clearance (min ")
+
+
+def test_the_dynamic_demo_plots_both_of_its_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    """``dynfab demo dynamic`` runs the dynamic fabric and its static baseline: both are
+    drawn, one above the other, each with its clearance and tracking error (the demo's
+    scenario shortened to 1 s)."""
+    from dynfab import cli
+    from dynfab.viz import result_plot
+
+    monkeypatch.setattr(cli, "load_scenario", lambda path: dataclasses.replace(load_scenario(path), duration=1.0))
+    figures: list[Figure] = []
+    plot_results = result_plot.plot_results
+    monkeypatch.setattr(result_plot, "plot_results", lambda *args: figures.append(plot_results(*args)) or figures[-1])
+    png = tmp_path / "demo.png"
+    assert main(["demo", "dynamic", "--plot", str(png), "--json"]) == 0
+    capsys.readouterr()
+    assert png.read_bytes()[:8] == PNG
+    [figure] = figures
+    titles = [subfigure.get_suptitle() for subfigure in figure.subfigs]
+    assert [title.split(":")[0] for title in titles] == ["panda, dynamic-fabric", "panda, static-fabric"]
+    for subfigure in figure.subfigs:
+        panels = [ax.get_title() for ax in subfigure.axes]
+        assert any(title.startswith("mesh clearance") for title in panels), panels
+        assert any("tracking error" in title for title in panels), panels
