@@ -146,7 +146,7 @@ def test_guidance_reaches_a_goal_behind_a_wall_that_the_fabric_alone_does_not(pa
     assert not alone.success and alone.guided is False and alone.failure == "stalled"
     assert guided.success and not guided.collision, guided
     assert guided.guided and guided.plans >= 1 and guided.failure is None
-    assert 0.0 < guided.plan_time_ms < 5000.0
+    assert guided.plan_time_ms > 0.0   # measured (a wall time: no bound asserted outside bench/)
     assert guided.max_velocity_ratio <= 1.0 + 1e-9
 
 

