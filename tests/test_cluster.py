@@ -12,13 +12,11 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip("distributed")
-
-from dynfab.cli import main  # noqa: E402
-from dynfab.experiments import exp1  # noqa: E402
-from dynfab.experiments.cluster import Cluster  # noqa: E402
-from dynfab.experiments.registry import SF, Experiment  # noqa: E402
-from dynfab.experiments.series import SeriesResult, run_series  # noqa: E402
+from dynfab.cli import main
+from dynfab.experiments import exp1
+from dynfab.experiments.cluster import Cluster
+from dynfab.experiments.registry import SF, Experiment
+from dynfab.experiments.series import SeriesResult, run_series
 
 SEEDS = 3
 TIMING_KEYS = {"solver_time_ms", "plan_time_ms"}   # wall times: they differ between executions

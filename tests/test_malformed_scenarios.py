@@ -11,6 +11,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import jsonschema
 import pytest
 import yaml
 
@@ -100,14 +101,12 @@ def test_schema_command_prints_the_json_schema(capsys: pytest.CaptureFixture[str
 
 @pytest.mark.parametrize("example", EXAMPLES, ids=[p.name for p in EXAMPLES])
 def test_every_example_satisfies_the_json_schema(example: Path) -> None:
-    jsonschema = pytest.importorskip("jsonschema")
     document = yaml.safe_load(example.read_text(encoding="utf-8"))
     jsonschema.validate(document, ScenarioDocument.model_json_schema())
     load_scenario(example)
 
 
 def test_the_json_schema_refuses_what_the_loader_refuses() -> None:
-    jsonschema = pytest.importorskip("jsonschema")
     schema = ScenarioDocument.model_json_schema()
     for key, value in (("dt", -1.0), ("duration", 1e300), ("colour", "red"), ("planner", "rrt")):
         with pytest.raises(jsonschema.ValidationError):
