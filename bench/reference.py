@@ -20,6 +20,7 @@ import json
 import os
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 BENCH_DIR = Path(__file__).resolve().parent
@@ -57,8 +58,12 @@ def _parse_json(stdout: str) -> dict:
     raise ValueError("no JSON object in the output")
 
 
-def run_reference(spheres: int, steps: int, urdf: Path, *, timeout: float | None = 600.0) -> dict | None:
+def run_reference(spheres: int, steps: int, urdf: Path, *, timeout: float | None = 600.0,
+                  scene: dict | None = None, model: dict | None = None) -> dict | None:
     """Benchmark the reference planner with `spheres` static obstacles.
+
+    ``scene`` (goal and obstacles) and ``model`` (another collision model) are the JSON
+    objects of reference_fabrics.py's ``--scene`` and ``--model``.
 
     Returns the parsed JSON (keys ``RESULT_KEYS`` at least), or None when the
     reference interpreter is absent.  Raises ReferenceError if it is present but
@@ -69,6 +74,16 @@ def run_reference(spheres: int, steps: int, urdf: Path, *, timeout: float | None
         return None
     cmd = [str(python), str(SCRIPT), "--spheres", str(int(spheres)), "--steps", str(int(steps)),
            "--urdf", str(Path(urdf).resolve()), "--json"]
+    with tempfile.TemporaryDirectory(prefix="dynfab-reference-") as folder:
+        for name, value in (("scene", scene), ("model", model)):
+            if value is not None:
+                path = Path(folder) / f"{name}.json"
+                path.write_text(json.dumps(value))
+                cmd += [f"--{name}", str(path)]
+        return _run(cmd, timeout)
+
+
+def _run(cmd: list[str], timeout: float | None) -> dict:
     env = dict(os.environ)
     env.pop("PYTHONPATH", None)  # our environment's packages must not leak into the reference's
     env.pop("PYTHONHOME", None)

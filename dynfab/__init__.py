@@ -34,6 +34,9 @@ _EXPORTS: dict[str, str] = {
     "JointLimitAvoidance": "dynfab.fabric.leaves.limits",
     "SelfCollisionAvoidance": "dynfab.fabric.leaves.self_collision",
     "SpeedControl": "dynfab.fabric.speed_control",
+    "Leaf": "dynfab.fabric.leaf",
+    "LeafContext": "dynfab.fabric.leaf",
+    "WorkspaceBounds": "dynfab.fabric.leaves.workspace",
     # robots
     "Robot": "dynfab.robots.robot",
     "CollisionSphere": "dynfab.robots.robot",
@@ -60,6 +63,7 @@ __all__ = [
     "FabricPlanner", "PlannerConfig", "GoalConfig", "OrientationGoalConfig", "ShapeSlots",
     "RuntimeParameters", "ParameterError", "GoalAttractor", "Barrier", "SphereObstacleAvoidance",
     "ShapeObstacleAvoidance", "JointLimitAvoidance", "SelfCollisionAvoidance", "SpeedControl",
+    "Leaf", "LeafContext", "WorkspaceBounds",
     "Robot", "CollisionSphere", "MotionLimits", "load_robot", "robot_from_urdf",
     "auto_collision_model", "GuidedFabric", "GuidanceSettings", "GuidanceError", "Scenario",
     "ScenarioError", "load_scenario", "run", "RunResult", "simulate", "simulate_mujoco",
@@ -80,6 +84,7 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:  # what type checkers and editors see; at run time __getattr__ imports lazily
+    from dynfab.fabric.leaf import Leaf, LeafContext
     from dynfab.fabric.leaves.barrier import Barrier
     from dynfab.fabric.leaves.goal import GoalAttractor
     from dynfab.fabric.leaves.limits import JointLimitAvoidance
@@ -87,6 +92,7 @@ if TYPE_CHECKING:  # what type checkers and editors see; at run time __getattr__
     from dynfab.fabric.leaves.orientation import OrientationGoalConfig
     from dynfab.fabric.leaves.self_collision import SelfCollisionAvoidance
     from dynfab.fabric.leaves.shape_obstacle import ShapeObstacleAvoidance
+    from dynfab.fabric.leaves.workspace import WorkspaceBounds
     from dynfab.fabric.parameters import ParameterError, RuntimeParameters, ShapeSlots
     from dynfab.fabric.planner import FabricPlanner
     from dynfab.fabric.planner_config import GoalConfig, PlannerConfig

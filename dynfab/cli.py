@@ -302,7 +302,7 @@ def _video_recorder(scenario: Scenario, path: Path | None) -> VideoRecorder | No
 def _output_options(parser: argparse.ArgumentParser, default_plot: Path | None = None) -> None:
     parser.add_argument("--json", action="store_true", help="print the metrics as one JSON object on stdout")
     parser.add_argument("--backend", choices=BACKENDS,
-                        help="override the scenario's backend: vm (CasADi VM) or c (compiled C, cached)")
+                        help="override the scenario's backend: c (compiled C, cached; the default) or vm (CasADi VM)")
     parser.add_argument("--plot", type=Path, default=default_plot, help="write a PNG of the run")
     parser.add_argument("--record", type=Path, metavar="OUT.npz",
                         help="write t, q, qdot, qddot (one row per control step) and joint_names of the (first) run")

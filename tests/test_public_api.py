@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import dynfab
-from dynfab.fabric.backends import BACKEND_VARIABLE, default_backend
+from dynfab.fabric.backends import BACKEND_VARIABLE, default_backend, series_backend
 from dynfab.fabric.parameters import AbsentParameter, ParameterError, ParameterLayout
 from dynfab.sim.models import DifferentialDrive
 
@@ -48,6 +48,11 @@ def test_backend_default_is_c_unless_the_environment_says_vm(monkeypatch: pytest
     assert dynfab.PlannerConfig(goals=(dynfab.GoalConfig(link="x"),)).backend == "c"
     monkeypatch.setenv(BACKEND_VARIABLE, "vm")
     assert dynfab.PlannerConfig(goals=(dynfab.GoalConfig(link="x"),)).backend == "vm"
+    assert series_backend() == "vm"
+    monkeypatch.delenv(BACKEND_VARIABLE)
+    assert series_backend() == "vm"  # series of short runs stay on the VM unless told
+    monkeypatch.setenv(BACKEND_VARIABLE, "c")
+    assert series_backend() == "c"
     monkeypatch.setenv(BACKEND_VARIABLE, "gpu")
     with pytest.raises(ValueError, match=r"\$DYNFAB_BACKEND must be one of vm, c, got 'gpu'"):
         default_backend()

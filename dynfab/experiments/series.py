@@ -46,6 +46,7 @@ from dynfab.experiments.series_plots import write_plots
 from dynfab.experiments.series_summary import (METRIC_KEYS, MetricValue, RunRecord, SeriesSummary, render_summary,
                                                render_timings, summarize, summary_dict, timings_dict)
 from dynfab.scenario.recording import Recording, run_recording, save_recording
+from dynfab.fabric.backends import series_backend
 from dynfab.scenario.runner import run_scenario
 from dynfab.scenario.schema import scenario_from_dict
 
@@ -275,9 +276,13 @@ RunOutcome = tuple[dict[str, MetricValue], float, Recording | None]
 
 def run_scenario_text(text: str, base_dir: str, record: bool) -> RunOutcome:
     """Worker: run one scenario given as YAML text (a relative URDF path resolves against
-    ``base_dir``); its metrics, wall time [s] and, if asked, its recording."""
+    ``base_dir``) on :func:`~dynfab.fabric.backends.series_backend` unless it chooses a backend;
+    its metrics, wall time [s] and, if asked, its recording."""
     start = time.perf_counter()
-    result = run_scenario(scenario_from_dict(yaml.safe_load(text), base_dir))
+    mapping = yaml.safe_load(text)
+    if isinstance(mapping, dict):
+        mapping.setdefault("backend", series_backend())
+    result = run_scenario(scenario_from_dict(mapping, base_dir))
     recording = run_recording(result.robot, result.record, result.scenario.dt) if record else None
     return result.metrics.to_dict(), time.perf_counter() - start, recording
 

@@ -42,7 +42,23 @@ def default_backend() -> str:
     Raises:
         ValueError: ``$DYNFAB_BACKEND`` is not one of :data:`BACKENDS`.
     """
-    backend = os.environ.get(BACKEND_VARIABLE, "c").strip() or "c"
+    return _configured_backend("c")
+
+
+def series_backend() -> str:
+    """``$DYNFAB_BACKEND`` if set, else ``"vm"``: the backend of the runs of an experiment
+    series or a benchmark whose scenarios do not choose one. Their planners differ from run
+    to run (each scenario's obstacle count sizes its slots) and a run is seconds long, so a
+    compile per planner (17 s to minutes) would cost more than it saves.
+
+    Raises:
+        ValueError: ``$DYNFAB_BACKEND`` is not one of :data:`BACKENDS`.
+    """
+    return _configured_backend("vm")
+
+
+def _configured_backend(otherwise: str) -> str:
+    backend = os.environ.get(BACKEND_VARIABLE, otherwise).strip() or otherwise
     if backend not in BACKENDS:
         raise ValueError(f"${BACKEND_VARIABLE} must be one of {', '.join(BACKENDS)}, got {backend!r}")
     return backend

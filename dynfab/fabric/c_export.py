@@ -83,8 +83,10 @@ def input_fields(planner: FabricPlanner) -> tuple[InputField, ...]:
         shapes = views.shape_views(kind)
         named += [(f"{kind}_orientation", shapes.orientation), (f"{kind}_dimensions", shapes.dimensions),
                   (f"{kind}_allowance", shapes.allowance)]
+    for leaf, keys in views.leaves.items():
+        named += [(f"leaf_{leaf}_{key}", view) for key, view in keys.items()]
     parameters = [InputField(name, n + nv + int(view.flat[0]), view.shape)
-                  for name, view in named if view is not None and view.size > 0]
+                  for name, view in named if isinstance(view, np.ndarray) and view.size > 0]
     fields = [InputField("q", 0, (n,)), InputField("qdot", n, (nv,))]
     fields += sorted(parameters, key=lambda field: field.offset)
     previous = planner._previous_command.size

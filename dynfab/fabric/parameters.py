@@ -14,8 +14,8 @@ layout has none, and its planner treats them as structurally zero.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass, fields
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass, field, fields
 from typing import NoReturn
 
 import casadi as ca
@@ -66,6 +66,56 @@ class AbsentParameter:
 
 
 _STATIC = "build it with PlannerConfig(..., dynamic=True)"
+
+
+class LeafViews(Mapping[str, np.ndarray]):
+    """The runtime parameters of one leaf (:mod:`dynfab.fabric.leaf`), by name.
+
+    ``views[key] = value`` copies ``value`` into the parameter's view after checking its
+    shape; ``views[key]`` is the writable view itself.
+    """
+
+    def __init__(self, leaf: str, views: Mapping[str, np.ndarray]) -> None:
+        self._leaf = leaf
+        self._views = dict(views)
+
+    def __getitem__(self, key: str) -> np.ndarray:
+        if key not in self._views:
+            raise ParameterError(f"leaves[{self._leaf!r}][{key!r}]: no such parameter; "
+                                 f"the leaf has {', '.join(map(repr, self._views)) or 'none'}")
+        return self._views[key]
+
+    def __setitem__(self, key: str, value: object) -> None:
+        view = self[key]
+        array = np.asarray(value, dtype=float).reshape(-1) if np.ndim(value) else np.full(1, float(value))
+        if array.shape != view.shape:
+            raise ParameterError(f"leaves[{self._leaf!r}][{key!r}] must have {view.size} values, got {array.size}")
+        view[:] = array
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._views)
+
+    def __len__(self) -> int:
+        return len(self._views)
+
+
+class LeafParameters(Mapping[str, LeafViews]):
+    """The runtime parameters of a planner's leaves (``PlannerConfig.leaves``), by leaf name."""
+
+    def __init__(self, leaves: Mapping[str, LeafViews]) -> None:
+        self._leaves = dict(leaves)
+
+    def __getitem__(self, name: str) -> LeafViews:
+        if name not in self._leaves:
+            raise ParameterError(f"leaves[{name!r}]: the planner has no leaf of that name; "
+                                 f"its leaves: {', '.join(map(repr, self._leaves)) or 'none'}")
+        return self._leaves[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._leaves)
+
+    def __len__(self) -> int:
+        return len(self._leaves)
 
 
 class GoalViews(tuple[np.ndarray, ...]):
@@ -180,6 +230,7 @@ class ParameterSymbols:
         obstacles: per slot, the centre's reference ``(c, ċ, c̈)`` (3-D).
         obstacle_radius: per slot, the radius.
         shapes: every shape slot, kinds in the order of :data:`SHAPE_DIMENSIONS`.
+        leaves: per leaf name, its parameters' symbols by name.
     """
 
     vector: ca.SX
@@ -188,6 +239,7 @@ class ParameterSymbols:
     obstacles: tuple[Reference, ...]
     obstacle_radius: tuple[ca.SX, ...]
     shapes: tuple[ShapeSymbols, ...] = ()
+    leaves: Mapping[str, Mapping[str, ca.SX]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -206,6 +258,8 @@ class RuntimeParameters:
             (dynamic planners only; an :class:`AbsentParameter` in a static one).
         boxes, cylinders, capsules, planes: the shape slots of each kind (zero rows if
             the planner has none).
+        leaves: the parameters of the planner's leaves (``PlannerConfig.leaves``):
+            ``leaves[leaf][key] = value``.
     """
 
     goal_position: GoalViews
@@ -220,6 +274,7 @@ class RuntimeParameters:
     goal_acceleration: GoalViews | AbsentParameter
     obstacle_velocity: np.ndarray | AbsentParameter
     obstacle_acceleration: np.ndarray | AbsentParameter
+    leaves: LeafParameters = field(default_factory=lambda: LeafParameters({}))
 
     def shape_views(self, kind: str) -> ShapeViews:
         """The views of the slots of ``kind`` (a key of :data:`SHAPE_DIMENSIONS`)."""
@@ -232,12 +287,21 @@ class ParameterLayout:
     acceleration if dynamic), the goal weights, the obstacle centres (then velocities and
     accelerations if dynamic), the obstacle radii; then per shape kind (in the order of
     :data:`SHAPE_DIMENSIONS`) its origins (then velocities and accelerations if dynamic),
-    orientations, dimensions and allowances."""
+    orientations, dimensions and allowances; then each leaf's parameters in order.
+
+    Attributes:
+        goal_dimensions: the dimension of each goal.
+        obstacle_slots: sphere slots.
+        dynamic: whether goals and obstacles carry velocities and accelerations.
+        shape_slots: shape slots per kind.
+        leaf_parameters: per leaf ``(name, ((key, size), ...))``.
+    """
 
     goal_dimensions: tuple[int, ...]
     obstacle_slots: int
     dynamic: bool = False
     shape_slots: ShapeSlots = ShapeSlots()
+    leaf_parameters: tuple[tuple[str, tuple[tuple[str, int], ...]], ...] = ()
 
     @property
     def _derivatives(self) -> int:
@@ -245,9 +309,24 @@ class ParameterLayout:
 
     @property
     def size(self) -> int:
+        return self._leaf_start + sum(size for _, keys in self.leaf_parameters for _, size in keys)
+
+    @property
+    def _leaf_start(self) -> int:
+        """Where the leaves' parameters start: after the goals, spheres and shapes."""
         k = self._derivatives
         return self._goal_and_sphere_size + sum(self.shape_slots.count(kind) * (3 * k + 4 + n + 1)
                                                 for kind, n in SHAPE_DIMENSIONS.items())
+
+    def _leaf_blocks(self) -> dict[str, dict[str, slice]]:
+        """Per leaf, the slice of each of its parameters."""
+        start, blocks = self._leaf_start, {}
+        for name, keys in self.leaf_parameters:
+            blocks[name] = {}
+            for key, size in keys:
+                blocks[name][key] = slice(start, start + size)
+                start += size
+        return blocks
 
     @property
     def _goal_and_sphere_size(self) -> int:
@@ -303,6 +382,8 @@ class ParameterLayout:
             obstacles=tuple(obstacle_references),
             obstacle_radius=tuple(vector[radii + k] for k in range(self.obstacle_slots)),
             shapes=self._shape_symbols(vector),
+            leaves={name: {key: vector[block] for key, block in keys.items()}
+                    for name, keys in self._leaf_blocks().items()},
         )
 
     def _shape_symbols(self, vector: ca.SX) -> tuple[ShapeSymbols, ...]:
@@ -344,6 +425,8 @@ class ParameterLayout:
                                else AbsentParameter("obstacle_velocity", _STATIC)),
             obstacle_acceleration=(obstacle_views[2] if self.dynamic
                                    else AbsentParameter("obstacle_acceleration", _STATIC)),
+            leaves=LeafParameters({name: LeafViews(name, {key: buffer[block] for key, block in keys.items()})
+                                   for name, keys in self._leaf_blocks().items()}),
         )
 
     def _shape_views(self, buffer: np.ndarray) -> dict[str, ShapeViews]:

@@ -33,6 +33,7 @@ from dynfab.fabric.backends import planner_function
 from dynfab.fabric.batch import BatchEvaluator
 from dynfab.fabric.command_bounds import CommandBounds
 from dynfab.fabric.energy import WeightedGeometry
+from dynfab.fabric.leaf import Leaf, LeafContext
 from dynfab.fabric.leaves.orientation import OrientationGoalConfig, direction_map
 from dynfab.fabric.joint_reference import joint_reference
 from dynfab.fabric.maps import DifferentialMap, Reference, linear_map, selected
@@ -75,7 +76,9 @@ class FabricPlanner:
         self._n = robot.kinematics.dof
         self._nv = self._n - 1 if robot.base is not None else self._n
         goal_dimensions = tuple(self._goal_dimension(goal) for goal in config.goals)
-        self._layout = ParameterLayout(goal_dimensions, config.obstacle_slots, config.dynamic, config.shape_slots)
+        leaf_parameters = tuple((leaf.name, tuple(leaf.parameter_sizes().items())) for leaf in config.leaves)
+        self._layout = ParameterLayout(goal_dimensions, config.obstacle_slots, config.dynamic, config.shape_slots,
+                                       leaf_parameters)
         self._remembers_command = config.bound_command and config.limits.jerk is not None
         built = planner_function(config.backend, self._build, (robot, config))
         self.function, self.backend, self._n_instructions = built.function, built.backend, built.n_instructions
@@ -241,6 +244,8 @@ class FabricPlanner:
         if self.config.joint_limits is not None:
             kin = self.robot.kinematics
             geometry = geometry + self.config.joint_limits.on_joints(q, qdot, kin.lower, kin.upper)
+        for leaf in self.config.leaves:
+            geometry = geometry + self._leaf_geometry(leaf, q, qdot, params)
         forcing, goal_distance, joint = self._forcing(q, qdot, params)
         motion = EnvironmentMotion(*joint, obstacle_momentum) if joint is not None else None
         qddot = self.config.speed_control.acceleration(geometry, forcing, goal_distance, motion)
@@ -262,6 +267,15 @@ class FabricPlanner:
         z = ca.SX.sym("z", state + size + previous.shape[0])
         qddot = inner(z[:n], z[n:state], z[state:state + size], z[state + size:])
         return ca.Function("fabric", [z], [qddot], {"cse": True})
+
+    def _leaf_geometry(self, leaf: Leaf, q: ca.SX, qdot: ca.SX, params: ParameterSymbols) -> WeightedGeometry:
+        """A leaf of ``config.leaves`` in joint space, its shapes checked."""
+        term = leaf.geometry(LeafContext(self.robot, q, qdot, params.leaves[leaf.name]))
+        n = self._n
+        if term.M.shape != (n, n) or term.f_geometry.shape != (n, 1) or term.f_energy.shape != (n, 1):
+            raise ValueError(f"leaf {leaf.name!r}: geometry(context) must be in joint space (M {n}x{n}, "
+                             f"forces {n}x1), got M {term.M.shape[0]}x{term.M.shape[1]}")
+        return term
 
     def _bounds(self) -> CommandBounds:
         """The command bounds of the velocity coordinates (position limits of the joints

@@ -5,11 +5,13 @@ compiles them is :class:`dynfab.fabric.planner.FabricPlanner`."""
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from dynfab.fabric.backends import BACKENDS, default_backend
+from dynfab.fabric.leaf import Leaf
 from dynfab.fabric.leaves.barrier import Barrier
 from dynfab.fabric.leaves.goal import GoalAttractor
 from dynfab.fabric.leaves.limits import JointLimitAvoidance
@@ -22,6 +24,9 @@ from dynfab.fabric.parameters import ShapeSlots
 from dynfab.fabric.speed_control import SpeedControl
 from dynfab.robots.limits import MotionLimits
 from dynfab.robots.robot import Robot
+
+
+_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
 @dataclass(frozen=True)
@@ -86,6 +91,9 @@ class PlannerConfig:
             position bounds look one period ahead (:mod:`dynfab.fabric.command_bounds`).
         bound_command: make every command executable (:mod:`dynfab.fabric.command_bounds`);
             ``False`` returns the fabric's raw acceleration (for studying the theory).
+        leaves: further leaves built through the leaf interface (:mod:`dynfab.fabric.leaf`),
+            e.g. :class:`~dynfab.fabric.leaves.workspace.WorkspaceBounds`; their runtime
+            parameters are ``planner.parameters.leaves[name]``.
         backend: ``"c"`` (the default, unless ``$DYNFAB_BACKEND`` says ``vm``) compiles the
             function to C and caches the library, falling back to the VM without a
             compiler; ``"vm"`` interprets it in CasADi's virtual machine
@@ -108,6 +116,7 @@ class PlannerConfig:
     limits: MotionLimits | None = None
     control_period: float = 0.01
     bound_command: bool = True
+    leaves: tuple[Leaf, ...] = ()
     backend: str = field(default_factory=default_backend)
 
     @classmethod
@@ -136,5 +145,25 @@ class PlannerConfig:
         if not (np.isfinite(self.control_period) and self.control_period > 0):
             raise ValueError(f"PlannerConfig.control_period must be a positive finite number, "
                              f"got {self.control_period}")
+        _check_leaves(self.leaves)
         if self.backend not in BACKENDS:
             raise ValueError(f"PlannerConfig.backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
+
+
+def _check_leaves(leaves: tuple[Leaf, ...]) -> None:
+    """Each leaf follows :class:`~dynfab.fabric.leaf.Leaf`, with a unique identifier for a
+    name and identifiers for parameter names (they name C fields in an export)."""
+    names: set[str] = set()
+    for i, leaf in enumerate(leaves):
+        if not isinstance(leaf, Leaf):
+            raise TypeError(f"PlannerConfig.leaves[{i}]: {type(leaf).__name__} is not a leaf "
+                            "(it needs name, parameter_sizes() and geometry(context): dynfab.fabric.leaf)")
+        if not isinstance(leaf.name, str) or not _IDENTIFIER.fullmatch(leaf.name):
+            raise ValueError(f"PlannerConfig.leaves[{i}].name must be an identifier, got {leaf.name!r}")
+        if leaf.name in names:
+            raise ValueError(f"PlannerConfig.leaves: two leaves are named {leaf.name!r}")
+        names.add(leaf.name)
+        for key, size in leaf.parameter_sizes().items():
+            if not _IDENTIFIER.fullmatch(key) or isinstance(size, bool) or not isinstance(size, int) or size < 1:
+                raise ValueError(f"PlannerConfig.leaves[{i}] ({leaf.name}): parameter {key!r} needs an identifier "
+                                 f"for a name and a size >= 1, got {size!r}")

@@ -14,7 +14,8 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dynfab.geometry.shapes import Box, Capsule, Cylinder, Placement, Plane, Shape, Sphere
+from dynfab.geometry.mesh_distance import mesh_signed_distance
+from dynfab.geometry.shapes import Box, Capsule, Cylinder, Mesh, Placement, Plane, Shape, Sphere
 
 __all__ = ["box_distance", "capsule_distance", "cylinder_distance", "placed_distance", "plane_distance",
            "shape_distance", "sphere_distance"]
@@ -59,7 +60,9 @@ def plane_distance(points: ArrayLike) -> NDArray[np.float64]:
 
 
 def shape_distance(shape: Shape, points: ArrayLike) -> NDArray[np.float64]:
-    """Signed distance (...,) [m] of points (..., 3) given in the shape's frame."""
+    """Signed distance (...,) [m] of points (..., 3) given in the shape's frame (a mesh:
+    :func:`~dynfab.geometry.mesh_distance.mesh_signed_distance`, signed within 0.1 m of a
+    closed mesh's surface)."""
     if isinstance(shape, Sphere):
         return sphere_distance(points, shape.radius)
     if isinstance(shape, Box):
@@ -70,6 +73,8 @@ def shape_distance(shape: Shape, points: ArrayLike) -> NDArray[np.float64]:
         return capsule_distance(points, shape.radius, shape.length)
     if isinstance(shape, Plane):
         return plane_distance(points)
+    if isinstance(shape, Mesh):
+        return mesh_signed_distance(shape, points)
     raise TypeError(f"unknown shape {shape!r}")
 
 

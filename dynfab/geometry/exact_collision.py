@@ -14,7 +14,8 @@ the link frame. Each mesh is kept twice, as
 or the meshes do not touch although their hulls overlap, and the hulls' (non-positive)
 signed distance when the meshes do touch — their surfaces intersect, or one lies wholly
 inside the other (then no surfaces cross; one point of the inner solid is tested against
-the outer mesh by ray parity, which needs closed meshes, as collision meshes are). Obstacle shapes (:mod:`dynfab.geometry.shapes`)
+the outer mesh by ray parity, which needs closed meshes, as collision meshes are; an open
+obstacle mesh, a surface, has no inside and is touched only when surfaces meet). Obstacle shapes (:mod:`dynfab.geometry.shapes`)
 are coal primitives, exact; a :class:`~dynfab.geometry.shapes.Plane` is the solid
 half-space ``z <= 0`` of its frame.
 
@@ -31,7 +32,7 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
-from dynfab.geometry.shapes import Box, Capsule, Cylinder, Placement, Plane, Shape, Sphere
+from dynfab.geometry.shapes import Box, Capsule, Cylinder, Mesh, Placement, Plane, Shape, Sphere
 
 __all__ = [
     "MeshSet", "Solid", "exact_distance", "hull_distance", "mesh_set", "placement_matrix",
@@ -86,8 +87,14 @@ def mesh_set(meshes: Sequence[trimesh.Trimesh]) -> MeshSet:
     return MeshSet(tuple(parts), center, radius)
 
 
-def shape_geometry(shape: Shape) -> coal.CollisionGeometry:
-    """The coal primitive of an obstacle shape, in the shape's frame (see shapes.py)."""
+def shape_geometry(shape: Shape) -> Solid:
+    """The coal primitive of an obstacle shape, in the shape's frame (see shapes.py); a mesh
+    obstacle's :class:`MeshSet` (built once per mesh)."""
+    if isinstance(shape, Mesh):
+        cached = shape.__dict__.get("_mesh_set")
+        if cached is None:
+            cached = shape.__dict__["_mesh_set"] = mesh_set([shape.triangles])
+        return cached
     if isinstance(shape, Sphere):
         return coal.Sphere(shape.radius)
     if isinstance(shape, Box):
@@ -114,6 +121,8 @@ def shape_bounding_radius(shape: Shape) -> float:
         return shape.radius + 0.5 * shape.length
     if isinstance(shape, Plane):
         return float("inf")
+    if isinstance(shape, Mesh):
+        return shape.bounding_radius
     raise TypeError(f"unsupported obstacle shape {type(shape).__name__}")
 
 
@@ -173,7 +182,9 @@ def _inside(part: _MeshPart, pose_a: NDArray[np.float64], b: Solid, triangles: t
     b_vertex = to_a[:3, :3] @ triangles.vertices[0] + to_a[:3, 3]
     to_b = np.linalg.inv(to_a)
     a_vertex = to_b[:3, :3] @ part.triangles.vertices[0] + to_b[:3, 3]
-    return bool(part.triangles.contains(b_vertex[None])[0] or triangles.contains(a_vertex[None])[0])
+    if bool(part.triangles.contains(b_vertex[None])[0]):
+        return True
+    return triangles.is_watertight and bool(triangles.contains(a_vertex[None])[0])  # an open surface has no inside
 
 
 def _hulls(b: Solid) -> list[coal.CollisionGeometry]:

@@ -11,6 +11,7 @@ the world [m]. The shape frames are:
   to ``(0, 0, length/2)``.
 - :class:`Plane`: the solid half-space ``z_s <= 0`` (the plane through the origin with
   normal +z; what lies below it is solid: a floor, a table top, a wall).
+- :class:`~dynfab.geometry.mesh_shape.Mesh`: triangles given in the shape frame.
 
 Orientations are unit quaternions ``(w, x, y, z)``.
 """
@@ -24,8 +25,10 @@ from typing import Union
 
 import numpy as np
 
+from dynfab.geometry.mesh_shape import Mesh
+
 __all__ = [
-    "Box", "Capsule", "Cylinder", "IDENTITY_QUATERNION", "Placement", "Plane", "Shape",
+    "Box", "Capsule", "Cylinder", "IDENTITY_QUATERNION", "Mesh", "Placement", "Plane", "Shape",
     "ShapeError", "Sphere", "quaternion_from_normal", "quaternion_from_rpy", "quaternion_matrix",
     "unit_quaternion",
 ]
@@ -212,4 +215,4 @@ class Plane:
 
 
 #: Any obstacle shape.
-Shape = Union[Sphere, Box, Cylinder, Capsule, Plane]
+Shape = Union[Sphere, Box, Cylinder, Capsule, Plane, Mesh]

@@ -16,12 +16,52 @@
  * None of this can change the result. The groups and blocks come with the robot's
  * constants (DYNFAB_GROUPS, DYNFAB_BLOCKS, dynfab_group_*[], dynfab_block_*[]). An obstacle row has 17 numbers: kind (0 sphere, 1 box, 2 cylinder, 3 capsule,
  * 4 plane), centre (3), rotation R row-major (9), dimensions (3), bounding radius
- * (a plane: ignored).
+ * (a plane: ignored). Kind 5 is a mesh's distance grid (dynfab/geometry/distance_grid.py): its
+ * dimensions[0] is the offset, in doubles from the row's start, of the grid's data in the same
+ * obstacle buffer (after the rows), and the distance is the grid's lower bound.
  */
 
 #define DYNFAB_ROW 17
 
 static double dynfab_max(double a, double b) { return a > b ? a : b; }
+
+/* Lower bound of the distance to a mesh at a point (x, y, z) of its frame: outside the grid
+ * the distance to the mesh's bounding box, inside sum_j w_j (v_j - |p - g_j|) over the
+ * cell's corners (trilinear weights w_j, node values v_j). Layout of `grid`: nx, ny, nz, h,
+ * origin (3), box low (3), box high (3), then nx*ny*nz values, z fastest. */
+static double dynfab_grid_distance(const double* grid, double x, double y, double z) {
+  const int n[3] = {(int)grid[0], (int)grid[1], (int)grid[2]};
+  const double h = grid[3], p[3] = {x, y, z};
+  double cell[3], gap2 = 0.0;
+  int inside = 1, base[3];
+  for (int a = 0; a < 3; ++a) {
+    const double below = grid[7 + a] - p[a], above = p[a] - grid[10 + a];
+    const double out = below > 0.0 ? below : (above > 0.0 ? above : 0.0);
+    gap2 += out * out;
+    cell[a] = (p[a] - grid[4 + a]) / h;
+    if (!(cell[a] >= 0.0 && cell[a] <= (double)(n[a] - 1))) inside = 0;
+  }
+  if (!inside) return sqrt(gap2);
+  for (int a = 0; a < 3; ++a) {
+    base[a] = (int)cell[a];
+    if (base[a] > n[a] - 2) base[a] = n[a] - 2;
+    cell[a] -= (double)base[a];
+  }
+  const double* values = grid + 13;
+  double total = 0.0;
+  for (int c = 0; c < 8; ++c) {
+    const int o[3] = {c >> 2 & 1, c >> 1 & 1, c & 1};
+    double weight = 1.0, d2 = 0.0;
+    for (int a = 0; a < 3; ++a) {
+      weight *= o[a] ? cell[a] : 1.0 - cell[a];
+      const double d = (cell[a] - (double)o[a]) * h;
+      d2 += d * d;
+    }
+    const long index = ((long)(base[0] + o[0]) * n[1] + (base[1] + o[1])) * n[2] + (base[2] + o[2]);
+    total += weight * (values[index] - sqrt(d2));
+  }
+  return total;
+}
 
 static double dynfab_distance(const double* o, const double* p) {
   const double dx = p[0] - o[1], dy = p[1] - o[2], dz = p[2] - o[3];
@@ -51,6 +91,8 @@ static double dynfab_distance(const double* o, const double* p) {
       if (a < -0.5 * d[1]) a = -0.5 * d[1];
       return sqrt(x * x + y * y + (z - a) * (z - a)) - d[0];
     }
+    case 5:
+      return dynfab_grid_distance(o + (long)d[0], x, y, z);
     default:
       return z;
   }

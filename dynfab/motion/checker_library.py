@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import ctypes
 import hashlib
+import sys
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -66,10 +68,14 @@ def load_checker_library(robot: Robot) -> CheckerLibrary | None:
     key = hashlib.sha256(f"{compiler.path} {compiler.version} {' '.join(_FLAGS)}\n{source}".encode()).hexdigest()
     path = cache_dir() / f"checker-{key}.so"
     if not _verified(path):
+        print(f"dynfab: compiling the collision checker of {robot.name} (once; cached in {path.parent}) ...",
+              file=sys.stderr, flush=True)
+        start = time.perf_counter()
         try:
             _compile(source, compiler, path)
         except (OSError, RuntimeError):
             return None
+        print(f"dynfab: compiled the checker in {time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
     return CheckerLibrary(path)
 
 

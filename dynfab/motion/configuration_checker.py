@@ -8,7 +8,9 @@ For a configuration ``q`` the checker gives
 
 over the robot's collision spheres ``(p_i, r_i)``, the obstacles ``k`` (centre ``c_k``,
 rotation ``R_k``, the exact signed distance ``d_k`` of a sphere, box, cylinder, capsule or
-plane in its own frame, :mod:`dynfab.geometry.distance`) and the robot's self-collision
+plane in its own frame, :mod:`dynfab.geometry.distance`; for a mesh, compiled, a lower bound
+of it from a grid, :mod:`dynfab.geometry.distance_grid`, at most ``h√3`` = 1.7 cm below it
+within 4 cm of the surface) and the robot's self-collision
 pairs: the same spheres, shapes and pairs the fabric's leaves avoid, so a path the
 checker accepts is one the fabric can follow. ``inf`` where there is nothing to check.
 
@@ -34,13 +36,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dynfab.geometry.distance import placed_distance
-from dynfab.geometry.shapes import Box, Capsule, Cylinder, Placement, Plane, Shape, Sphere
+from dynfab.geometry.distance_grid import distance_grid
+from dynfab.geometry.shapes import Box, Capsule, Cylinder, Mesh, Placement, Plane, Shape, Sphere
 from dynfab.motion.checker_library import as_pointer, load_checker_library
 from dynfab.robots.robot import Robot
 
 __all__ = ["ConfigurationChecker", "PlacedObstacle"]
 
-_KIND: dict[type, int] = {Sphere: 0, Box: 1, Cylinder: 2, Capsule: 3, Plane: 4}
+_KIND: dict[type, int] = {Sphere: 0, Box: 1, Cylinder: 2, Capsule: 3, Plane: 4, Mesh: 5}
 _ROW = 17
 _ONE = ctypes.c_int(1)
 
@@ -89,9 +92,10 @@ class ConfigurationChecker:
         return self._obstacles
 
     def set_obstacles(self, obstacles: Sequence[PlacedObstacle]) -> None:
-        """Check against ``obstacles`` from now on."""
+        """Check against ``obstacles`` from now on (a mesh's distance grid is built on its
+        first use: a second or so per mesh, :mod:`dynfab.geometry.distance_grid`)."""
         self._obstacles = tuple(obstacles)
-        self._rows = np.ascontiguousarray(np.array([_row(o) for o in self._obstacles]).reshape(-1, _ROW))
+        self._rows = _buffer(self._obstacles)
         self._rows_pointer = as_pointer(self._rows)
         self._rows_address = ctypes.c_void_p(self._rows.ctypes.data)
         self._count = ctypes.c_int(len(self._obstacles))
@@ -174,8 +178,24 @@ class ConfigurationChecker:
         return out
 
 
+def _buffer(obstacles: Sequence[PlacedObstacle]) -> NDArray[np.float64]:
+    """The kernel's obstacle buffer: one row per obstacle, then the meshes' grids, each
+    mesh row's dimensions[0] the offset of its grid from the row's start [doubles]."""
+    rows = np.array([_row(o) for o in obstacles]).reshape(-1, _ROW)
+    grids = []
+    end = rows.size
+    for k, obstacle in enumerate(obstacles):
+        if isinstance(obstacle.shape, Mesh):
+            grid = distance_grid(obstacle.shape).packed()
+            rows[k, 13] = end - _ROW * k
+            grids.append(grid)
+            end += grid.size
+    return np.ascontiguousarray(np.concatenate([rows.reshape(-1), *grids]))
+
+
 def _row(obstacle: PlacedObstacle) -> NDArray[np.float64]:
-    """The kernel's 17 numbers: kind, centre, rotation (row-major), dimensions, bounding radius."""
+    """The kernel's 17 numbers: kind, centre, rotation (row-major), dimensions, bounding radius
+    (a mesh: kind 5, its grid's offset set by :func:`_buffer`)."""
     row = np.zeros(_ROW)
     row[0] = _KIND[type(obstacle.shape)]
     row[1:4] = obstacle.placement.position
@@ -196,4 +216,6 @@ def _bounding_radius(shape: Shape) -> float:
         return math.hypot(shape.radius, 0.5 * shape.length)
     if isinstance(shape, Capsule):
         return shape.radius + 0.5 * shape.length
+    if isinstance(shape, Mesh):
+        return shape.bounding_radius
     return 0.0

@@ -16,7 +16,9 @@ the position of its point (first) and the orientation of its link, with the same
 
 Sphere obstacles take the planner's sphere slots in file order; boxes, cylinders, capsules
 and planes take the slots of their kind (:class:`dynfab.fabric.parameters.ShapeSlots`),
-whose orientation and sizes are written once.
+whose orientation and sizes are written once. Mesh obstacles take no slot: the planner gets
+a nearest-point leaf (:mod:`dynfab.fabric.leaves.surface_points`, range and gains of the
+shape obstacles'), written every tick (:mod:`dynfab.scenario.mesh_obstacles`).
 """
 
 from __future__ import annotations
@@ -27,6 +29,8 @@ from typing import Protocol
 import numpy as np
 
 from dynfab.fabric.leaves.orientation import FRAME_AXES, OrientationGoalConfig
+from dynfab.fabric.leaves.shape_obstacle import ShapeObstacleAvoidance
+from dynfab.fabric.leaves.surface_points import NearestSurfaceAvoidance
 from dynfab.fabric.parameters import AbsentParameter, RuntimeParameters, ShapeSlots
 from dynfab.fabric.planner import FabricPlanner, GoalConfig, PlannerConfig
 from dynfab.motion.references import References
@@ -34,6 +38,8 @@ from dynfab.motion.trajectories import StaticPoint, Trajectory, TrajectoryPoint
 from dynfab.mpc import GoalTerm, MpcConfig, MpcController, MpcProblem
 from dynfab.robots.robot import Robot
 from dynfab.sim.simulator import RunStopped
+from dynfab.perception.surfaces import SurfaceFeed
+from dynfab.scenario.mesh_obstacles import MeshObstacles, surface_leaf
 from dynfab.scenario.references import goal_axes
 from dynfab.scenario.schema import GoalSpec, ObstacleSpec, Scenario, ScenarioError
 
@@ -68,11 +74,13 @@ class FabricController:
 
     def __init__(self, planner: FabricPlanner, references: References,
                  moving_goals: tuple[int, ...], moving_obstacles: tuple[int, ...],
-                 obstacle_slots: tuple[ObstacleSlot, ...] | None = None) -> None:
-        """``obstacle_slots[k]`` is where obstacle ``k``'s centre is written; ``None``: the
-        sphere slot ``k``."""
+                 obstacle_slots: tuple[ObstacleSlot | None, ...] | None = None,
+                 meshes: MeshObstacles | None = None) -> None:
+        """``obstacle_slots[k]`` is where obstacle ``k``'s centre is written (None: a mesh,
+        which ``meshes`` writes each tick); ``None``: the sphere slot ``k``."""
         self.planner = planner
         self.references = references
+        self._meshes = meshes
         self._moving_goals = moving_goals
         self._moving_obstacles = moving_obstacles
         params = planner.parameters
@@ -83,6 +91,8 @@ class FabricController:
 
     def __call__(self, t: float, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
         self._write(t, self._moving_goals, self._moving_obstacles)
+        if self._meshes is not None:
+            self._meshes.write(t, q, self.references)
         return self.planner.compute(q, qdot)
 
     def retarget(self, references: References, t: float) -> None:
@@ -110,6 +120,8 @@ class FabricController:
         for k in obstacles:
             point = _finite_point(self.references.obstacles[k], t, f"the trajectory of obstacles[{k}]")
             slot = self._slots[k]
+            if slot is None:
+                continue
             d = len(point.position)  # planar scenarios may give x, y only
             slot.position[slot.row, :d] = point.position
             if dynamic:
@@ -144,13 +156,32 @@ def make_controller(scenario: Scenario, robot: Robot, references: References) ->
     config = replace(PlannerConfig.for_robot(robot, goals, spheres, _FABRIC_PLANNERS[scenario.planner],
                                              shape_slots_of(scenario.obstacles)),
                      control_period=scenario.dt, backend=scenario.backend)
-    config = scenario.fabric.configured(config)
+    config = with_surface_leaf(scenario.fabric.configured(config), robot, scenario.obstacles)
     planner = FabricPlanner(robot, config)
     slots = place_obstacles(scenario.obstacles, planner.parameters)
     references = planner_references(scenario, references)
     moving_goals = tuple(i for i, goal in enumerate(references.goals) if not isinstance(goal, StaticPoint))
     moving_obstacles = tuple(k for k, obstacle in enumerate(scenario.obstacles) if obstacle.trajectory is not None)
-    return FabricController(planner, references, moving_goals, moving_obstacles, slots)
+    return FabricController(planner, references, moving_goals, moving_obstacles, slots,
+                            mesh_obstacles(planner, robot, scenario.obstacles))
+
+
+def with_surface_leaf(config: PlannerConfig, robot: Robot, obstacles: tuple[ObstacleSpec, ...]) -> PlannerConfig:
+    """``config`` with the nearest-point leaf of the mesh obstacles (if any), whose barrier is
+    the shape obstacles' (the default one if shapes are off)."""
+    barrier = (config.shape_avoidance or ShapeObstacleAvoidance()).barrier
+    leaf = surface_leaf(robot, obstacles, barrier)
+    return config if leaf is None else replace(config, leaves=config.leaves + (leaf,))
+
+
+def mesh_obstacles(planner: FabricPlanner, robot: Robot, obstacles: tuple[ObstacleSpec, ...]) -> MeshObstacles | None:
+    """What writes the planner's nearest-point leaf each tick; None without mesh obstacles."""
+    leaf = next((leaf for leaf in planner.config.leaves if isinstance(leaf, NearestSurfaceAvoidance)), None)
+    if leaf is None:
+        return None
+    indices = tuple(k for k, obstacle in enumerate(obstacles) if obstacle.type == "mesh")
+    feed = SurfaceFeed(robot, leaf, planner.parameters.leaves[leaf.name])
+    return MeshObstacles(indices, tuple(obstacles[k] for k in indices), feed, planner.config.dynamic)
 
 
 def shape_slots_of(obstacles: tuple[ObstacleSpec, ...]) -> ShapeSlots:
@@ -160,12 +191,16 @@ def shape_slots_of(obstacles: tuple[ObstacleSpec, ...]) -> ShapeSlots:
                       plane=kinds.count("plane"))
 
 
-def place_obstacles(obstacles: tuple[ObstacleSpec, ...], params: RuntimeParameters) -> tuple[ObstacleSlot, ...]:
+def place_obstacles(obstacles: tuple[ObstacleSpec, ...],
+                    params: RuntimeParameters) -> tuple[ObstacleSlot | None, ...]:
     """Give each obstacle the next slot of its kind and write its radius, or its
-    orientation and sizes; returns where each one's centre goes."""
+    orientation and sizes; returns where each one's centre goes (None: a mesh, no slot)."""
     used = dict.fromkeys(("sphere", "box", "cylinder", "capsule", "plane"), 0)
-    slots = []
+    slots: list[ObstacleSlot | None] = []
     for obstacle in obstacles:
+        if obstacle.type == "mesh":
+            slots.append(None)
+            continue
         row = used[obstacle.type]
         used[obstacle.type] += 1
         if obstacle.type == "sphere":

@@ -38,8 +38,9 @@ from dynfab.motion.inverse_kinematics import AxisTarget, PointTarget
 from dynfab.motion.references import References
 from dynfab.motion.trajectories import StaticPoint
 from dynfab.robots.robot import Robot
-from dynfab.scenario.controllers import (Controller, FabricController, make_controller, place_obstacles,
-                                         shape_slots_of)
+from dynfab.scenario.controllers import (Controller, FabricController, make_controller, mesh_obstacles,
+                                         place_obstacles, shape_slots_of)
+from dynfab.scenario.mesh_obstacles import surface_leaf
 from dynfab.scenario.exact_metrics import obstacle_shapes
 from dynfab.scenario.recovering_controller import with_recovery
 from dynfab.scenario.references import goal_axes
@@ -149,7 +150,10 @@ class AllowanceSlot:
     radius: float = 0.0
 
     def write(self, params: RuntimeParameters, allowance: float) -> None:
-        """Let the fabric's spheres enter the obstacle by ``allowance`` [m]."""
+        """Let the fabric's spheres enter the obstacle by ``allowance`` [m] (a mesh has no
+        slot and takes none: its nearest-point leaf keeps its full range)."""
+        if self.kind == "mesh":
+            return
         if self.kind == "sphere":
             params.obstacle_radius[self.row] = max(SMALLEST_RADIUS, self.radius - allowance)
         else:
@@ -192,10 +196,11 @@ def make_scenario_controller(scenario: Scenario, robot: Robot, references: Refer
     slots = place_obstacles(scenario.obstacles, fabric.parameters)
     moving_indices = tuple(k for k, obstacle in enumerate(scenario.obstacles) if obstacle.trajectory is not None)
     inner = FabricController(fabric, References((StaticPoint(tuple(scenario.initial_state.q)),), references.obstacles),
-                             (), moving_indices, slots)
+                             (), moving_indices, slots, mesh_obstacles(fabric, planning_robot, scenario.obstacles))
     guided = GuidedFabric(fabric, settings)
     guided.set_obstacles(_placed(scenario, references, 0.0, static=True))
-    static_slots = tuple(AllowanceSlot(obstacle.type, slot.row, obstacle.radius if obstacle.type == "sphere" else 0.0)
+    static_slots = tuple(AllowanceSlot(obstacle.type, -1 if slot is None else slot.row,
+                                       obstacle.radius if obstacle.type == "sphere" else 0.0)
                          for obstacle, slot in zip(scenario.obstacles, slots) if obstacle.trajectory is None)
     return GuidedController(inner, guided, goal_targets(scenario, robot),
                             lambda t: _placed(scenario, references, t, static=False), plain, static_slots)
@@ -204,12 +209,15 @@ def make_scenario_controller(scenario: Scenario, robot: Robot, references: Refer
 def guided_planner_config(robot: Robot, scenario: Scenario) -> PlannerConfig:
     """The guided fabric of a scenario: dynamic, its first goal the joint-space reference
     (attractor gain :data:`GUIDED_GOAL_GAIN`), obstacle leaves of range
-    :data:`GUIDED_OBSTACLE_RANGE`, the scenario's obstacle slots; the ``fabric:`` block applies on top."""
+    :data:`GUIDED_OBSTACLE_RANGE`, the scenario's obstacle slots and, with meshes, the
+    nearest-point leaf with the same barrier; the ``fabric:`` block applies on top (not to
+    the nearest-point leaf, whose barrier is fixed here)."""
     barrier = Barrier(geometry_gain=5.0, energy_gain=GUIDED_OBSTACLE_ENERGY, horizon=GUIDED_OBSTACLE_RANGE,
                       offset=GUIDED_OBSTACLE_BUFFER)
     spheres = sum(obstacle.type == "sphere" for obstacle in scenario.obstacles)
     attractor = GoalAttractor(gain=GUIDED_GOAL_GAIN, sharpness=GUIDED_GOAL_SHARPNESS)
-    return PlannerConfig(goals=(guided_goal_config(attractor=attractor),),
+    leaf = surface_leaf(robot, scenario.obstacles, barrier)
+    return PlannerConfig(goals=(guided_goal_config(attractor=attractor),), leaves=() if leaf is None else (leaf,),
                          obstacle_slots=spheres, shape_slots=shape_slots_of(scenario.obstacles), dynamic=True,
                          obstacle_avoidance=SphereObstacleAvoidance(barrier),
                          shape_avoidance=ShapeObstacleAvoidance(barrier),

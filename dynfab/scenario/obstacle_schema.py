@@ -1,5 +1,7 @@
-"""The ``obstacles:`` entries of a scenario: spheres, boxes, cylinders, capsules and
-half-space planes, each static or moving along a trajectory of its centre."""
+"""The ``obstacles:`` entries of a scenario: spheres, boxes, cylinders, capsules,
+half-space planes and triangle meshes, each static or moving along a trajectory of its
+centre, and scenes given as URDFs (static; :mod:`dynfab.scenario.scene_files` reads the
+files)."""
 
 from __future__ import annotations
 
@@ -16,6 +18,7 @@ from dynfab.geometry.shapes import (
     Capsule,
     Cylinder,
     Plane,
+    Mesh,
     Shape,
     ShapeError,
     Sphere,
@@ -23,15 +26,15 @@ from dynfab.geometry.shapes import (
     unit_quaternion,
 )
 from dynfab.scenario.model_errors import tagged_union
-from dynfab.scenario.model_types import Items, Range, ScenarioModel, fail
+from dynfab.scenario.model_types import Items, Range, ScenarioModel, Text, fail
 from dynfab.scenario.ranges import Coordinate, Length, Point3
 from dynfab.scenario.trajectory_schema import TrajectoryMapping, frozen_trajectory
 
 
-OBSTACLE_TYPES: tuple[str, ...] = ("sphere", "box", "cylinder", "capsule", "plane")
+OBSTACLE_TYPES: tuple[str, ...] = ("sphere", "box", "cylinder", "capsule", "plane", "mesh", "urdf")
 
 
-ObstacleType = Literal["sphere", "box", "cylinder", "capsule", "plane"]
+ObstacleType = Literal["sphere", "box", "cylinder", "capsule", "plane", "mesh"]
 
 
 @dataclass(frozen=True)
@@ -52,6 +55,7 @@ class ObstacleSpec:
         orientation: Unit quaternion (w, x, y, z) of the shape frame (normalised from the
             file); a plane's takes +z onto its ``normal``.
         normal: A plane's unit normal, pointing out of the solid half-space; None otherwise.
+        mesh: A mesh's triangles in its frame (scaled); None for other shapes.
     """
 
     type: ObstacleType
@@ -62,6 +66,7 @@ class ObstacleSpec:
     length: float | None = None
     orientation: tuple[float, float, float, float] = IDENTITY_QUATERNION
     normal: tuple[float, float, float] | None = None
+    mesh: Mesh | None = None
 
     @property
     def shape(self) -> Shape:
@@ -74,6 +79,9 @@ class ObstacleSpec:
             return Cylinder(self.radius, self.length)
         if self.type == "capsule":
             return Capsule(self.radius, self.length)
+        if self.type == "mesh":
+            assert self.mesh is not None
+            return self.mesh
         return Plane()
 
 
@@ -150,7 +158,44 @@ class PlaneMapping(_Placed):
         return self
 
 
-def _check_rotation(shape: BoxMapping | CylinderMapping) -> Any:
+MeshScale = Annotated[float, Range(0.0, 1e3, open_lower=True)]
+FileName = Annotated[str, Text(4096)]
+
+
+class MeshMapping(_Placed):
+    """``{type: mesh, file: shelf.stl, scale: s, orientation: [w, x, y, z], position | trajectory}``:
+    the file's triangles (relative to the scenario file), scaled by ``s`` about the file's
+    origin, which ``position`` places."""
+
+    type: Literal["mesh"]
+    file: FileName
+    scale: MeshScale = 1.0
+    orientation: Quaternion = IDENTITY_QUATERNION
+    position: Point3 | None = None
+    trajectory: TrajectoryMapping | None = None
+
+    @model_validator(mode="after")
+    def _rotation(self) -> MeshMapping:
+        return _check_rotation(self)
+
+
+class UrdfMapping(ScenarioModel):
+    """``{type: urdf, file: kitchen.urdf, position, orientation, package_dirs: [...]}``: every
+    link's collision geometry at the pose of the scene's joints at zero, the scene's root
+    placed at ``position`` (static)."""
+
+    type: Literal["urdf"]
+    file: FileName
+    position: Point3 = (0.0, 0.0, 0.0)
+    orientation: Quaternion = IDENTITY_QUATERNION
+    package_dirs: Annotated[tuple[FileName, ...], Items(what="folders", allow_empty=True)] = ()
+
+    @model_validator(mode="after")
+    def _rotation(self) -> UrdfMapping:
+        return _check_rotation(self)
+
+
+def _check_rotation(shape: BoxMapping | CylinderMapping | MeshMapping | UrdfMapping) -> Any:
     """Refuse a zero quaternion (any other is normalised)."""
     try:
         unit_quaternion(shape.orientation)
@@ -161,12 +206,14 @@ def _check_rotation(shape: BoxMapping | CylinderMapping) -> Any:
 
 
 ObstacleMapping = tagged_union({"sphere": SphereMapping, "box": BoxMapping, "cylinder": CylinderMapping,
-                                "capsule": CapsuleMapping, "plane": PlaneMapping}, "type")
+                                "capsule": CapsuleMapping, "plane": PlaneMapping, "mesh": MeshMapping,
+                                "urdf": UrdfMapping}, "type")
 
 
 def obstacle_spec(obstacle: ScenarioModel) -> ObstacleSpec:
-    """The obstacle value of a validated ``obstacles:`` entry."""
-    assert isinstance(obstacle, _Placed)
+    """The obstacle value of a validated ``obstacles:`` entry of a primitive shape (meshes and
+    URDF scenes read files: :mod:`dynfab.scenario.scene_files`)."""
+    assert isinstance(obstacle, _Placed) and not isinstance(obstacle, MeshMapping)
     values = obstacle.model_dump(exclude={"trajectory"})
     normal = None
     orientation = unit_quaternion(values.get("orientation", IDENTITY_QUATERNION))

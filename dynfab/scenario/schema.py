@@ -32,7 +32,8 @@ from dynfab.scenario.joint_limits import check_within_limits, clipped_to_limits
 from dynfab.scenario.limits_schema import LimitsMapping, LimitsSpec
 from dynfab.scenario.model_errors import scenario_error
 from dynfab.scenario.model_types import Choice, Flag, Items, Range, ScenarioModel, fail
-from dynfab.scenario.obstacle_schema import OBSTACLE_TYPES, ObstacleMapping, ObstacleSpec, ObstacleType, obstacle_spec
+from dynfab.scenario.obstacle_schema import OBSTACLE_TYPES, ObstacleMapping, ObstacleSpec, ObstacleType
+from dynfab.scenario.scene_files import obstacle_specs
 from dynfab.scenario.ranges import (
     MAX_DT,
     MAX_DURATION,
@@ -178,10 +179,12 @@ class ScenarioDocument(ScenarioModel):
         return self
 
     def scenario(self, base_dir: Path) -> Scenario:
-        """The scenario value; a URDF path is resolved against ``base_dir``.
+        """The scenario value; a URDF path, a mesh or a scene file is resolved against
+        ``base_dir``; a URDF scene becomes one obstacle per collision geometry
+        (:mod:`dynfab.scenario.scene_files`).
 
         Raises:
-            ScenarioError: The URDF file is not found.
+            ScenarioError: The URDF file is not found, or a mesh or scene file is bad.
         """
         return Scenario(
             robot=robot_spec(self.robot, "robot", base_dir),
@@ -190,7 +193,8 @@ class ScenarioDocument(ScenarioModel):
             duration=self.duration,
             initial_state=InitialState(self.initial_state.q, self.initial_state.qdot),
             goals=tuple(goal_spec(goal) for goal in self.goal),
-            obstacles=tuple(obstacle_spec(obstacle) for obstacle in self.obstacles),
+            obstacles=tuple(spec for k, obstacle in enumerate(self.obstacles)
+                            for spec in obstacle_specs(obstacle, base_dir, f"obstacles[{k}]")),
             limits=self.limits.spec(),
             simulation=Simulation(self.simulator, self.control, self.delay, self.noise),
             recovery=self.recovery,
@@ -289,6 +293,9 @@ def validate_for_robot(scenario: Scenario, robot: Robot) -> Scenario:
         if obstacle.position is not None:
             key = "point" if obstacle.type == "plane" else "position"
             fields.check_length(obstacle.position, f"obstacles[{i}].{key}", obstacle_lengths)
+        if robot.planar and obstacle.type == "mesh":
+            raise ScenarioError(f"obstacles[{i}].type", "a planar robot moves in the xy-plane; mesh obstacles are 3-D "
+                                "(use spheres, boxes, cylinders or planes)")
         if robot.planar and obstacle.normal is not None and math.hypot(*obstacle.normal[:2]) < 1e-9:
             raise ScenarioError(f"obstacles[{i}].normal", "a planar robot moves in the xy-plane, which a "
                                 f"horizontal plane never bounds; use a wall (normal with an x or y part), "

@@ -17,6 +17,7 @@ import time
 from typing import Any
 
 from dynfab.benchmarks.mbm.franka import franka_robot_mapping
+from dynfab.fabric.backends import series_backend
 from dynfab.scenario.recording import run_recording
 from dynfab.scenario.recording_check import check_recording
 from dynfab.scenario.runner import run_scenario
@@ -28,6 +29,7 @@ __all__ = ["run_case"]
 def run_case(mapping: dict[str, Any]) -> dict[str, Any]:
     """Run the scenario ``mapping`` and check it on the meshes (module doc)."""
     start = time.perf_counter()
+    mapping = {"backend": series_backend(), **mapping}
     try:
         result = run_scenario(scenario_from_dict(mapping))
     except ScenarioError as error:

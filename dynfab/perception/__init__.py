@@ -1,0 +1,1 @@
+"""What the planner knows of the scene: surfaces (meshes) as nearest points per robot sphere."""

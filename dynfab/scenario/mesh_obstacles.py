@@ -1,0 +1,56 @@
+"""A scenario's mesh obstacles for the fabric: the nearest-point leaf they need and where
+they are at each tick (:mod:`dynfab.perception.surfaces` finds the points)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from dynfab.fabric.leaves.barrier import Barrier
+from dynfab.fabric.leaves.surface_points import NearestSurfaceAvoidance, moving_spheres
+from dynfab.geometry.shapes import Placement
+from dynfab.motion.references import References
+from dynfab.perception.surfaces import PlacedMesh, SurfaceFeed
+from dynfab.robots.robot import Robot
+from dynfab.scenario.schema import ObstacleSpec
+
+__all__ = ["MeshObstacles", "surface_leaf"]
+
+
+@dataclass(frozen=True)
+class MeshObstacles:
+    """The mesh obstacles of a scenario and the feed that writes their nearest points.
+
+    Attributes:
+        indices: Their indices among the scenario's obstacles.
+        obstacles: The obstacles.
+        feed: Writes the planner's nearest-point leaf.
+        with_velocity: Pass the meshes' velocities (dynamic fabrics); a static fabric sees
+            positions only, as the paper's static-fabric baseline does.
+    """
+
+    indices: tuple[int, ...]
+    obstacles: tuple[ObstacleSpec, ...]
+    feed: SurfaceFeed
+    with_velocity: bool
+
+    def write(self, t: float, q: np.ndarray, references: References) -> None:
+        """Write the nearest surface point of each robot sphere at time ``t`` [s]."""
+        placed = []
+        for k, obstacle in zip(self.indices, self.obstacles):
+            point = references.obstacles[k].evaluate(t)
+            velocity = tuple(float(v) for v in point.velocity) if self.with_velocity else (0.0, 0.0, 0.0)
+            assert obstacle.mesh is not None
+            placed.append(PlacedMesh(obstacle.mesh, Placement(tuple(point.position), obstacle.orientation),
+                                     velocity))  # type: ignore[arg-type]
+        self.feed.write(q, placed)
+
+
+def surface_leaf(robot: Robot, obstacles: Sequence[ObstacleSpec], barrier: Barrier) -> NearestSurfaceAvoidance | None:
+    """The nearest-point leaf of a scenario with mesh obstacles (on every sphere a joint
+    moves), or None without meshes."""
+    if not any(obstacle.type == "mesh" for obstacle in obstacles):
+        return None
+    return NearestSurfaceAvoidance(spheres=moving_spheres(robot), barrier=barrier)
