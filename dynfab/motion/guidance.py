@@ -86,7 +86,7 @@ class GuidanceSettings:
             reference (outside an approach) before the run counts as stalled [s]: held by
             the obstacle leaves in a tight passage, the reference's clock still creeps for
             seconds before ``stall_rate`` notices (chosen on training problems 10-16).
-        stall_margin: planning margin [m] a replan after a stall tries first (one attempt
+        stall_margin: planning margin [m] a replan after a stall on the way tries first (one attempt
             of ``stall_margin_time``), before ``path.margin``: a path that keeps more
             clearance where the stalled one went through a tight passage (chosen on
             training problems 10-16).

@@ -33,8 +33,10 @@ It replans from where the robot is (at most ``replans`` times) when
 Replans plan among the static obstacles and the moving ones where they are now, except
 those that touch the goal configuration (they are passing it: a plan around where they
 are now would end in a needless escape of the goal; the fabric avoids them). A replan
-after a stall first tries to keep ``stall_margin`` from obstacles, so that it does not
-lead through the same tight passage again.
+after a stall on the way (not in an approach, nor after the reference ended) first tries
+to keep ``stall_margin`` from obstacles, so that it does not lead through the same tight
+passage again; a stall in a grasp's approach replans as before (training as-posed
+table_pick/0014: replans at 3 cm there stalled 5 times in the approach).
 
 A goal closer to a static obstacle than the planner's margin (a grasp, where the
 spheres overlap what the meshes clear) ends the plan with a segment the planner checked
@@ -206,8 +208,10 @@ class GuidedFabric:
 
     def _replan_reason(self, t: float, q: NDArray[np.float64], lag: float,
                        moving: Sequence[PlacedObstacle]) -> str | None:
-        """``stalled`` if progress stalled, ``blocked`` if the reference is blocked ahead by
-        something moving, else None (module docstring); ``lag``: ``‖q − q_r‖`` [rad]."""
+        """``held`` if progress stalled on the way (the reference running, not in an
+        approach), ``stalled`` if it stalled elsewhere, ``blocked`` if the reference is
+        blocked ahead by something moving, else None (module docstring); ``lag``:
+        ``‖q − q_r‖`` [rad]."""
         assert self._plan is not None
         settings = self._settings
         running = self._tau < self._plan.trajectory.duration
@@ -217,7 +221,7 @@ class GuidedFabric:
             self._lagging_since = None
         if self._lagging_since is not None and t - self._lagging_since > settings.stall_lag_time:
             self.status = replace(self.status, replans_stalled=self.status.replans_stalled + 1)
-            return "stalled"
+            return "held"
         if running:  # on the way: the reference's clock must advance
             progress, needed = -self._tau, settings.stall_rate * settings.stall_window
             at_goal = False
@@ -229,7 +233,7 @@ class GuidedFabric:
             self._best, self._best_time = progress, t
         if not at_goal and t - self._best_time > settings.stall_window:
             self.status = replace(self.status, replans_stalled=self.status.replans_stalled + 1)
-            return "stalled"
+            return "held" if running and not self._in_approach() else "stalled"
         if moving and t >= self._next_check:
             self._next_check = t + settings.check_period
             if self.guidance.blocked_ahead(self._plan, self._tau, moving):
@@ -239,7 +243,7 @@ class GuidedFabric:
 
     def _replan(self, t: float, q: NDArray[np.float64], moving: Sequence[PlacedObstacle], first: bool,
                 after: str | None = None) -> None:
-        """Plan from ``q`` at time ``t`` [s]; ``after``: why (``stalled``, ``blocked``), None at first."""
+        """Plan from ``q`` at time ``t`` [s]; ``after``: why (:meth:`_replan_reason`), None at first."""
         assert self._goal is not None
         q = np.asarray(q, dtype=float)
         if self._plan is not None:  # what moves and touches the goal configuration is passing it
@@ -248,7 +252,7 @@ class GuidedFabric:
         obstacles = self._static if first else self._static + tuple(moving)
         began = time.perf_counter()
         try:
-            plan = self.guidance.plan(q, self._goal, obstacles, seed=self._seed, wide=after == "stalled")
+            plan = self.guidance.plan(q, self._goal, obstacles, seed=self._seed, wide=after == "held")
             failure, message = None, None
         except GuidanceError as error:
             plan, failure, message = None, error.reason, str(error)
