@@ -66,8 +66,8 @@ class GuidanceSettings:
         attempts: plans tried per request, each with the next seed and twice the previous
             one's time limit (1, 2, 4 s by default) [-].
         replans: plans at most in one run after the first [-]. 10: with 4 (the value
-            before), 8 of the 8 failures of training moving-sphere problems 10-16 had used
-            them all.
+            before), all 8 failures of training moving-sphere problems 10-16 had used them
+            all.
         blocked_interval: least time between a replan for a blocked reference and the
             next check of what moves against the new one [s]: checking at once replanned
             4 times in 0.13 s on training moving-sphere bookshelf_tall/0014 as the sphere

@@ -63,8 +63,9 @@ GUIDED_OBSTACLE_BUFFER = 0.005
 #: how much larger [m] the guided fabric's leaves see a moving obstacle than it is (a sphere's
 #: radius grown, a shape's allowance made negative): its leaves range only
 #: :data:`GUIDED_OBSTACLE_RANGE` with a light energy, which lets the plan pass close to what
-#: is static but left a sphere crossing at 0.4 m/s 0.25 s to be avoided, too late (training
-#: moving-sphere problems 10-16: 3 collisions without it; chosen there)
+#: is static but left a sphere crossing at 0.4 m/s 0.25 s to be avoided, too late (chosen on
+#: training moving-sphere problems 10-16: bookshelf_tall/0014 and 0015 collide without it,
+#: with every other change of this issue in place; none of the 49 collides with it)
 GUIDED_MOVING_MARGIN = 0.03
 #: range [rad] and ``λ`` of the guided fabric's joint-limit leaves: the reference keeps within
 #: the limits, and a goal at a limit (common in MBM) must be reachable: the default leaf's
