@@ -32,7 +32,7 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
-from dynfab.geometry.shapes import Box, Capsule, Cylinder, Mesh, Placement, Plane, Shape, Sphere
+from dynfab.geometry.shapes import Box, Capsule, Cylinder, Mesh, Placement, Plane, PointCloud, Shape, Sphere
 
 __all__ = [
     "MeshSet", "Solid", "exact_distance", "hull_distance", "mesh_set", "placement_matrix",
@@ -89,7 +89,13 @@ def mesh_set(meshes: Sequence[trimesh.Trimesh]) -> MeshSet:
 
 def shape_geometry(shape: Shape) -> Solid:
     """The coal primitive of an obstacle shape, in the shape's frame (see shapes.py); a mesh
-    obstacle's :class:`MeshSet` (built once per mesh)."""
+    obstacle's :class:`MeshSet` (built once per mesh); a point cloud's, of a 0.1 mm triangle
+    at each point (:attr:`~dynfab.geometry.point_cloud.PointCloud.specks`)."""
+    if isinstance(shape, PointCloud):
+        cached = shape.__dict__.get("_mesh_set")
+        if cached is None:
+            cached = shape.__dict__["_mesh_set"] = mesh_set([shape.specks.triangles])
+        return cached
     if isinstance(shape, Mesh):
         cached = shape.__dict__.get("_mesh_set")
         if cached is None:
@@ -121,7 +127,7 @@ def shape_bounding_radius(shape: Shape) -> float:
         return shape.radius + 0.5 * shape.length
     if isinstance(shape, Plane):
         return float("inf")
-    if isinstance(shape, Mesh):
+    if isinstance(shape, Mesh | PointCloud):
         return shape.bounding_radius
     raise TypeError(f"unsupported obstacle shape {type(shape).__name__}")
 

@@ -151,8 +151,8 @@ class AllowanceSlot:
 
     def write(self, params: RuntimeParameters, allowance: float) -> None:
         """Let the fabric's spheres enter the obstacle by ``allowance`` [m] (a mesh has no
-        slot and takes none: its nearest-point leaf keeps its full range)."""
-        if self.kind == "mesh":
+        slot and takes none: its nearest-point leaf keeps its full range; nor has a point cloud)."""
+        if self.kind in ("mesh", "points"):
             return
         if self.kind == "sphere":
             params.obstacle_radius[self.row] = max(SMALLEST_RADIUS, self.radius - allowance)
