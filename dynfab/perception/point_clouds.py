@@ -9,7 +9,8 @@ taken, and
    (the voxel's centre), doubling ``h`` until at most ``max_points`` remain
    (:class:`~dynfab.geometry.point_cloud.PointCloud`, bounded memory);
 2. removes the robot's own body: every kept point within ``r_i + margin`` of a robot
-   collision sphere ``(p_i(q), r_i)`` (a KD-tree ball query per sphere);
+   collision sphere ``(p_i(q), r_i)`` (the points in the box around all the spheres, then
+   their distances to every sphere);
 3. builds a KD-tree of what is left.
 
 Each control tick :meth:`PointCloudFeed.write` finds, per sphere of the leaf, the nearest
@@ -82,8 +83,13 @@ class RobotFilter:
         if cloud.empty or len(self._radii) == 0:
             return cloud, 0
         centres = np.asarray(self._centres(np.asarray(q, dtype=float)), dtype=float).reshape(-1, 3)
-        inside = cloud.tree.query_ball_point(centres, self._radii)
-        hit = np.unique(np.concatenate([np.asarray(rows, dtype=np.int64) for rows in inside]))
+        low = (centres - self._radii[:, None]).min(axis=0)
+        high = (centres + self._radii[:, None]).max(axis=0)
+        near = np.flatnonzero(np.all((cloud.points >= low) & (cloud.points <= high), axis=1))
+        if near.size == 0:
+            return cloud, 0
+        gaps = np.linalg.norm(cloud.points[near, None, :] - centres[None, :, :], axis=2)
+        hit = near[(gaps <= self._radii[None, :]).any(axis=1)]
         if hit.size == 0:
             return cloud, 0
         keep = np.ones(len(cloud.points), dtype=bool)
