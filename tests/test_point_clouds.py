@@ -6,6 +6,9 @@ points written), 10⁷ points in bounded time and memory."""
 from __future__ import annotations
 
 import math
+import re
+import subprocess
+import sys
 import time
 import tracemalloc
 from pathlib import Path
@@ -212,3 +215,12 @@ def test_an_empty_update_leaves_every_sphere_inactive(feed_and_planner: tuple[Po
     assert update.kept == 0 and not planner.parameters.leaves["surfaces"]["active"].any()
     with pytest.raises(ValueError, match=r"expected an \(N, 3\) array of numbers, got shape \(2, 2\)"):
         feed.update_points(np.zeros((2, 2)), None)
+
+
+def test_the_point_cloud_example_reaches_its_goal_with_the_robot_filtered_out() -> None:
+    example = Path(__file__).resolve().parent.parent / "examples" / "panda_point_cloud.py"
+    run = subprocess.run([sys.executable, str(example)], capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-2000:]
+    found = re.search(r"(\d+) on the robot.*error ([\d.]+) m; closest sphere to the wall ([\d.]+) cm", run.stdout, re.S)
+    assert found is not None, run.stdout
+    assert int(found[1]) > 0 and float(found[2]) < 0.06 and float(found[3]) > 0.0
