@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 
 from dynfab.benchmarks.mbm.problems import PROBLEM_TYPES
 from dynfab.robots.collision_model import cache_dir
-from dynfab.geometry.shapes import quaternion_matrix
+from dynfab.geometry.shapes import quaternion_matrix, unit_quaternion
 
 if TYPE_CHECKING:
     from dynfab.benchmarks.mbm.variants import Case
@@ -63,7 +63,7 @@ def surface_points(obstacle: Mapping[str, Any], spacing: float = SPACING) -> NDA
         local = _cylinder_surface(obstacle["radius"], obstacle["length"], spacing)
     else:
         raise ValueError(f"cannot sample a {obstacle['type']!r} obstacle")
-    rotation = quaternion_matrix(obstacle.get("orientation", (1.0, 0.0, 0.0, 0.0)))
+    rotation = quaternion_matrix(unit_quaternion(obstacle.get("orientation", (1.0, 0.0, 0.0, 0.0))))
     return local @ rotation.T + np.asarray(obstacle["position"], dtype=float)
 
 
