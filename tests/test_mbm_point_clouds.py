@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 
 from dynfab.benchmarks.mbm.franka import franka
 from dynfab.benchmarks.mbm.point_clouds import NOISE, SPACING, surface_points
@@ -28,7 +29,6 @@ def test_surface_samples_lie_on_the_surface_no_farther_apart_than_the_spacing(ki
     placement = Placement(spec.position, spec.orientation)
     assert np.abs(placed_distance(spec.shape, placement, points)).max() < 1e-9
     # every surface point is within the spacing of a sample: test on a denser sampling
-    from scipy.spatial import cKDTree
     dense = surface_points(mapping, SPACING / 4)
     assert cKDTree(points).query(dense)[0].max() <= SPACING
 

@@ -1,7 +1,8 @@
 """Point clouds: voxel downsampling and its cap, the bounds the fabric and the checker read
 (never above the distance to a measured point), the file readers and their bad input, the
 scenario entry (empty, NaN, malformed), the run-time feed (robot filtered out, nearest
-points written), 10⁷ points in bounded time and memory."""
+points written), 10⁷ points in bounded time and memory, the compiled checker's bound, the
+example."""
 
 from __future__ import annotations
 
@@ -22,6 +23,8 @@ from dynfab.fabric.planner import FabricPlanner, GoalConfig, PlannerConfig
 from dynfab.geometry.cloud_files import CloudFileError, read_points
 from dynfab.geometry.cloud_grid import cloud_distance_grid
 from dynfab.geometry.point_cloud import PointCloud
+from dynfab.geometry.shapes import Placement
+from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.perception.point_clouds import PointCloudFeed
 from dynfab.robots.builtin import load_robot
 from dynfab.scenario.schema import ScenarioError, scenario_from_dict
@@ -224,3 +227,20 @@ def test_the_point_cloud_example_reaches_its_goal_with_the_robot_filtered_out() 
     found = re.search(r"(\d+) on the robot.*error ([\d.]+) m; closest sphere to the wall ([\d.]+) cm", run.stdout, re.S)
     assert found is not None, run.stdout
     assert int(found[1]) > 0 and float(found[2]) < 0.06 and float(found[3]) > 0.0
+
+
+def test_the_compiled_checker_bounds_the_sphere_distance_to_the_cloud_from_below() -> None:
+    robot = load_robot("panda")
+    rng = np.random.default_rng(6)
+    raw = _wall(rng)
+    cloud = PointCloud.from_points(raw, voxel=0.01)
+    checker = ConfigurationChecker(robot, [PlacedObstacle(cloud, Placement((0.0, 0.0, 0.0)))])
+    assert checker.compiled
+    qs = rng.uniform(robot.kinematics.lower, robot.kinematics.upper, (300, robot.dof))
+    tree = cKDTree(raw)
+    exact = np.array([(tree.query(np.asarray(robot.sphere_centers(q), dtype=float).reshape(-1, 3))[0]
+                       - robot.sphere_radii).min() for q in qs])
+    bound = checker.batch(qs)[:, 0]
+    assert (bound <= exact + 1e-12).all()
+    near = (exact > 0) & (exact < 0.05)
+    assert near.sum() > 5 and (exact - bound)[near].max() < 2 * math.sqrt(3) * 0.01 + 2 * cloud.lowering
