@@ -2,21 +2,19 @@
 
 The same :class:`~dynfab.geometry.distance_grid.DistanceGrid` the compiled checker reads for
 meshes (kind 5), built from the cloud's kept points ``C`` (voxel centres,
-:mod:`dynfab.geometry.point_cloud`). Each point ``c`` is rounded to its nearest node
-``m(c)``, within ``h√3/2`` of it (``h`` the grid pitch); with ``EDT(g)`` the Euclidean
-distance transform of the occupied nodes (scipy.ndimage.distance_transform_edt), for every
-node ``g``
+:mod:`dynfab.geometry.point_cloud`); a raw point lies within ``δ = h_v√3/2`` of its kept
+centre (``h_v`` the cloud's voxel), so ``d(x, raw) ≥ d(x, C) − δ``. Node values ``v(g)``:
 
-    d(g, C) ≥ min_c (‖g − m(c)‖ − h√3/2) = EDT(g) − h√3/2,
+- within ``band`` of the cloud, exact: ``v(g) = d(g, C) − δ`` (a KD-tree query per node);
+- farther, each point ``c`` rounded to its nearest node ``m(c)`` (within ``h√3/2`` of it,
+  ``h`` the grid pitch) and ``EDT(g)`` the Euclidean distance transform of the occupied
+  nodes (scipy.ndimage.distance_transform_edt): ``d(g, C) ≥ min_c (‖g − m(c)‖ − h√3/2) =
+  EDT(g) − h√3/2``, so ``v(g) = max(0, EDT(g) − h√3/2 − δ)``.
 
-and a raw point lies within ``δ = h_v√3/2`` of its kept centre (``h_v`` the cloud's voxel),
-so the node values
-
-    v(g) = max(0, EDT(g) − h√3/2 − δ)            [m]
-
-never exceed the distance to the raw cloud; the kernel's interpolation between nodes keeps
-that (the distance is 1-Lipschitz, :mod:`dynfab.geometry.distance_grid`). It falls short by
-at most ``h√3 + δ`` plus the interpolation's ``h√3`` (3.5 cm + δ at the default 1 cm pitch).
+Neither exceeds the distance to the raw cloud, and the kernel's interpolation between nodes
+keeps that (the distance is 1-Lipschitz, :mod:`dynfab.geometry.distance_grid`): it falls
+short of ``d(x, C) − δ`` by at most the interpolation's ``h√3`` (1.7 cm at the default 1 cm
+pitch) near the cloud.
 
 The grid covers the cloud's bounding box grown by ``margin`` (outside, the kernel takes
 the distance to the box); at most :data:`~dynfab.geometry.distance_grid.MAX_NODES` nodes
@@ -37,7 +35,7 @@ from dynfab.geometry.point_cloud import PointCloud
 __all__ = ["cloud_distance_grid"]
 
 
-def cloud_distance_grid(cloud: PointCloud, pitch: float = 0.01, margin: float = 0.1) -> DistanceGrid:
+def cloud_distance_grid(cloud: PointCloud, pitch: float = 0.005, margin: float = 0.1, band: float = 0.03) -> DistanceGrid:
     """The lower-bound grid of a non-empty ``cloud`` (module docstring), world frame; cached
     on the cloud per arguments.
 
@@ -45,13 +43,14 @@ def cloud_distance_grid(cloud: PointCloud, pitch: float = 0.01, margin: float = 
         cloud: The cloud.
         pitch: ``h`` [m]; grown if the grid would exceed ``MAX_NODES``.
         margin: How far the grid reaches beyond the cloud's bounding box [m].
+        band: Nodes this close to the cloud get exact distances [m].
 
     Raises:
         ValueError: The cloud is empty.
     """
     if cloud.empty:
         raise ValueError(f"point cloud {cloud.source} is empty: no distance grid")
-    key = ("_distance_grid", pitch, margin)
+    key = ("_distance_grid", pitch, margin, band)
     cached = cloud.__dict__.get(key)
     if cached is not None:
         return cached
@@ -65,6 +64,10 @@ def cloud_distance_grid(cloud: PointCloud, pitch: float = 0.01, margin: float = 
     free[nodes[:, 0], nodes[:, 1], nodes[:, 2]] = False
     transform = distance_transform_edt(free, sampling=pitch)
     values = np.maximum(transform - 0.5 * math.sqrt(3.0) * pitch - cloud.lowering, 0.0)
+    near = np.argwhere(transform <= band + 0.5 * math.sqrt(3.0) * pitch)
+    if len(near):
+        exact, _ = cloud.tree.query(np.ascontiguousarray(origin + near * pitch))
+        values[near[:, 0], near[:, 1], near[:, 2]] = exact - cloud.lowering
     grid = DistanceGrid(origin, pitch, values, low - cloud.lowering, high + cloud.lowering)  # raw points' box
     cloud.__dict__[key] = grid
     return grid

@@ -5,7 +5,8 @@ Every box and cylinder of the scene is sampled on its surface every :data:`SPACI
 each box face; on a cylinder, rings on its side and concentric rings on its caps), each
 sample moved by Gaussian noise of :data:`NOISE` per axis, seeded by the problem; the cloud
 is saved as ``.npy`` under ``<cache>/mbm-clouds/`` (``$DYNFAB_CACHE_DIR`` or
-``~/.cache/dynfab``) and the scenario has one obstacle, ``{type: points, file: ...}``. The
+``~/.cache/dynfab``) and the scenario has one obstacle, ``{type: points, file: ...,
+voxel:`` :data:`VOXEL` ``}``. The
 run is checked against the true shapes (:attr:`~dynfab.benchmarks.mbm.variants.Case.check_obstacles`),
 not against the cloud.
 """
@@ -28,12 +29,15 @@ from dynfab.geometry.shapes import quaternion_matrix, unit_quaternion
 if TYPE_CHECKING:
     from dynfab.benchmarks.mbm.variants import Case
 
-__all__ = ["NOISE", "SPACING", "as_point_cloud", "surface_points"]
+__all__ = ["NOISE", "SPACING", "VOXEL", "as_point_cloud", "surface_points"]
 
 #: Distance between surface samples [m].
 SPACING = 0.005
 #: Standard deviation of the noise on each coordinate [m].
 NOISE = 0.002
+#: The cloud's voxel [m]: the sampling's spacing (a coarser one costs its half-diagonal of
+#: clearance in the grasp poses, which sit millimetres from the scene).
+VOXEL = 0.005
 
 
 def as_point_cloud(case: Case, seed: int = 0) -> Case:
@@ -50,7 +54,7 @@ def as_point_cloud(case: Case, seed: int = 0) -> Case:
     partial = path.with_suffix(".partial.npy")
     np.save(partial, points)
     partial.replace(path)
-    mapping = {**case.mapping, "obstacles": [{"type": "points", "file": str(path)}]}
+    mapping = {**case.mapping, "obstacles": [{"type": "points", "file": str(path), "voxel": VOXEL}]}
     return dataclasses.replace(case, variant="points", mapping=mapping, check_obstacles=tuple(obstacles))
 
 
