@@ -35,7 +35,7 @@ from dynfab.geometry.point_cloud import PointCloud
 __all__ = ["cloud_distance_grid"]
 
 
-def cloud_distance_grid(cloud: PointCloud, pitch: float = 0.005, margin: float = 0.1, band: float = 0.03) -> DistanceGrid:
+def cloud_distance_grid(cloud: PointCloud, pitch: float = 0.01, margin: float = 0.1, band: float = 0.03) -> DistanceGrid:
     """The lower-bound grid of a non-empty ``cloud`` (module docstring), world frame; cached
     on the cloud per arguments.
 
