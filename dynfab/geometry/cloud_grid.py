@@ -11,10 +11,15 @@ centre (``h_v`` the cloud's voxel), so ``d(x, raw) ≥ d(x, C) − δ``. Node va
   nodes (scipy.ndimage.distance_transform_edt): ``d(g, C) ≥ min_c (‖g − m(c)‖ − h√3/2) =
   EDT(g) − h√3/2``, so ``v(g) = max(0, EDT(g) − h√3/2 − δ)``.
 
-Neither exceeds the distance to the raw cloud, and the kernel's interpolation between nodes
-keeps that (the distance is 1-Lipschitz, :mod:`dynfab.geometry.distance_grid`): it falls
-short of ``d(x, C) − δ`` by at most the interpolation's ``h√3`` (1.7 cm at the default 1 cm
-pitch) near the cloud.
+Neither exceeds the distance to the raw cloud. Between nodes the checker (kernel kind 6)
+takes the largest corner bound
+
+    f(p) ≥ max_j (v(g_j) − ‖p − g_j‖)            [m]
+
+(each is a lower bound alone, the distance being 1-Lipschitz), not the meshes' weighted mean
+of them: never lower than the mean, and short of ``d(p, C) − δ`` by at most
+``2 min_j ‖p − g_j‖ ≤ h√3`` near the cloud (:func:`largest_corner_bound` computes it as the
+kernel does).
 
 The grid covers the cloud's bounding box grown by ``margin`` (outside, the kernel takes
 the distance to the box); at most :data:`~dynfab.geometry.distance_grid.MAX_NODES` nodes
@@ -27,12 +32,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from scipy.ndimage import distance_transform_edt
 
 from dynfab.geometry.distance_grid import MAX_NODES, DistanceGrid
 from dynfab.geometry.point_cloud import PointCloud
 
-__all__ = ["cloud_distance_grid"]
+__all__ = ["cloud_distance_grid", "largest_corner_bound"]
 
 
 def cloud_distance_grid(cloud: PointCloud, pitch: float = 0.01, margin: float = 0.1, band: float = 0.03) -> DistanceGrid:
@@ -71,3 +77,22 @@ def cloud_distance_grid(cloud: PointCloud, pitch: float = 0.01, margin: float = 
     grid = DistanceGrid(origin, pitch, values, low - cloud.lowering, high + cloud.lowering)  # raw points' box
     cloud.__dict__[key] = grid
     return grid
+
+
+def largest_corner_bound(grid: DistanceGrid, points: ArrayLike) -> NDArray[np.float64]:
+    """``max_j (v(g_j) − ‖p − g_j‖)`` (...,) [m] over the corners of each point's cell, points
+    (..., 3) (outside the grid: the distance to its box), as the checker's kernel computes it."""
+    p = np.asarray(points, dtype=float)
+    flat = p.reshape(-1, 3)
+    shape = np.array(grid.values.shape)
+    cell = (flat - grid.origin) / grid.pitch
+    inside = np.all((cell >= 0) & (cell <= shape - 1), axis=1)
+    result = np.linalg.norm(np.maximum(grid.low - flat, 0) + np.maximum(flat - grid.high, 0), axis=1)
+    base = np.minimum(np.floor(cell[inside]).astype(int), shape - 2)
+    best = np.full(int(inside.sum()), -np.inf)
+    for corner in np.ndindex(2, 2, 2):
+        node = base + np.array(corner)
+        gap = np.linalg.norm(flat[inside] - (grid.origin + node * grid.pitch), axis=1)
+        best = np.maximum(best, grid.values[node[:, 0], node[:, 1], node[:, 2]] - gap)
+    result[inside] = best
+    return result.reshape(p.shape[:-1])

@@ -46,7 +46,7 @@ from dynfab.robots.robot import Robot
 
 __all__ = ["ConfigurationChecker", "PlacedObstacle"]
 
-_KIND: dict[type, int] = {Sphere: 0, Box: 1, Cylinder: 2, Capsule: 3, Plane: 4, Mesh: 5, PointCloud: 5}
+_KIND: dict[type, int] = {Sphere: 0, Box: 1, Cylinder: 2, Capsule: 3, Plane: 4, Mesh: 5, PointCloud: 6}
 _ROW = 17
 _ONE = ctypes.c_int(1)
 
