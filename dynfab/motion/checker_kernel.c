@@ -18,17 +18,20 @@
  * 4 plane), centre (3), rotation R row-major (9), dimensions (3), bounding radius
  * (a plane: ignored). Kind 5 is a mesh's distance grid (dynfab/geometry/distance_grid.py): its
  * dimensions[0] is the offset, in doubles from the row's start, of the grid's data in the same
- * obstacle buffer (after the rows), and the distance is the grid's lower bound.
+ * obstacle buffer (after the rows), and the distance is the grid's lower bound. Kind 6 is a
+ * point cloud's grid (dynfab/geometry/cloud_grid.py), laid out and read the same.
  */
 
 #define DYNFAB_ROW 17
 
 static double dynfab_max(double a, double b) { return a > b ? a : b; }
 
-/* Lower bound of the distance to a mesh at a point (x, y, z) of its frame: outside the grid
- * the distance to the mesh's bounding box, inside sum_j w_j (v_j - |p - g_j|) over the
- * cell's corners (trilinear weights w_j, node values v_j). Layout of `grid`: nx, ny, nz, h,
- * origin (3), box low (3), box high (3), then nx*ny*nz values, z fastest. */
+/* Lower bound of the distance to a mesh or a cloud at a point (x, y, z) of its frame:
+ * outside the grid the distance to the bounding box, inside max_j (v_j - |p - g_j|) over the
+ * cell's corners g_j (node values v_j; each term is a lower bound alone: the distance is
+ * 1-Lipschitz). Layout of
+ * `grid`: nx, ny, nz, h, origin (3), box low (3), box high (3), then nx*ny*nz values, z
+ * fastest. */
 static double dynfab_grid_distance(const double* grid, double x, double y, double z) {
   const int n[3] = {(int)grid[0], (int)grid[1], (int)grid[2]};
   const double h = grid[3], p[3] = {x, y, z};
@@ -91,6 +94,7 @@ static double dynfab_distance(const double* o, const double* p) {
       return sqrt(x * x + y * y + (z - a) * (z - a)) - d[0];
     }
     case 5:
+    case 6:
       return dynfab_grid_distance(o + (long)d[0], x, y, z);
     default:
       return z;

@@ -158,9 +158,9 @@ class AllowanceSlot:
 
     def write(self, params: RuntimeParameters, allowance: float) -> None:
         """Let the fabric's spheres enter the obstacle by ``allowance`` [m] (a negative one
-        keeps them that much farther; a mesh has no slot and takes none: its nearest-point
-        leaf keeps its full range)."""
-        if self.kind == "mesh":
+        keeps them that much farther; a mesh or a point cloud has no slot and takes none:
+        its nearest-point leaf keeps its full range)."""
+        if self.kind in ("mesh", "points"):
             return
         if self.kind == "sphere":
             params.obstacle_radius[self.row] = max(SMALLEST_RADIUS, self.radius - allowance)

@@ -1,5 +1,12 @@
-"""Obstacles read from files: ``{type: mesh}`` (a mesh file) and ``{type: urdf}`` (a scene
-described as a URDF, as MotionBenchMaker ships its scenes).
+"""Obstacles read from files: ``{type: mesh}`` (a mesh file), ``{type: urdf}`` (a scene
+described as a URDF, as MotionBenchMaker ships its scenes) and ``{type: points}`` (a point
+cloud: .npy, .ply or .pcd, :mod:`dynfab.geometry.cloud_files`).
+
+A point cloud is downsampled as it is read (:mod:`dynfab.geometry.point_cloud`); its NaN or
+infinite rows are dropped and counted on stderr; an empty cloud (no finite point) is no
+obstacle (the entry gives none, said on stderr). It is the scene as measured: nothing is
+filtered out of it (the robot filter is for clouds taken with the robot in view,
+:mod:`dynfab.perception.point_clouds`).
 
 A URDF scene becomes one obstacle per ``<collision>`` element of its links (root first, then down the tree),
 each at its pose with the scene's movable joints at the entry's ``joints`` values (the others
@@ -17,20 +24,23 @@ A mesh need not be closed: an open surface is kept away from on both sides (see
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
+from dynfab.geometry.cloud_files import CloudFileError, read_points
 from dynfab.geometry.mesh_files import MeshFileError, read_mesh
+from dynfab.geometry.point_cloud import PointCloud
 from dynfab.geometry.shapes import Box, Cylinder, Sphere, quaternion_matrix
 from dynfab.robots.mesh_paths import resolve_uri
 from dynfab.robots.urdf import load_urdf
 from dynfab.robots.urdf_model import CollisionGeometry, Joint, Origin, UrdfError, UrdfModel
 from dynfab.scenario.fields import ScenarioError
 from dynfab.scenario.model_types import ScenarioModel
-from dynfab.scenario.obstacle_schema import MeshMapping, ObstacleSpec, UrdfMapping, obstacle_spec
+from dynfab.scenario.obstacle_schema import MeshMapping, ObstacleSpec, PointsMapping, UrdfMapping, obstacle_spec
 from dynfab.scenario.trajectory_schema import frozen_trajectory
 
 __all__ = ["link_poses", "obstacle_specs"]
@@ -43,6 +53,8 @@ def obstacle_specs(obstacle: ScenarioModel, base_dir: Path, field: str) -> tuple
         return (_mesh_spec(obstacle, base_dir, field),)
     if isinstance(obstacle, UrdfMapping):
         return _scene_specs(obstacle, base_dir, field)
+    if isinstance(obstacle, PointsMapping):
+        return _points_specs(obstacle, base_dir, field)
     return (obstacle_spec(obstacle),)
 
 
@@ -58,6 +70,23 @@ def _mesh_spec(entry: MeshMapping, base_dir: Path, field: str) -> ObstacleSpec:
     trajectory = None if entry.trajectory is None else frozen_trajectory(entry.trajectory)
     return ObstacleSpec(type="mesh", position=entry.position, trajectory=trajectory,
                         orientation=_unit(entry.orientation), mesh=mesh)
+
+
+def _points_specs(entry: PointsMapping, base_dir: Path, field: str) -> tuple[ObstacleSpec, ...]:
+    path = resolve_uri(entry.file, base_dir)
+    if path is None:
+        raise ScenarioError(f"{field}.file", f"file not found: {entry.file} (a path relative to the scenario file, "
+                            "absolute, or package://NAME/...)")
+    try:
+        cloud = PointCloud.from_points(read_points(path), entry.voxel, entry.max_points, source=path.name)
+    except (CloudFileError, ValueError) as error:
+        raise ScenarioError(f"{field}.file", str(error)) from None
+    if cloud.dropped:
+        print(f"dynfab: {field}.file: {path.name}: {cloud.dropped} NaN or infinite points dropped", file=sys.stderr)
+    if cloud.empty:
+        print(f"dynfab: {field}.file: {path.name} has no finite point: no obstacle", file=sys.stderr)
+        return ()
+    return (ObstacleSpec(type="points", position=(0.0, 0.0, 0.0), cloud=cloud),)
 
 
 def _scene_specs(entry: UrdfMapping, base_dir: Path, field: str) -> tuple[ObstacleSpec, ...]:

@@ -216,7 +216,8 @@ def _execute(cases: Sequence[Case], jobs: int, cluster: Cluster | None,
     if not cases:
         return
     with series_executor(jobs, cluster) as executor:
-        futures: dict[Future[dict[str, Any]], Case] = {executor.submit(run_case, case.mapping): case for case in cases}
+        futures: dict[Future[dict[str, Any]], Case] = {executor.submit(run_case, case.mapping, case.check_obstacles): case
+                                                       for case in cases}
         remaining = set(futures)
         while remaining:
             finished, remaining = wait(remaining, return_when=FIRST_COMPLETED)
