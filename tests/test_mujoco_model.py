@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+from pathlib import Path
+
 import mujoco
 import numpy as np
 import pinocchio as pin
@@ -99,3 +103,13 @@ def test_link_without_inertial_is_refused_naming_it() -> None:
                   self_collision_pairs=(), planar=False, default_q=np.zeros(1))
     with pytest.raises(MujocoModelError, match=r"link 'arm' moves but has no <inertial> mass"):
         build_scene(robot)
+
+
+def test_mujoco_warnings_go_to_stderr_not_to_a_log_file_in_the_working_directory(tmp_path: Path) -> None:
+    code = ("import mujoco, dynfab.sim.mujoco_model\n"
+            "m = mujoco.MjModel.from_xml_string('<mujoco><worldbody><body><freejoint/><geom size=\"0.1\"/>"
+            "</body></worldbody></mujoco>')\n"
+            "d = mujoco.MjData(m); d.qpos[:] = float('nan'); mujoco.mj_step(m, d)\n")
+    done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, check=True)
+    assert "mujoco: warning: Nan, Inf or huge value in QPOS" in done.stderr
+    assert list(tmp_path.iterdir()) == []  # no MUJOCO_LOG.TXT

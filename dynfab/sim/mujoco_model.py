@@ -45,6 +45,7 @@ from dynfab.robots.robot import BASE_JOINTS, DifferentialDriveBase, Robot
 from dynfab.robots.urdf import Joint, UrdfModel
 from dynfab.sim.mjcf_values import joint_motion, mjcf_numbers, origin_matrix, pose_attributes
 from dynfab.sim.mujoco_meshes import link_mesh_file, mesh_file
+from dynfab.sim.mujoco_warnings import route_warnings_to_stderr
 
 __all__ = ["ARMATURE", "PHYSICS_TIMESTEP", "MujocoModelError", "MujocoScene", "SceneObstacle", "build_scene"]
 
@@ -68,6 +69,8 @@ WHEEL_GAIN, WHEEL_TORQUE = 40.0, 40.0
 _DEFAULT_WHEEL_MASS = 1.0
 _ROBOT_RGBA = "0.95 0.55 0.1 1"
 _OBSTACLE_RGBA = "0.2 0.4 0.9 0.8"
+
+route_warnings_to_stderr()
 
 
 class MujocoModelError(ValueError):
