@@ -70,10 +70,10 @@ class CameraSpec:
             object.__setattr__(self, name, int(value))
         fov = _number(self.fov, "fov")
         if not 0.0 < fov < 180.0:
-            raise CameraSpecError(f"fov: must lie in (0, 180) degrees, got {fov}")
+            raise CameraSpecError(f"fov: must lie in (0, 180) degrees, got {self.fov}")
         rate = _number(self.rate, "rate")
         if rate <= 0.0:
-            raise CameraSpecError(f"rate: must be > 0 Hz, got {rate}")
+            raise CameraSpecError(f"rate: must be > 0 Hz, got {self.rate}")
         for name in ("noise", "delay"):
             if _number(getattr(self, name), name) < 0.0:
                 raise CameraSpecError(f"{name}: must be >= 0, got {getattr(self, name)}")
