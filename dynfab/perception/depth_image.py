@@ -48,7 +48,6 @@ class DepthProjector:
         camera_rays = np.stack(np.broadcast_arrays(a[None, :], b[:, None], -1.0), axis=-1)
         self.rays = (camera_rays @ self.rotation.T).astype(np.float32)
         self.ray_norms = np.einsum("ijk,ijk->ij", self.rays, self.rays)
-        self._flat_rays = self.rays.reshape(-1, 3)
         for array in (self.rays, self.ray_norms):
             array.setflags(write=False)
 
@@ -66,9 +65,10 @@ class DepthProjector:
     def points(self, depth: NDArray[np.floating], keep: NDArray[np.bool_]) -> NDArray[np.float64]:
         """World points ``o + d r`` of the pixels where ``keep`` holds, (N, 3) [m], in row-major
         pixel order."""
-        pixels = np.flatnonzero(keep)
-        depths = depth.reshape(-1)[pixels]
-        return self.origin + (depths[:, None] * self._flat_rays[pixels]).astype(np.float64)
+        scaled = np.multiply(depth[..., None], self.rays, dtype=np.float32)  # every pixel: cheaper than gathering
+        points = np.compress(keep.reshape(-1), scaled.reshape(-1, 3), axis=0).astype(np.float64)
+        points += self.origin
+        return points
 
     def windows(self, centres: NDArray[np.float64], radii: NDArray[np.float64]) -> NDArray[np.int64]:
         """Per ball (``centres`` (k, 3), ``radii`` (k,) [m]), the pixels whose rays may meet it:
