@@ -21,6 +21,10 @@ cylinder (the disc the planner sees). Contacts (bit masks, MuJoCo's ``contype`` 
 ``conaffinity``): robot geoms touch obstacles; robot geoms touch each other only in the
 robot's self-collision pairs (explicit ``<pair>``\\ s); obstacles never touch each other.
 
+Cameras (``cameras``): fixed ``<camera>``\\ s in the world, one per
+:class:`~dynfab.perception.camera_spec.CameraSpec`, for depth rendering
+(:mod:`dynfab.sim.depth_render`).
+
 A differential-drive base (``robot.base``): the body below ``base_yaw`` floats (a free
 joint) on a floor plane at z = 0, carried by two drive wheels (hinges with velocity
 actuators, radius and track from :class:`~dynfab.robots.robot.DifferentialDriveBase`,
