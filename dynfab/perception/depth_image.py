@@ -65,7 +65,8 @@ class DepthProjector:
     def points(self, depth: NDArray[np.floating], keep: NDArray[np.bool_]) -> NDArray[np.float64]:
         """World points ``o + d r`` of the pixels where ``keep`` holds, (N, 3) [m], in row-major
         pixel order."""
-        scaled = np.multiply(depth[..., None], self.rays, dtype=np.float32)  # every pixel: cheaper than gathering
+        with np.errstate(invalid="ignore"):  # inf · 0 where a pixel without return has a ray component 0
+            scaled = np.multiply(depth[..., None], self.rays, dtype=np.float32)  # every pixel: cheaper than gathering
         points = np.compress(keep.reshape(-1), scaled.reshape(-1, 3), axis=0).astype(np.float64)
         points += self.origin
         return points
