@@ -36,9 +36,11 @@ def add_benchmark_parser(commands: Any) -> None:
     parser.add_argument("--variant", choices=VARIANTS,
                         help="as-posed (default for panda); object-removed: the object to grasp removed (default "
                              "and only one for ur5); moving-sphere: object removed and a sphere crossing the hand's "
-                             "path")
+                             "path; points: object removed, the scene given as a point cloud (surfaces every 5 mm, 2 mm "
+                             "noise), checked against the true shapes")
     parser.add_argument("--types", type=_types, default=PROBLEM_TYPES, metavar="T1,T2",
-                        help=f"problem types, comma-separated (default all: {','.join(PROBLEM_TYPES)})")
+                        help=f"problem types, comma-separated (default all of the archive: {','.join(PROBLEM_TYPES)}); "
+                             "the mesh scenes kitchen,table_bars (generated from --seed, as-posed only)")
     parser.add_argument("--problems", type=at_least_one, metavar="N", help="the first N problems of each type")
     parser.add_argument("--first", type=at_least_one, metavar="K", default=1,
                         help="start at each type's K-th problem (default 1; the shared set numbers them from 9)")
@@ -46,7 +48,7 @@ def add_benchmark_parser(commands: Any) -> None:
                         help="the scenarios' planner (default dynamic-fabric)")
     parser.add_argument("--guidance", action=argparse.BooleanOptionalAction,
                         help="set the scenarios' guidance key (default: the schema's default)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the moving spheres (default 0)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the moving spheres and of the mesh scenes' problems (default 0)")
     parser.add_argument("--out", type=Path, help="output directory (default dynfab-benchmarks/mbm-VARIANT)")
     parser.add_argument("--jobs", type=at_least_one, help="worker processes (default: the number of CPUs)")
     parser.add_argument("--workers", type=at_least_one,
@@ -85,9 +87,11 @@ def _types(text: str) -> tuple[str, ...]:
     """``--types``: comma-separated problem types."""
     from dynfab.benchmarks.mbm.problems import PROBLEM_TYPES
 
+    from dynfab.benchmarks.mbm.scene_configs import SCENE_TYPES
+
     names = tuple(name.strip() for name in text.split(",") if name.strip())
-    unknown = [name for name in names if name not in PROBLEM_TYPES]
+    unknown = [name for name in names if name not in PROBLEM_TYPES + SCENE_TYPES]
     if unknown or not names:
         raise argparse.ArgumentTypeError(f"unknown problem type {unknown[0] if unknown else text!r} "
-                                         f"(expected some of {', '.join(PROBLEM_TYPES)})")
+                                         f"(expected some of {', '.join(PROBLEM_TYPES + SCENE_TYPES)})")
     return names

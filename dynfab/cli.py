@@ -82,6 +82,9 @@ def main(argv: list[str] | None = None) -> int:
                             help="under mujoco: std of the observation noise [rad or m, and per s]")
     experiment.add_argument("--recovery", action="store_true",
                             help="recover from stalls by following a global path (off in the paper's runs)")
+    experiment.add_argument("--planners", type=lambda text: tuple(filter(None, text.split(","))), default=(),
+                            help="only these of the experiment's planners, comma-separated (default: all), "
+                                 "e.g. static-fabric")
     export = commands.add_parser("export", help="write a scenario's fabric planner as self-contained C "
                                                 "(NAME.c, NAME.h, example.c, Makefile)")
     export.add_argument("file", type=Path, help="scenario YAML file (static-fabric or dynamic-fabric)")
@@ -172,7 +175,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"dynfab: error: --record: cannot write {args.record} ({error.strerror})", file=sys.stderr)
             return 2
     if args.plot is not None:
-        _plot(results[0], args.plot)
+        _plot(results, args.plot)
         print(f"dynfab: plot written to {args.plot}", file=sys.stderr)
     if args.command == "run" and not results[0].metrics.success:
         return 1  # ran, but the goal was not reached without collision (the metrics say why)
@@ -185,7 +188,7 @@ def _experiment(args: argparse.Namespace) -> int:
     output directory of another series or an unusable cluster, 1 if a run failed, 130 on
     Ctrl-C (resumable)."""
     from dynfab.experiments.cluster import ClusterError
-    from dynfab.experiments.settings import setting_name, with_setting
+    from dynfab.experiments.settings import setting_name, with_planners, with_setting
     from dynfab.experiments.registry import EXPERIMENTS
     from dynfab.experiments.series import SeriesError, run_series
     from dynfab.scenario.simulation_schema import Simulation
@@ -203,7 +206,11 @@ def _experiment(args: argparse.Namespace) -> int:
     if simulation.simulator == "kinematic" and simulation != Simulation():
         print("dynfab: error: --control, --delay and --noise need --simulator mujoco", file=sys.stderr)
         return 2
-    experiment = with_setting(EXPERIMENTS[name], simulation, args.recovery)
+    try:
+        experiment = with_planners(with_setting(EXPERIMENTS[name], simulation, args.recovery), args.planners)
+    except ValueError as error:
+        print(f"dynfab: error: --planners: {error}", file=sys.stderr)
+        return 2
     if out is None:
         suffix = "" if simulation == Simulation() and not args.recovery else "-" + setting_name(simulation, args.recovery)
         out = Path("dynfab-experiments") / (name + suffix)
@@ -346,10 +353,15 @@ def _shown(value: object) -> str:
     return f"{value:.4g}" if isinstance(value, float) else str(value)
 
 
-def _plot(result: RunResult, path: Path) -> None:
-    from dynfab.viz.result_plot import plot_result
+def _plot(results: list[RunResult], path: Path) -> None:
+    """One run's plot, or the runs of a comparing demo one above the other."""
+    from dynfab.viz.result_plot import plot_result, plot_results
 
-    plot_result(result, path)
+    if len(results) == 1:
+        plot_result(results[0], path)
+    else:
+        plot_results(results, path)
+
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -1,46 +1,20 @@
 """Connecting dynfab to a torque-controlled robot: a Panda in MuJoCo, with Franka's
-identified inertias, stands in for the real arm.
+identified inertias, stands in for the real arm (scene and loop: mujoco_common.py).
 
 The planner runs at 100 Hz and returns joint accelerations; the robot's controller runs at
 1 kHz and takes joint torques τ [N m] (Franka's torque control): computed torque through
 an inverse-dynamics model, here MuJoCo's (on a real robot e.g. pinocchio's rnea or
-libfranka's model).
-dynfab.sim.control_interfaces turns one into the other.
+libfranka's model), with a PD term on the setpoint's tracking error.
 
     .venv/bin/python examples/mujoco_torque_control.py
 """
 
-import mujoco
-import numpy as np
+from mujoco_common import panda_in_mujoco, run
 
-from dynfab.fabric.planner import FabricPlanner, GoalConfig, PlannerConfig
-from dynfab.robots import load_robot
-from dynfab.sim.control_interfaces import SetpointIntegrator, TorqueInterface
-from dynfab.sim.mujoco_drives import JointDrive, MujocoInverseDynamics
-from dynfab.sim.mujoco_model import build_scene
+from dynfab.sim.control_interfaces import TorqueInterface
+from dynfab.sim.mujoco_drives import MujocoInverseDynamics
 
-GOAL = [0.5, -0.4, 0.3]
-robot = load_robot("panda")
-planner = FabricPlanner(robot, PlannerConfig(goals=(GoalConfig(link="panda_hand"),)))
-planner.parameters.goal_position[0][:] = GOAL
-
-scene = build_scene(robot)  # the "robot": MuJoCo physics at 1 kHz
-data = mujoco.MjData(scene.model)
-data.qpos[:] = robot.default_q
-robot_controller = JointDrive(scene, data, "torque", servo_period=0.001)  # the arm's own torque controller
-
-setpoints = SetpointIntegrator(servo_period=0.001)
+robot, planner, scene, data = panda_in_mujoco()
 interface = TorqueInterface(MujocoInverseDynamics(scene, data), stiffness=400.0, damping=40.0,
                             effort=robot.limits.effort)
-setpoints.reset(data.qpos, data.qvel)
-for tick in range(5000):  # 5 s
-    q, qdot = data.qpos.copy(), data.qvel.copy()  # the measured joint state
-    if tick % 10 == 0:  # the planner, every 10 ms
-        setpoints.hold(planner.compute(q, qdot))
-    command = interface.command(setpoints.advance(), q, qdot)  # every 1 ms
-    mujoco.mj_step1(scene.model, data)
-    robot_controller.apply(command, q, qdot)  # on a real robot: send `command` to it
-    mujoco.mj_step2(scene.model, data)
-
-hand = np.asarray(robot.kinematics.position(data.qpos, "panda_hand")).ravel()
-print(f"torque control: hand at {hand.round(3)}, error {np.linalg.norm(hand - GOAL):.4f} m")
+run(robot, planner, scene, data, interface, "torque")

@@ -7,19 +7,16 @@ from __future__ import annotations
 import socket
 import subprocess
 import sys
-import time
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
-pytest.importorskip("distributed")
-
-from dynfab.cli import main  # noqa: E402
-from dynfab.experiments import exp1  # noqa: E402
-from dynfab.experiments.cluster import Cluster  # noqa: E402
-from dynfab.experiments.registry import SF, Experiment  # noqa: E402
-from dynfab.experiments.series import SeriesResult, run_series  # noqa: E402
+from dynfab.cli import main
+from dynfab.experiments import exp1
+from dynfab.experiments.cluster import Cluster
+from dynfab.experiments.registry import SF, Experiment
+from dynfab.experiments.series import SeriesResult, run_series
 
 SEEDS = 3
 TIMING_KEYS = {"solver_time_ms", "plan_time_ms"}   # wall times: they differ between executions
@@ -102,11 +99,15 @@ def test_embedded_local_cluster_gives_the_same_results_with_one_progress_bar(
     assert capsys.readouterr().err == ""  # dask's own logging stays quiet
 
 
-def test_unreachable_scheduler_is_one_line_within_10_s(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    start = time.perf_counter()
+def test_unreachable_scheduler_is_one_line_naming_the_connect_timeout(tmp_path: Path,
+                                                                      capsys: pytest.CaptureFixture[str]) -> None:
+    """Dask gives up after CONNECT_TIMEOUT_S (5 s), which the error names; no wall-clock
+    assertion (bench/ holds those)."""
+    from dynfab.experiments.cluster import CONNECT_TIMEOUT_S
+
     code = main(["experiment", "exp1", "--runs", "1", "--out", str(tmp_path),
                  "--scheduler", f"tcp://127.0.0.1:{_free_port()}"])
-    elapsed = time.perf_counter() - start
     err = capsys.readouterr().err.strip().splitlines()
-    assert code == 2 and elapsed < 10.0
+    assert code == 2 and CONNECT_TIMEOUT_S == 5.0
     assert len(err) == 1 and err[0].startswith("dynfab: error: --scheduler: cannot reach tcp://127.0.0.1:"), err
+    assert f"within {CONNECT_TIMEOUT_S:g} s" in err[0]

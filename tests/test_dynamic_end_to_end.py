@@ -122,10 +122,23 @@ def test_experiment3_dynamic_fabrics_keep_more_clearance(experiment3: dict[str, 
     assert df >= sf, f"exp3 mean clearance over {len(both)} common successes: DF {df:.4f} m vs SF {sf:.4f} m"
 
 
-def test_experiment3_dynamic_fabrics_cost_little_more_solver_time(experiment3: dict[str, list[Metrics]]) -> None:
-    df = mean([m.solver_time_ms for m in experiment3["dynamic-fabric"]])
-    sf = mean([m.solver_time_ms for m in experiment3["static-fabric"]])
-    assert df <= 1.5 * sf, f"exp3 mean solver time DF {df:.4f} ms vs SF {sf:.4f} ms"
+def test_experiment3_dynamic_fabrics_cost_little_more_per_step() -> None:
+    """The paper: dynamic fabrics do not increase solver time. Measured deterministically,
+    as the instructions each planner evaluates per step on Experiment 3's scene (wall times
+    are compared by ``dynfab experiment exp3``'s timings, not asserted in tests)."""
+    from dynfab.scenario.controllers import make_controller
+    from dynfab.scenario.references import scenario_references
+    from dynfab.scenario.runner import robot_for
+    from dynfab.scenario.schema import validate_for_robot
+
+    instructions = {}
+    for planner in PLANNERS:
+        scenario = scenario_from_dict({**exp3.scenario(0, planner), "guidance": False})
+        robot = robot_for(scenario)
+        scenario = validate_for_robot(scenario, robot)
+        controller = make_controller(scenario, robot, scenario_references(scenario, robot))
+        instructions[planner] = controller.planner.n_instructions
+    assert instructions["dynamic-fabric"] <= 1.5 * instructions["static-fabric"], instructions
 
 
 def disc_driving_at_resting_point(planner: str) -> dict[str, Any]:

@@ -4,7 +4,7 @@ are one-line errors."""
 import pytest
 
 from dynfab.cli import main
-from dynfab.experiments.settings import setting_name, with_setting
+from dynfab.experiments.settings import setting_name, with_planners, with_setting
 from dynfab.experiments.registry import EXPERIMENTS
 from dynfab.scenario.simulation_schema import Simulation
 
@@ -34,11 +34,21 @@ def test_the_paper_runs_have_no_recovery_and_the_setting_turns_it_on() -> None:
     assert with_setting(EXPERIMENTS["exp4"], Simulation(), recovery=True).sampler(0, "static-fabric")["recovery"]
 
 
+def test_a_series_of_some_planners_keeps_the_experiments_order_and_scenarios() -> None:
+    experiment = with_planners(EXPERIMENTS["exp2a"], ("dynamic-fabric", "static-fabric"))
+    assert experiment.planners == EXPERIMENTS["exp2a"].planners
+    fabric = with_planners(EXPERIMENTS["exp1"], ("static-fabric",))
+    assert fabric.planners == ("static-fabric",)
+    assert fabric.sampler(3, "static-fabric") == EXPERIMENTS["exp1"].sampler(3, "static-fabric")
+    assert with_planners(EXPERIMENTS["exp1"], ()) is EXPERIMENTS["exp1"]
+
+
 @pytest.mark.parametrize("arguments, message", [
     (["--simulator", "bullet"], "--simulator: expected one of kinematic, mujoco"),
     (["--simulator", "mujoco", "--control", "fast"], "--control: expected one of torque, velocity, position"),
     (["--simulator", "mujoco", "--delay", "-1"], "--delay: must be >= 0"),
     (["--noise", "0.1"], "need --simulator mujoco"),
+    (["--planners", "static-fabric,rrt"], "--planners: rrt is not a planner of exp1 (expected some of static-fabric, mpc)"),
 ])
 def test_bad_settings_are_one_line_errors(tmp_path, capsys, arguments, message) -> None:
     assert main(["experiment", "exp1", "--runs", "1", "--out", str(tmp_path / "out"), *arguments]) == 2

@@ -144,7 +144,7 @@ def test_schema_command_shows_the_block(capsys: pytest.CaptureFixture[str]) -> N
     barrier = schema["$defs"]["BarrierMapping"]
     assert barrier["additionalProperties"] is False
     assert barrier["properties"]["range"]["anyOf"][0] == {"minimum": 0.01, "maximum": 10.0, "type": "number"}
-    jsonschema = pytest.importorskip("jsonschema")
+    import jsonschema
     jsonschema.validate({**REACH, "fabric": {"obstacle": {"range": 0.3}}}, schema)
     with pytest.raises(jsonschema.ValidationError):
         jsonschema.validate({**REACH, "fabric": {"obstacle": {"range": 0.0}}}, schema)

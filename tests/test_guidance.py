@@ -146,7 +146,7 @@ def test_guidance_reaches_a_goal_behind_a_wall_that_the_fabric_alone_does_not(pa
     assert not alone.success and alone.guided is False and alone.failure == "stalled"
     assert guided.success and not guided.collision, guided
     assert guided.guided and guided.plans >= 1 and guided.failure is None
-    assert 0.0 < guided.plan_time_ms < 5000.0
+    assert guided.plan_time_ms > 0.0   # measured (a wall time: no bound asserted outside bench/)
     assert guided.max_velocity_ratio <= 1.0 + 1e-9
 
 
@@ -156,6 +156,7 @@ def test_a_goal_guidance_cannot_reach_falls_back_to_the_fabric_and_says_why() ->
     metrics = run_scenario(scenario_from_dict(data)).metrics
     assert not metrics.success and metrics.guided is False
     assert metrics.failure == "no_ik_solution" and metrics.fallbacks >= 1
+    assert metrics.plans == metrics.recovered and metrics.plan_time_ms > 0.0   # the plan that failed is no plan
     assert metrics.final_distance > 0.3
 
 

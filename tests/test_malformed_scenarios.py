@@ -1,18 +1,22 @@
-"""Every malformed scenario file ends `dynfab run` cleanly: exit 2 within 2 s, one line on
-stderr ``dynfab: error: <field>...``, no traceback, nothing on stdout (issue 11)."""
+"""Every malformed scenario file ends `dynfab run` cleanly: exit 2 before a step is
+simulated, one line on stderr ``dynfab: error: <field>...``, no traceback, nothing on stdout
+(issue 11). (The issue asked for "within 2 s"; that is a wall-clock figure, which tests
+outside bench/ do not assert: refusing before the simulation is what keeps it fast, and the
+subprocess's timeout stops a hang.)"""
 
 from __future__ import annotations
 
 import json
 import subprocess
 import sys
-import time
 from pathlib import Path
 
+import jsonschema
 import pytest
 import yaml
 
 from dynfab.cli import main
+from dynfab.scenario import mujoco_runner, runner
 from dynfab.scenario.schema import ScenarioDocument, load_scenario
 from malformed_scenarios import FILE, VALID, malformed_cases
 
@@ -26,7 +30,7 @@ def _write(tmp_path: Path, content: bytes) -> Path:
     return path
 
 
-def _assert_refused(path: Path, field: str, code: int, out: str, err: str, seconds: float) -> None:
+def _assert_refused(path: Path, field: str, code: int, out: str, err: str) -> None:
     field = str(path) if field == FILE else field
     assert code == 2, err
     assert out == ""
@@ -35,7 +39,6 @@ def _assert_refused(path: Path, field: str, code: int, out: str, err: str, secon
     assert len(lines) == 1, lines
     assert lines[0].startswith(f"dynfab: error: {field}"), lines[0]
     assert lines[0][len(f"dynfab: error: {field}")] in ":[. ", lines[0]
-    assert seconds < 2.0, f"{seconds:.2f} s"
 
 
 def test_the_suite_covers_at_least_150_files() -> None:
@@ -43,15 +46,23 @@ def test_the_suite_covers_at_least_150_files() -> None:
     assert len({name for name, _, _ in CASES}) == len(CASES)
 
 
+@pytest.fixture
+def nothing_simulated(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A run that gets as far as simulating (kinematic or MuJoCo) fails the test."""
+    def simulated(*args: object, **kwargs: object) -> None:
+        raise AssertionError("the malformed file got as far as the simulation")
+
+    monkeypatch.setattr(runner, "simulate", simulated)
+    monkeypatch.setattr(mujoco_runner, "run_mujoco", simulated)
+
+
 @pytest.mark.parametrize(("name", "content", "field"), CASES, ids=[name for name, _, _ in CASES])
-def test_malformed_file_is_refused_in_process(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+def test_malformed_file_is_refused_in_process(tmp_path: Path, capsys: pytest.CaptureFixture[str], nothing_simulated: None,
                                               name: str, content: bytes, field: str) -> None:
     path = _write(tmp_path, content)
-    start = time.perf_counter()
     code = main(["run", str(path)])
-    seconds = time.perf_counter() - start
     out, err = capsys.readouterr()
-    _assert_refused(path, field, code, out, err, seconds)
+    _assert_refused(path, field, code, out, err)
 
 
 SAMPLE = ("utf-16 with BOM", "latin-1 byte in a comment", "binary", "deep flow lists under trajectory",
@@ -64,24 +75,9 @@ SAMPLE = ("utf-16 with BOM", "latin-1 byte in a comment", "binary", "deep flow l
 def test_malformed_file_is_refused_by_the_command(tmp_path: Path, name: str) -> None:
     (content, field), = [(content, field) for case, content, field in CASES if case == name]
     path = _write(tmp_path, content)
-    start = time.perf_counter()
     completed = subprocess.run([sys.executable, "-m", "dynfab.cli", "run", str(path)], capture_output=True,
                                text=True, timeout=60)
-    seconds = time.perf_counter() - start
-    # the interpreter and its imports (numpy, casadi, ...) start before the file is read
-    _assert_refused(path, field, completed.returncode, completed.stdout, completed.stderr, seconds - _startup())
-
-
-_STARTUP: list[float] = []
-
-
-def _startup() -> float:
-    """Seconds for ``python -c 'import dynfab.cli'`` (measured once)."""
-    if not _STARTUP:
-        start = time.perf_counter()
-        subprocess.run([sys.executable, "-c", "import dynfab.cli"], check=True, timeout=60)
-        _STARTUP.append(time.perf_counter() - start)
-    return _STARTUP[0]
+    _assert_refused(path, field, completed.returncode, completed.stdout, completed.stderr)
 
 
 def test_aliases_within_the_budget_and_a_utf8_bom_are_fine(tmp_path: Path) -> None:
@@ -105,14 +101,12 @@ def test_schema_command_prints_the_json_schema(capsys: pytest.CaptureFixture[str
 
 @pytest.mark.parametrize("example", EXAMPLES, ids=[p.name for p in EXAMPLES])
 def test_every_example_satisfies_the_json_schema(example: Path) -> None:
-    jsonschema = pytest.importorskip("jsonschema")
     document = yaml.safe_load(example.read_text(encoding="utf-8"))
     jsonschema.validate(document, ScenarioDocument.model_json_schema())
     load_scenario(example)
 
 
 def test_the_json_schema_refuses_what_the_loader_refuses() -> None:
-    jsonschema = pytest.importorskip("jsonschema")
     schema = ScenarioDocument.model_json_schema()
     for key, value in (("dt", -1.0), ("duration", 1e300), ("colour", "red"), ("planner", "rrt")):
         with pytest.raises(jsonschema.ValidationError):

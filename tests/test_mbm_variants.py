@@ -10,9 +10,11 @@ import pytest
 
 from dynfab.benchmarks.mbm.franka import franka
 from dynfab.benchmarks.mbm.moveit import SceneObject
-from dynfab.benchmarks.mbm.moving_sphere import CROSSING_TIMES, RADII, SPEEDS
+from dynfab.benchmarks.mbm.moving_sphere import CROSSING_TIMES, FIXED_LINKS, RADII, SPEEDS, START_MARGIN
 from dynfab.benchmarks.mbm.problems import Problem, load_problems
 from dynfab.benchmarks.mbm.variants import GRASPABLE_PREFIXES, prepare_case
+from dynfab.geometry.shapes import Placement, Sphere
+from dynfab.robots.mesh_sweep import PlacedShape, sweep_meshes
 
 
 @pytest.fixture(scope="module")
@@ -68,3 +70,20 @@ def test_the_moving_sphere_crosses_the_hands_straight_path(table_pick: Problem) 
     assert 0.3 < along[closest] < 0.7  # around the middle
     assert prepare_case(table_pick, "moving-sphere", robot, seed=3).mapping == case.mapping  # seeded
     assert prepare_case(table_pick, "moving-sphere", robot, seed=4).mapping != case.mapping
+
+
+def test_the_moving_sphere_keeps_off_the_links_nothing_can_move_away() -> None:
+    """bookshelf_thin/0016's first draw swept through the Panda's base (a collision no
+    controller avoids); the sphere kept keeps START_MARGIN from link0 and link1 all run."""
+    robot = franka()
+    problem = load_problems(["bookshelf_thin"], per_type=1, skip=7)[0]
+    assert problem.number == 16
+    case = prepare_case(problem, "moving-sphere", robot, seed=0)
+    sphere = case.mapping["obstacles"][-1]
+    start, velocity = np.array(sphere["trajectory"]["start"]), np.array(sphere["trajectory"]["velocity"])
+    times = np.arange(0.0, case.mapping["duration"] + 0.1, 0.1)
+    grown = PlacedShape("sphere", Sphere(sphere["radius"] + START_MARGIN - 1e-3),
+                        tuple(Placement(tuple(start + t * velocity)) for t in times))
+    q = np.repeat(np.array([case.mapping["initial_state"]["q"]]), len(times), axis=0)
+    touched = {contact.first for contact in sweep_meshes(robot.meshes, q, [grown]).obstacle_contacts}
+    assert not touched & set(FIXED_LINKS)

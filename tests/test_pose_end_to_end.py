@@ -3,7 +3,6 @@ orientation error of every run is measured from the recorded joint states."""
 
 from __future__ import annotations
 
-import importlib.metadata
 import json
 from pathlib import Path
 from typing import Any
@@ -139,11 +138,8 @@ def test_cli_json_reports_orientation_error(tmp_path: Path, capsys: pytest.Captu
 
 
 def test_ur5_from_its_shipped_urdf_reaches_a_pose_of_tool0() -> None:
-    """The contract's own example: a pose goal for ``tool0`` of a URDF as it ships."""
-    try:
-        importlib.metadata.distribution("example-robot-data")
-    except importlib.metadata.PackageNotFoundError:
-        pytest.skip("example-robot-data is not installed")
+    """The contract's own example: a pose goal for ``tool0`` of a URDF as it ships
+    (example-robot-data is a test dependency)."""
     data = {"robot": {"urdf": "package://example-robot-data/robots/ur_description/urdf/ur5_robot.urdf",
                       "goal_link": "tool0"},
             "planner": "static-fabric", "dt": 0.01, "duration": 6.0,

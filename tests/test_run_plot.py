@@ -1,9 +1,11 @@
 """Plots that show the robot (issue 13 item 3): snapshots of the body at the right
 instants and places, drawn in every view, and ``dynfab plot`` on a recorded run whose
-replayed metrics equal the run's."""
+replayed metrics equal the run's; the clearance drawn is the one the metrics report
+(issue 21 item 5)."""
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +19,7 @@ from dynfab.scenario.replay import replay_recording
 from dynfab.scenario.runner import run_scenario
 from dynfab.scenario.schema import load_scenario
 from dynfab.viz.body_drawing import draw_body_projection
+from dynfab.viz.result_plot import plot_result
 from dynfab.viz.robot_snapshots import robot_snapshots, snapshot_indices
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -86,3 +89,57 @@ def test_plot_needs_a_readable_recording_that_names_its_scenario(tmp_path: Path,
     assert len(err) == 1 and "--scenario" in err[0]
     assert main(["plot", str(recording), "--scenario", str(EXAMPLES / "boxer_spheres.yaml")]) == 2
     assert "are not those of the scenario's robot" in capsys.readouterr().err
+
+
+def _clearance_panel(figure: Figure):
+    """The clearance axes of a run's figure: its title names what it draws."""
+    return next(ax for ax in figure.axes if "clearance" in ax.get_title())
+
+
+def test_the_plot_draws_the_mesh_clearance_the_metrics_report(tmp_path: Path) -> None:
+    """The built-in Panda is measured on Franka's meshes: the plotted clearance is theirs
+    (not the planner's spheres, which reach up to 2 cm out of the meshes) and says so."""
+    scenario = load_scenario(EXAMPLES / "panda_table_box.yaml")
+    result = run_scenario(dataclasses.replace(scenario, duration=1.0))
+    assert result.mesh_sweep is not None
+    metrics = result.metrics
+    assert metrics.sphere_clearance < metrics.clearance - 1e-3   # the two figures differ here
+    panel = _clearance_panel(plot_result(result, tmp_path / "run.png"))
+    drawn = panel.lines[0].get_ydata()
+    assert drawn.min() == pytest.approx(metrics.clearance, abs=1e-12)
+    assert len(drawn) == len(result.record.t)
+    assert panel.get_title() == f"mesh clearance (min {metrics.clearance:+.3f} m)"
+    assert panel.get_ylabel() == "mesh clearance [m]"
+
+
+def test_a_robot_measured_by_spheres_plots_its_sphere_clearance(tmp_path: Path) -> None:
+    result = run_scenario(load_scenario(EXAMPLES / "point_spheres.yaml"))
+    assert result.mesh_sweep is None
+    panel = _clearance_panel(plot_result(result, tmp_path / "run.png"))
+    assert panel.lines[0].get_ydata().min() == pytest.approx(result.metrics.clearance, abs=1e-12)
+    assert panel.get_title().startswith("sphere clearance (min ")
+
+
+def test_the_dynamic_demo_plots_both_of_its_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    """``dynfab demo dynamic`` runs the dynamic fabric and its static baseline: both are
+    drawn, one above the other, each with its clearance and tracking error (the demo's
+    scenario shortened to 1 s)."""
+    from dynfab import cli
+    from dynfab.viz import result_plot
+
+    monkeypatch.setattr(cli, "load_scenario", lambda path: dataclasses.replace(load_scenario(path), duration=1.0))
+    figures: list[Figure] = []
+    plot_results = result_plot.plot_results
+    monkeypatch.setattr(result_plot, "plot_results", lambda *args: figures.append(plot_results(*args)) or figures[-1])
+    png = tmp_path / "demo.png"
+    assert main(["demo", "dynamic", "--plot", str(png), "--json"]) == 0
+    capsys.readouterr()
+    assert png.read_bytes()[:8] == PNG
+    [figure] = figures
+    titles = [subfigure.get_suptitle() for subfigure in figure.subfigs]
+    assert [title.split(":")[0] for title in titles] == ["panda, dynamic-fabric", "panda, static-fabric"]
+    for subfigure in figure.subfigs:
+        panels = [ax.get_title() for ax in subfigure.axes]
+        assert any(title.startswith("mesh clearance") for title in panels), panels
+        assert any("tracking error" in title for title in panels), panels

@@ -7,9 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from dynfab.scenario import recovering_controller
 from dynfab.scenario.runner import run_scenario
 from dynfab.scenario.schema import load_scenario
-from dynfab.scenario.stall_recovery import PathFollower, StallMonitor, StallRecovery
+from dynfab.scenario.stall_recovery import GlobalPlanningError, PathFollower, StallMonitor, StallRecovery
 
 STALL = Path(__file__).parent / "data" / "boxer_stall.yaml"
 
@@ -60,6 +61,22 @@ def test_a_boxer_that_deadlocks_reaches_its_goal_with_recovery() -> None:
     scenario = load_scenario(STALL)
     without = run_scenario(dataclasses.replace(scenario, recovery=False))
     assert not without.metrics.goal_reached and not without.metrics.collision
+    assert (without.metrics.recovered, without.metrics.plans, without.metrics.failure) == (0, 0, "stalled")
     recovered = run_scenario(dataclasses.replace(scenario, recovery=True))
     assert recovered.metrics.success and not recovered.metrics.collision
-    assert recovered.controller.recovery_times   # it was the recovery that got it there
+    paths = len(recovered.controller.recovery_times)   # it was the recovery that got it there ...
+    assert paths >= 1 and recovered.metrics.recovered == recovered.metrics.plans == paths   # ... and the JSON says so
+    assert recovered.metrics.guided is False and recovered.metrics.fallbacks == 0
+
+
+def test_a_recovery_that_finds_no_path_is_not_reported_as_one(monkeypatch: pytest.MonkeyPatch) -> None:
+    attempts: list[int] = []
+
+    def no_path(start, goal, spheres, margin, seed):
+        attempts.append(seed)
+        raise GlobalPlanningError("no path")
+
+    monkeypatch.setattr(recovering_controller, "rrt_path_planner", lambda: no_path)
+    result = run_scenario(dataclasses.replace(load_scenario(STALL), recovery=True))
+    assert attempts and not result.metrics.goal_reached   # recovery was tried and failed: the fabric went on alone
+    assert (result.metrics.recovered, result.metrics.plans, result.metrics.failure) == (0, 0, "stalled")

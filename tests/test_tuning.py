@@ -7,18 +7,15 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import optuna
 import pytest
 import yaml
 
-pytest.importorskip("optuna")
-
-import optuna  # noqa: E402
-
-from dynfab.cli import main  # noqa: E402
-from dynfab.experiments.registry import EXPERIMENTS  # noqa: E402
-from dynfab.experiments.tuning_objective import Objective, evaluate  # noqa: E402
-from dynfab.experiments.tuning_space import SEARCH_SPACE, block_of, default_values  # noqa: E402
-from dynfab.scenario.schema import scenario_from_dict  # noqa: E402
+from dynfab.cli import main
+from dynfab.experiments.registry import EXPERIMENTS
+from dynfab.experiments.tuning_objective import Objective, evaluate
+from dynfab.experiments.tuning_space import SEARCH_SPACE, block_of, default_values
+from dynfab.scenario.schema import scenario_from_dict
 
 TINY = ["--train", "2", "--held-out", "2", "--duration", "2.5", "--jobs", "1"]
 
@@ -141,7 +138,6 @@ def test_without_optuna_the_command_says_what_to_install(tmp_path: Path, monkeyp
 
 
 def test_trials_run_on_dask_with_the_same_results(tmp_path: Path) -> None:
-    pytest.importorskip("distributed")
     local, dask = tmp_path / "local", tmp_path / "dask"
     local.mkdir()
     dask.mkdir()

@@ -17,18 +17,16 @@ import casadi as ca
 import numpy as np
 import pytest
 
-pytest.importorskip("viser")
-
-from dynfab.cli import main  # noqa: E402
-from dynfab.robots import load_robot  # noqa: E402
-from dynfab.scenario.controllers import FabricController  # noqa: E402
-from dynfab.scenario.recording import load_recording, run_recording, save_recording  # noqa: E402
-from dynfab.scenario.runner import run_scenario  # noqa: E402
-from dynfab.scenario.schema import ScenarioError, load_scenario, scenario_from_dict  # noqa: E402
-from dynfab.viz.replay_session import ReplaySession  # noqa: E402
-from dynfab.viz.robot_visuals import LinkPoses, robot_look  # noqa: E402
-from dynfab.viz.view_server import LiveView, PortError, ReplayView, choose_port, port_is_free  # noqa: E402
-from dynfab.viz.view_session import ViewSession  # noqa: E402
+from dynfab.cli import main
+from dynfab.robots import load_robot
+from dynfab.scenario.controllers import FabricController
+from dynfab.scenario.recording import load_recording, run_recording, save_recording
+from dynfab.scenario.runner import run_scenario
+from dynfab.scenario.schema import ScenarioError, load_scenario, scenario_from_dict
+from dynfab.viz.replay_session import ReplaySession
+from dynfab.viz.robot_visuals import LinkPoses, robot_look
+from dynfab.viz.view_server import LiveView, PortError, ReplayView, choose_port, port_is_free
+from dynfab.viz.view_session import ViewSession
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 PANDA_Q0 = [1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0]

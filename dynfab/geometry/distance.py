@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dynfab.geometry.mesh_distance import mesh_signed_distance
-from dynfab.geometry.shapes import Box, Capsule, Cylinder, Mesh, Placement, Plane, Shape, Sphere
+from dynfab.geometry.shapes import Box, Capsule, Cylinder, Mesh, Placement, Plane, PointCloud, Shape, Sphere
 
 __all__ = ["box_distance", "capsule_distance", "cylinder_distance", "placed_distance", "plane_distance",
            "shape_distance", "sphere_distance"]
@@ -62,7 +62,8 @@ def plane_distance(points: ArrayLike) -> NDArray[np.float64]:
 def shape_distance(shape: Shape, points: ArrayLike) -> NDArray[np.float64]:
     """Signed distance (...,) [m] of points (..., 3) given in the shape's frame (a mesh:
     :func:`~dynfab.geometry.mesh_distance.mesh_signed_distance`, signed within 0.1 m of a
-    closed mesh's surface)."""
+    closed mesh's surface; a point cloud: the distance to its nearest kept point less its
+    voxel half-diagonal, unsigned, :meth:`~dynfab.geometry.point_cloud.PointCloud.distance`)."""
     if isinstance(shape, Sphere):
         return sphere_distance(points, shape.radius)
     if isinstance(shape, Box):
@@ -75,6 +76,8 @@ def shape_distance(shape: Shape, points: ArrayLike) -> NDArray[np.float64]:
         return plane_distance(points)
     if isinstance(shape, Mesh):
         return mesh_signed_distance(shape, points)
+    if isinstance(shape, PointCloud):
+        return shape.distance(points)
     raise TypeError(f"unknown shape {shape!r}")
 
 

@@ -32,7 +32,7 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
-from dynfab.geometry.shapes import Box, Capsule, Cylinder, Mesh, Placement, Plane, Shape, Sphere
+from dynfab.geometry.shapes import Box, Capsule, Cylinder, Mesh, Placement, Plane, PointCloud, Shape, Sphere
 
 __all__ = [
     "MeshSet", "Solid", "exact_distance", "hull_distance", "mesh_set", "placement_matrix",
@@ -42,11 +42,13 @@ __all__ = [
 
 @dataclass(frozen=True, eq=False)
 class _MeshPart:
-    """One triangle mesh as its convex hull, as a BVH of its triangles and as is."""
+    """One triangle mesh as its convex hull, as a BVH of its triangles and as is, and whether
+    it is closed (watertight: it has an inside), decided once."""
 
     hull: coal.Convex
     mesh: coal.BVHModelOBBRSS
     triangles: trimesh.Trimesh
+    closed: bool
 
 
 @dataclass(frozen=True, eq=False)
@@ -80,7 +82,7 @@ def mesh_set(meshes: Sequence[trimesh.Trimesh]) -> MeshSet:
     for mesh in meshes:
         if len(mesh.faces) == 0:
             raise ValueError("a collision mesh has no triangles")
-        parts.append(_MeshPart(_convex(mesh.convex_hull), _bvh(mesh), mesh))
+        parts.append(_MeshPart(_convex(mesh.convex_hull), _bvh(mesh), mesh, bool(mesh.is_watertight)))
     vertices = np.concatenate([np.asarray(mesh.vertices, dtype=float) for mesh in meshes])
     center = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
     radius = float(np.max(np.linalg.norm(vertices - center, axis=1)))
@@ -89,7 +91,13 @@ def mesh_set(meshes: Sequence[trimesh.Trimesh]) -> MeshSet:
 
 def shape_geometry(shape: Shape) -> Solid:
     """The coal primitive of an obstacle shape, in the shape's frame (see shapes.py); a mesh
-    obstacle's :class:`MeshSet` (built once per mesh)."""
+    obstacle's :class:`MeshSet` (built once per mesh); a point cloud's, of a 0.1 mm triangle
+    at each point (:attr:`~dynfab.geometry.point_cloud.PointCloud.specks`)."""
+    if isinstance(shape, PointCloud):
+        cached = shape.__dict__.get("_mesh_set")
+        if cached is None:
+            cached = shape.__dict__["_mesh_set"] = mesh_set([shape.specks.triangles])
+        return cached
     if isinstance(shape, Mesh):
         cached = shape.__dict__.get("_mesh_set")
         if cached is None:
@@ -121,7 +129,7 @@ def shape_bounding_radius(shape: Shape) -> float:
         return shape.radius + 0.5 * shape.length
     if isinstance(shape, Plane):
         return float("inf")
-    if isinstance(shape, Mesh):
+    if isinstance(shape, Mesh | PointCloud):
         return shape.bounding_radius
     raise TypeError(f"unsupported obstacle shape {type(shape).__name__}")
 
@@ -159,11 +167,11 @@ def exact_distance(a: MeshSet, pose_a: NDArray[np.float64], b: Solid, pose_b: ND
     transform_a, transform_b = _transform(pose_a), _transform(pose_b)
     best = float("inf")
     for part in a.parts:
-        for hull, mesh, triangles in _parts_of(b):
+        for hull, mesh, triangles, closed in _parts_of(b):
             hull_gap = _distance(part.hull, transform_a, hull, transform_b)
             touching = hull_gap <= 0.0 and (
                 _collide(part.mesh, transform_a, mesh, transform_b)
-                or _inside(part, pose_a, b, triangles, pose_b))
+                or _inside(part, pose_a, triangles, closed, pose_b))
             if touching:
                 gap = min(hull_gap, 0.0)
             else:
@@ -172,7 +180,7 @@ def exact_distance(a: MeshSet, pose_a: NDArray[np.float64], b: Solid, pose_b: ND
     return best
 
 
-def _inside(part: _MeshPart, pose_a: NDArray[np.float64], b: Solid, triangles: trimesh.Trimesh | None,
+def _inside(part: _MeshPart, pose_a: NDArray[np.float64], triangles: trimesh.Trimesh | None, closed: bool,
             pose_b: NDArray[np.float64]) -> bool:
     """Whether ``b`` lies inside the part, or (a mesh) the part inside ``b``, given that
     their surfaces do not cross: then one point of the inner one decides."""
@@ -184,18 +192,19 @@ def _inside(part: _MeshPart, pose_a: NDArray[np.float64], b: Solid, triangles: t
     a_vertex = to_b[:3, :3] @ part.triangles.vertices[0] + to_b[:3, 3]
     if bool(part.triangles.contains(b_vertex[None])[0]):
         return True
-    return triangles.is_watertight and bool(triangles.contains(a_vertex[None])[0])  # an open surface has no inside
+    return closed and bool(triangles.contains(a_vertex[None])[0])  # an open surface has no inside
 
 
 def _hulls(b: Solid) -> list[coal.CollisionGeometry]:
     return [part.hull for part in b.parts] if isinstance(b, MeshSet) else [b]
 
 
-def _parts_of(b: Solid) -> list[tuple[coal.CollisionGeometry, coal.CollisionGeometry, trimesh.Trimesh | None]]:
-    """(hull, BVH, triangles) of each part of a mesh set; (shape, shape, None) for a primitive."""
+def _parts_of(b: Solid) -> list[tuple[coal.CollisionGeometry, coal.CollisionGeometry, trimesh.Trimesh | None, bool]]:
+    """(hull, BVH, triangles, closed) of each part of a mesh set; (shape, shape, None, True)
+    for a primitive."""
     if isinstance(b, MeshSet):
-        return [(part.hull, part.mesh, part.triangles) for part in b.parts]
-    return [(b, b, None)]
+        return [(part.hull, part.mesh, part.triangles, part.closed) for part in b.parts]
+    return [(b, b, None, True)]
 
 
 def _distance(a: coal.CollisionGeometry, transform_a: coal.Transform3s,

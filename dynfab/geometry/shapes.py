@@ -12,6 +12,8 @@ the world [m]. The shape frames are:
 - :class:`Plane`: the solid half-space ``z_s <= 0`` (the plane through the origin with
   normal +z; what lies below it is solid: a floor, a table top, a wall).
 - :class:`~dynfab.geometry.mesh_shape.Mesh`: triangles given in the shape frame.
+- :class:`~dynfab.geometry.point_cloud.PointCloud`: measured points given in the shape frame
+  (a scenario's clouds: the world frame, placed at the origin).
 
 Orientations are unit quaternions ``(w, x, y, z)``.
 """
@@ -26,9 +28,10 @@ from typing import Union
 import numpy as np
 
 from dynfab.geometry.mesh_shape import Mesh
+from dynfab.geometry.point_cloud import PointCloud
 
 __all__ = [
-    "Box", "Capsule", "Cylinder", "IDENTITY_QUATERNION", "Mesh", "Placement", "Plane", "Shape",
+    "Box", "Capsule", "Cylinder", "IDENTITY_QUATERNION", "Mesh", "Placement", "Plane", "PointCloud", "Shape",
     "ShapeError", "Sphere", "quaternion_from_normal", "quaternion_from_rpy", "quaternion_matrix",
     "unit_quaternion",
 ]
@@ -215,4 +218,4 @@ class Plane:
 
 
 #: Any obstacle shape.
-Shape = Union[Sphere, Box, Cylinder, Capsule, Plane, Mesh]
+Shape = Union[Sphere, Box, Cylinder, Capsule, Plane, Mesh, PointCloud]

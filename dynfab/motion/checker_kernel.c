@@ -18,17 +18,20 @@
  * 4 plane), centre (3), rotation R row-major (9), dimensions (3), bounding radius
  * (a plane: ignored). Kind 5 is a mesh's distance grid (dynfab/geometry/distance_grid.py): its
  * dimensions[0] is the offset, in doubles from the row's start, of the grid's data in the same
- * obstacle buffer (after the rows), and the distance is the grid's lower bound.
+ * obstacle buffer (after the rows), and the distance is the grid's lower bound. Kind 6 is a
+ * point cloud's grid (dynfab/geometry/cloud_grid.py), laid out and read the same.
  */
 
 #define DYNFAB_ROW 17
 
 static double dynfab_max(double a, double b) { return a > b ? a : b; }
 
-/* Lower bound of the distance to a mesh at a point (x, y, z) of its frame: outside the grid
- * the distance to the mesh's bounding box, inside sum_j w_j (v_j - |p - g_j|) over the
- * cell's corners (trilinear weights w_j, node values v_j). Layout of `grid`: nx, ny, nz, h,
- * origin (3), box low (3), box high (3), then nx*ny*nz values, z fastest. */
+/* Lower bound of the distance to a mesh or a cloud at a point (x, y, z) of its frame:
+ * outside the grid the distance to the bounding box, inside max_j (v_j - |p - g_j|) over the
+ * cell's corners g_j (node values v_j; each term is a lower bound alone: the distance is
+ * 1-Lipschitz). Layout of
+ * `grid`: nx, ny, nz, h, origin (3), box low (3), box high (3), then nx*ny*nz values, z
+ * fastest. */
 static double dynfab_grid_distance(const double* grid, double x, double y, double z) {
   const int n[3] = {(int)grid[0], (int)grid[1], (int)grid[2]};
   const double h = grid[3], p[3] = {x, y, z};
@@ -48,19 +51,18 @@ static double dynfab_grid_distance(const double* grid, double x, double y, doubl
     cell[a] -= (double)base[a];
   }
   const double* values = grid + 13;
-  double total = 0.0;
+  double best = -INFINITY;
   for (int c = 0; c < 8; ++c) {
     const int o[3] = {c >> 2 & 1, c >> 1 & 1, c & 1};
-    double weight = 1.0, d2 = 0.0;
+    double d2 = 0.0;
     for (int a = 0; a < 3; ++a) {
-      weight *= o[a] ? cell[a] : 1.0 - cell[a];
       const double d = (cell[a] - (double)o[a]) * h;
       d2 += d * d;
     }
     const long index = ((long)(base[0] + o[0]) * n[1] + (base[1] + o[1])) * n[2] + (base[2] + o[2]);
-    total += weight * (values[index] - sqrt(d2));
+    best = dynfab_max(best, values[index] - sqrt(d2));
   }
-  return total;
+  return best;
 }
 
 static double dynfab_distance(const double* o, const double* p) {
@@ -92,6 +94,7 @@ static double dynfab_distance(const double* o, const double* p) {
       return sqrt(x * x + y * y + (z - a) * (z - a)) - d[0];
     }
     case 5:
+    case 6:
       return dynfab_grid_distance(o + (long)d[0], x, y, z);
     default:
       return z;

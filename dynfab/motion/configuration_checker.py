@@ -10,7 +10,9 @@ over the robot's collision spheres ``(p_i, r_i)``, the obstacles ``k`` (centre `
 rotation ``R_k``, the exact signed distance ``d_k`` of a sphere, box, cylinder, capsule or
 plane in its own frame, :mod:`dynfab.geometry.distance`; for a mesh, compiled, a lower bound
 of it from a grid, :mod:`dynfab.geometry.distance_grid`, at most ``h√3`` = 1.7 cm below it
-within 4 cm of the surface) and the robot's self-collision
+within 4 cm of the surface; for a point cloud, compiled, the grid of
+:mod:`dynfab.geometry.cloud_grid`, interpreted, the KD-tree distance less the voxel
+half-diagonal) and the robot's self-collision
 pairs: the same spheres, shapes and pairs the fabric's leaves avoid, so a path the
 checker accepts is one the fabric can follow. ``inf`` where there is nothing to check.
 
@@ -37,13 +39,15 @@ from numpy.typing import NDArray
 
 from dynfab.geometry.distance import placed_distance
 from dynfab.geometry.distance_grid import distance_grid
-from dynfab.geometry.shapes import Box, Capsule, Cylinder, Mesh, Placement, Plane, Shape, Sphere
+from dynfab.geometry.cloud_grid import cloud_distance_grid
+from dynfab.geometry.shapes import Box, Capsule, Cylinder, Mesh, Placement, Plane, PointCloud, Shape, Sphere
 from dynfab.motion.checker_library import as_pointer, load_checker_library
+from dynfab.robots.collision_model import cache_dir
 from dynfab.robots.robot import Robot
 
 __all__ = ["ConfigurationChecker", "PlacedObstacle"]
 
-_KIND: dict[type, int] = {Sphere: 0, Box: 1, Cylinder: 2, Capsule: 3, Plane: 4, Mesh: 5}
+_KIND: dict[type, int] = {Sphere: 0, Box: 1, Cylinder: 2, Capsule: 3, Plane: 4, Mesh: 5, PointCloud: 6}
 _ROW = 17
 _ONE = ctypes.c_int(1)
 
@@ -93,7 +97,8 @@ class ConfigurationChecker:
 
     def set_obstacles(self, obstacles: Sequence[PlacedObstacle]) -> None:
         """Check against ``obstacles`` from now on (a mesh's distance grid is built on its
-        first use: a second or so per mesh, :mod:`dynfab.geometry.distance_grid`)."""
+        first use: a second or so per mesh, :mod:`dynfab.geometry.distance_grid`; a point cloud's
+        in 0.05-1 s, :mod:`dynfab.geometry.cloud_grid`)."""
         self._obstacles = tuple(obstacles)
         self._rows = _buffer(self._obstacles)
         self._rows_pointer = as_pointer(self._rows)
@@ -185,8 +190,10 @@ def _buffer(obstacles: Sequence[PlacedObstacle]) -> NDArray[np.float64]:
     grids = []
     end = rows.size
     for k, obstacle in enumerate(obstacles):
-        if isinstance(obstacle.shape, Mesh):
-            grid = distance_grid(obstacle.shape).packed()
+        if isinstance(obstacle.shape, Mesh | PointCloud):
+            shape = obstacle.shape
+            grid = (distance_grid(shape, cache=cache_dir() / "distance-grids") if isinstance(shape, Mesh)
+                    else cloud_distance_grid(shape)).packed()
             rows[k, 13] = end - _ROW * k
             grids.append(grid)
             end += grid.size
@@ -216,6 +223,6 @@ def _bounding_radius(shape: Shape) -> float:
         return math.hypot(shape.radius, 0.5 * shape.length)
     if isinstance(shape, Capsule):
         return shape.radius + 0.5 * shape.length
-    if isinstance(shape, Mesh):
+    if isinstance(shape, Mesh | PointCloud):
         return shape.bounding_radius
     return 0.0

@@ -19,15 +19,24 @@ The reference runs on its own clock ``τ``, which slows while the robot lags beh
 It replans from where the robot is (at most ``replans`` times) when
 
 - the reference within ``check_horizon`` ahead meets an obstacle given as moving
-  (checked every ``check_period``), or
-- the run stalls: while the reference runs, its clock ``τ`` has not advanced by
-  ``stall_rate · stall_window`` within ``stall_window`` seconds (the robot is held back);
-  once it has ended, the joint-space distance to the goal configuration has not come
-  ``max(stall_floor, stall_progress · d₀)`` below its best for ``stall_window`` seconds
-  (``d₀``: its distance when the goal was set, so the test scales with the motion asked
-  for). A detour that leads away from the goal is progress as long as it is followed.
+  (checked every ``check_period``, and not within ``blocked_interval`` of a replan for a
+  blocked reference), or
+- the run stalls: while the reference runs, the robot has stayed more than ``e_slow``
+  behind it for ``stall_lag_time`` seconds (outside an approach), or the clock ``τ`` has
+  not advanced by ``stall_rate · stall_window`` within ``stall_window`` seconds (the robot
+  is held back); once it has ended, the joint-space distance to the goal configuration
+  has not come ``max(stall_floor, stall_progress · d₀)`` below its best for
+  ``stall_window`` seconds (``d₀``: its distance when the goal was set, so the test
+  scales with the motion asked for). A detour that leads away from the goal is progress
+  as long as it is followed.
 
-Replans plan among the static obstacles and the moving ones where they are now.
+Replans plan among the static obstacles and the moving ones where they are now, except
+those that touch the goal configuration (they are passing it: a plan around where they
+are now would end in a needless escape of the goal; the fabric avoids them). A replan
+after a stall on the way (not in an approach, nor after the reference ended) first tries
+to keep ``stall_margin`` from obstacles, so that it does not lead through the same tight
+passage again; a stall in a grasp's approach replans as before (training as-posed
+table_pick/0014: replans at 3 cm there stalled 5 times in the approach).
 
 A goal closer to a static obstacle than the planner's margin (a grasp, where the
 spheres overlap what the meshes clear) ends the plan with a segment the planner checked
@@ -123,6 +132,7 @@ class GuidedFabric:
         self._seed = 0
         self._allowances = np.zeros(0)
         self._approaching = False
+        self._lagging_since: float | None = None
 
     @property
     def plan(self) -> Plan | None:
@@ -163,15 +173,18 @@ class GuidedFabric:
         if self._plan is None:
             return
         settings = self._settings
-        if self.status.plans <= settings.replans and self._needs_replan(t, q, moving):
-            self._replan(t, q, moving, first=False)
-            if self._plan is None:
-                return
-        dt = 0.0 if self._last_t is None else max(0.0, t - self._last_t)
-        self._last_t = t
         params = self.fabric.parameters
         lag = float(np.linalg.norm(q - params.goal_position[0]))   # the reference at τ, written last tick
-        in_approach = self._plan.approach > 0.0 and self._tau >= self._plan.approach_start
+        if self.status.plans <= settings.replans:
+            reason = self._replan_reason(t, q, lag, moving)
+            if reason is not None:
+                self._replan(t, q, moving, first=False, after=reason)
+                if self._plan is None:
+                    return
+                lag = float(np.linalg.norm(q - params.goal_position[0]))
+        dt = 0.0 if self._last_t is None else max(0.0, t - self._last_t)
+        self._last_t = t
+        in_approach = self._in_approach()
         slow, stop = ((settings.approach_lag_slow, settings.approach_lag_stop) if in_approach
                       else (settings.lag_slow, settings.lag_stop))
         self._approaching = self._approaching or (in_approach and lag <= settings.approach_lag_stop)
@@ -188,11 +201,28 @@ class GuidedFabric:
         self.update(t, q, moving)
         return self.fabric.compute(q, qdot)
 
-    def _needs_replan(self, t: float, q: NDArray[np.float64], moving: Sequence[PlacedObstacle]) -> bool:
-        """Whether the reference is blocked ahead by something moving, or progress stalled."""
+    def _in_approach(self) -> bool:
+        """Whether the reference's clock is in the plan's approach."""
+        assert self._plan is not None
+        return self._plan.approach > 0.0 and self._tau >= self._plan.approach_start
+
+    def _replan_reason(self, t: float, q: NDArray[np.float64], lag: float,
+                       moving: Sequence[PlacedObstacle]) -> str | None:
+        """``held`` if progress stalled on the way (the reference running, not in an
+        approach), ``stalled`` if it stalled elsewhere, ``blocked`` if the reference is
+        blocked ahead by something moving, else None (module docstring); ``lag``:
+        ``‖q − q_r‖`` [rad]."""
         assert self._plan is not None
         settings = self._settings
-        if self._tau < self._plan.trajectory.duration:  # on the way: the reference's clock must advance
+        running = self._tau < self._plan.trajectory.duration
+        if running and not self._in_approach() and lag > settings.lag_slow:
+            self._lagging_since = t if self._lagging_since is None else self._lagging_since
+        else:
+            self._lagging_since = None
+        if self._lagging_since is not None and t - self._lagging_since > settings.stall_lag_time:
+            self.status = replace(self.status, replans_stalled=self.status.replans_stalled + 1)
+            return "held"
+        if running:  # on the way: the reference's clock must advance
             progress, needed = -self._tau, settings.stall_rate * settings.stall_window
             at_goal = False
         else:  # the reference has ended: the robot must close in on the goal configuration
@@ -203,21 +233,26 @@ class GuidedFabric:
             self._best, self._best_time = progress, t
         if not at_goal and t - self._best_time > settings.stall_window:
             self.status = replace(self.status, replans_stalled=self.status.replans_stalled + 1)
-            return True
+            return "held" if running and not self._in_approach() else "stalled"
         if moving and t >= self._next_check:
             self._next_check = t + settings.check_period
             if self.guidance.blocked_ahead(self._plan, self._tau, moving):
                 self.status = replace(self.status, replans_blocked=self.status.replans_blocked + 1)
-                return True
-        return False
+                return "blocked"
+        return None
 
-    def _replan(self, t: float, q: NDArray[np.float64], moving: Sequence[PlacedObstacle], first: bool) -> None:
+    def _replan(self, t: float, q: NDArray[np.float64], moving: Sequence[PlacedObstacle], first: bool,
+                after: str | None = None) -> None:
+        """Plan from ``q`` at time ``t`` [s]; ``after``: why (:meth:`_replan_reason`), None at first."""
         assert self._goal is not None
         q = np.asarray(q, dtype=float)
+        if self._plan is not None:  # what moves and touches the goal configuration is passing it
+            margin = self._settings.path.margin
+            moving = tuple(o for o in moving if self.guidance.obstacle_clearance(self._plan.goal, o) >= margin)
         obstacles = self._static if first else self._static + tuple(moving)
         began = time.perf_counter()
         try:
-            plan = self.guidance.plan(q, self._goal, obstacles, seed=self._seed)
+            plan = self.guidance.plan(q, self._goal, obstacles, seed=self._seed, wide=after == "held")
             failure, message = None, None
         except GuidanceError as error:
             plan, failure, message = None, error.reason, str(error)
@@ -230,7 +265,8 @@ class GuidedFabric:
                               plan_times_ms=status.plan_times_ms + (elapsed_ms,), failure=failure)
         self.failure_message = message
         self._best, self._best_time, self._ended_seen = np.inf, t, False
-        self._next_check = t
+        self._next_check = t + (self._settings.blocked_interval if after == "blocked" else 0.0)
+        self._lagging_since = None
         if plan is None:
             if first:
                 self._plan = None

@@ -1,5 +1,9 @@
 """Feeding the nearest-point leaf: each tick, the nearest surface point to each robot sphere.
 
+The surfaces are meshes and point clouds (:class:`~dynfab.geometry.point_cloud.PointCloud`,
+world frame, static: a KD-tree query per sphere, the clearance lowered by the cloud's voxel
+half-diagonal so that it never exceeds the distance to a measured point).
+
 For the configuration ``q`` the robot's sphere centres ``p_i`` are computed (forward
 kinematics), brought into each mesh's frame, and the nearest points within
 ``reach = range + r_i`` of it are found (:func:`~dynfab.geometry.mesh_distance.nearest_on_mesh`,
@@ -27,6 +31,7 @@ from dynfab.fabric.leaves.surface_points import NearestSurfaceAvoidance
 from dynfab.fabric.parameters import LeafViews
 from dynfab.geometry.mesh_distance import nearest_on_mesh
 from dynfab.geometry.mesh_shape import Mesh
+from dynfab.geometry.point_cloud import PointCloud
 from dynfab.geometry.shapes import Placement
 from dynfab.robots.robot import Robot
 
@@ -66,8 +71,9 @@ class SurfaceFeed:
         centres = robot.sphere_centers(q)[list(leaf.spheres), :] if leaf.spheres else ca.SX(0, 3)
         self._centres = ca.Function("sphere_centres", [q], [centres])
 
-    def write(self, q: NDArray[np.float64], meshes: Sequence[PlacedMesh]) -> None:
-        """Find and write the nearest surface point of every sphere at configuration ``q``."""
+    def write(self, q: NDArray[np.float64], meshes: Sequence[PlacedMesh], clouds: Sequence[PointCloud] = ()) -> None:
+        """Find and write the nearest surface point of every sphere at configuration ``q``
+        among ``meshes`` and ``clouds``."""
         if not self.leaf.spheres:
             return
         centres = np.asarray(self._centres(q), dtype=float).reshape(-1, 3)
@@ -86,6 +92,13 @@ class SurfaceFeed:
             points[closer] = found.points[closer] @ rotation.T + np.asarray(placed.placement.position)
             normals[closer] = found.normals[closer] @ rotation.T
             velocities[closer] = placed.velocity
+        for cloud in clouds:
+            found = cloud.nearest(centres, max_distance=float(self.reach.max()))
+            closer = found.found & (found.distances < best) & (found.distances <= self.reach)
+            best[closer] = found.distances[closer]
+            points[closer] = found.points[closer]
+            normals[closer] = found.normals[closer]
+            velocities[closer] = 0.0
         active = np.isfinite(best)
         normals[~active] = (0.0, 0.0, 1.0)
         self._views["points"] = points

@@ -176,6 +176,9 @@ def auto_collision_model(path: str | os.PathLike[str], joints: Sequence[str] | N
                 _check_not_empty(cached.links, path, kinematics)
             return cached
     if spheres is None:
+        below = set(kinematics.link_names)
+        if not any(link.collisions for link in model.links if link.name in below):
+            _check_not_empty((), path, kinematics)  # raises before announcing a fit
         print(f"dynfab: fitting collision spheres to the meshes of {model.name or Path(path).name} "
               f"(once; cached in {entry.parent}) ...", file=sys.stderr, flush=True)
         start = time.perf_counter()

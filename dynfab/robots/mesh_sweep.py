@@ -30,7 +30,7 @@ from dynfab.geometry.shapes import Placement, Plane, Shape
 
 from .mesh_collision import MeshCollisionModel
 
-__all__ = ["Contact", "MeshSweep", "PlacedShape", "sweep_meshes"]
+__all__ = ["Contact", "MeshSweep", "PlacedShape", "clearance_per_sample", "sweep_meshes"]
 
 
 @dataclass(frozen=True)
@@ -94,21 +94,10 @@ def sweep_meshes(model: MeshCollisionModel, qs: ArrayLike, obstacles: Sequence[P
     Raises:
         ValueError: An obstacle whose number of placements is neither 1 nor T.
     """
-    poses = model.link_poses(qs)
-    samples = poses.shape[0]
-    centers = np.einsum("tlij,lj->tli", poses[:, :, :3, :3], np.array([m.center for m in model.meshes]))
-    centers += poses[:, :, :3, 3]
-    radii = np.array([m.radius for m in model.meshes])
+    poses, centers, radii = _link_spheres(model, qs)
     clearance, obstacle_contacts = None, []
     for obstacle in obstacles:
-        obstacle_poses = _obstacle_poses(obstacle, samples)
-        geometry = shape_geometry(obstacle.shape)
-        bound = _obstacle_bound(obstacle.shape, obstacle_poses, centers, radii)
-
-        def distance(t: int, link: int, exact: bool) -> float:
-            measure = exact_distance if exact else hull_distance
-            return measure(model.meshes[link], poses[t, link], geometry, obstacle_poses[t])
-
+        bound, distance = _obstacle_distances(model, obstacle, poses, centers, radii)
         minimum, contacts = _search(bound, distance)
         clearance = minimum if clearance is None else min(clearance, minimum)
         obstacle_contacts += [Contact(model.links[link], obstacle.name, tuple(s for s, _ in found),
@@ -129,6 +118,57 @@ def sweep_meshes(model: MeshCollisionModel, qs: ArrayLike, obstacles: Sequence[P
                          for p, found in contacts.items()]
     return MeshSweep(clearance, min_self_distance, _by_first_sample(obstacle_contacts),
                      _by_first_sample(self_contacts))
+
+
+def clearance_per_sample(model: MeshCollisionModel, qs: ArrayLike, obstacles: Sequence[PlacedShape]
+                         ) -> NDArray[np.float64]:
+    """The mesh clearance at each sample: ``min`` over links and obstacles of the mesh
+    distance, shape (T,) [m] (inf without obstacles); its minimum is
+    :attr:`MeshSweep.clearance` of the same run, for the same three tiers (module doc) are
+    searched per sample, each to its exact minimum.
+
+    Raises:
+        ValueError: An obstacle whose number of placements is neither 1 nor T.
+    """
+    poses, centers, radii = _link_spheres(model, qs)
+    columns = [_obstacle_distances(model, obstacle, poses, centers, radii) for obstacle in obstacles]
+    clearance = np.full(poses.shape[0], np.inf)
+    if not columns:
+        return clearance
+    bound = np.concatenate([column_bound for column_bound, _ in columns], axis=1)
+    links = len(model.meshes)
+    for t, row in enumerate(bound):
+        for j in np.argsort(row, kind="stable"):
+            if row[j] >= clearance[t]:
+                break
+            distance = columns[j // links][1]
+            if distance(t, j % links, False) < clearance[t]:
+                clearance[t] = min(clearance[t], distance(t, j % links, True))
+    return clearance
+
+
+def _link_spheres(model: MeshCollisionModel, qs: ArrayLike
+                  ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The links' poses (T, L, 4, 4), bounding-sphere centres (T, L, 3) [m] and radii (L,) [m]."""
+    poses = model.link_poses(qs)
+    centers = np.einsum("tlij,lj->tli", poses[:, :, :3, :3], np.array([m.center for m in model.meshes]))
+    centers += poses[:, :, :3, 3]
+    return poses, centers, np.array([m.radius for m in model.meshes])
+
+
+def _obstacle_distances(model: MeshCollisionModel, obstacle: PlacedShape, poses: NDArray[np.float64],
+                        centers: NDArray[np.float64], radii: NDArray[np.float64]
+                        ) -> tuple[NDArray[np.float64], Callable[[int, int, bool], float]]:
+    """Tier 1's bounds (T, L) [m] of each link's distance to ``obstacle``, and the
+    distance ``(t, link, exact)`` of tiers 2 (``exact=False``) and 3."""
+    obstacle_poses = _obstacle_poses(obstacle, poses.shape[0])
+    geometry = shape_geometry(obstacle.shape)
+
+    def distance(t: int, link: int, exact: bool) -> float:
+        measure = exact_distance if exact else hull_distance
+        return measure(model.meshes[link], poses[t, link], geometry, obstacle_poses[t])
+
+    return _obstacle_bound(obstacle.shape, obstacle_poses, centers, radii), distance
 
 
 def _obstacle_poses(obstacle: PlacedShape, samples: int) -> NDArray[np.float64]:

@@ -18,7 +18,8 @@ Sphere obstacles take the planner's sphere slots in file order; boxes, cylinders
 and planes take the slots of their kind (:class:`dynfab.fabric.parameters.ShapeSlots`),
 whose orientation and sizes are written once. Mesh obstacles take no slot: the planner gets
 a nearest-point leaf (:mod:`dynfab.fabric.leaves.surface_points`, range and gains of the
-shape obstacles'), written every tick (:mod:`dynfab.scenario.mesh_obstacles`).
+shape obstacles'), written every tick (:mod:`dynfab.scenario.mesh_obstacles`); point clouds
+(``points``) feed the same leaf.
 """
 
 from __future__ import annotations
@@ -180,8 +181,9 @@ def mesh_obstacles(planner: FabricPlanner, robot: Robot, obstacles: tuple[Obstac
     if leaf is None:
         return None
     indices = tuple(k for k, obstacle in enumerate(obstacles) if obstacle.type == "mesh")
+    clouds = tuple(obstacle.cloud for obstacle in obstacles if obstacle.cloud is not None)
     feed = SurfaceFeed(robot, leaf, planner.parameters.leaves[leaf.name])
-    return MeshObstacles(indices, tuple(obstacles[k] for k in indices), feed, planner.config.dynamic)
+    return MeshObstacles(indices, tuple(obstacles[k] for k in indices), feed, planner.config.dynamic, clouds)
 
 
 def shape_slots_of(obstacles: tuple[ObstacleSpec, ...]) -> ShapeSlots:
@@ -194,11 +196,12 @@ def shape_slots_of(obstacles: tuple[ObstacleSpec, ...]) -> ShapeSlots:
 def place_obstacles(obstacles: tuple[ObstacleSpec, ...],
                     params: RuntimeParameters) -> tuple[ObstacleSlot | None, ...]:
     """Give each obstacle the next slot of its kind and write its radius, or its
-    orientation and sizes; returns where each one's centre goes (None: a mesh, no slot)."""
+    orientation and sizes; returns where each one's centre goes (None: a mesh or a point
+    cloud, no slot)."""
     used = dict.fromkeys(("sphere", "box", "cylinder", "capsule", "plane"), 0)
     slots: list[ObstacleSlot | None] = []
     for obstacle in obstacles:
-        if obstacle.type == "mesh":
+        if obstacle.type in ("mesh", "points"):
             slots.append(None)
             continue
         row = used[obstacle.type]

@@ -1,5 +1,5 @@
-"""A scenario's mesh obstacles for the fabric: the nearest-point leaf they need and where
-they are at each tick (:mod:`dynfab.perception.surfaces` finds the points)."""
+"""A scenario's mesh obstacles and point clouds for the fabric: the nearest-point leaf they
+need and where they are at each tick (:mod:`dynfab.perception.surfaces` finds the points)."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import numpy as np
 
 from dynfab.fabric.leaves.barrier import Barrier
 from dynfab.fabric.leaves.surface_points import NearestSurfaceAvoidance, moving_spheres
+from dynfab.geometry.point_cloud import PointCloud
 from dynfab.geometry.shapes import Placement
 from dynfab.motion.references import References
 from dynfab.perception.surfaces import PlacedMesh, SurfaceFeed
@@ -29,12 +30,14 @@ class MeshObstacles:
         feed: Writes the planner's nearest-point leaf.
         with_velocity: Pass the meshes' velocities (dynamic fabrics); a static fabric sees
             positions only, as the paper's static-fabric baseline does.
+        clouds: The scenario's point clouds (static).
     """
 
     indices: tuple[int, ...]
     obstacles: tuple[ObstacleSpec, ...]
     feed: SurfaceFeed
     with_velocity: bool
+    clouds: tuple[PointCloud, ...] = ()
 
     def write(self, t: float, q: np.ndarray, references: References) -> None:
         """Write the nearest surface point of each robot sphere at time ``t`` [s]."""
@@ -45,12 +48,12 @@ class MeshObstacles:
             assert obstacle.mesh is not None
             placed.append(PlacedMesh(obstacle.mesh, Placement(tuple(point.position), obstacle.orientation),
                                      velocity))  # type: ignore[arg-type]
-        self.feed.write(q, placed)
+        self.feed.write(q, placed, self.clouds)
 
 
 def surface_leaf(robot: Robot, obstacles: Sequence[ObstacleSpec], barrier: Barrier) -> NearestSurfaceAvoidance | None:
-    """The nearest-point leaf of a scenario with mesh obstacles (on every sphere a joint
-    moves), or None without meshes."""
-    if not any(obstacle.type == "mesh" for obstacle in obstacles):
+    """The nearest-point leaf of a scenario with mesh obstacles or point clouds (on every
+    sphere a joint moves), or None without them."""
+    if not any(obstacle.type in ("mesh", "points") for obstacle in obstacles):
         return None
     return NearestSurfaceAvoidance(spheres=moving_spheres(robot), barrier=barrier)

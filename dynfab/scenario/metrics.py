@@ -59,13 +59,17 @@ class Metrics:
             else between the spheres of a self-collision pair). None for the kinematic
             simulator.
         guided: A global joint-space plan was followed (scenario/guided_controller.py);
-            None for planners without guidance (MPC).
-        plans: Global plans made (guidance's first plan and replans, or stall-recovery paths).
+            False for the fabric alone and the MPC. These outcome keys
+            (scenario/outcome.py) are None only for a replayed recording.
+        plans: Global plans made (guidance's first plan and replans, or stall-recovery
+            paths followed); 0 for the MPC.
         plan_time_ms: Wall time of the first global plan [ms]; None without one.
         recovered: Replans of guidance (blocked reference, stalled progress) or
-            stall-recovery paths of the fabric alone.
+            stall-recovery paths of the fabric alone (attempts that found no path are
+            not counted); 0 for the MPC.
         fallbacks: Safe actions taken: fabric outputs replaced by braking, plus one if
-            guidance could not plan and the fabric alone took over.
+            guidance could not plan and the fabric alone took over; for the MPC, solves
+            that failed (the last plan, or braking, was executed).
         failure: Why the run failed, None on success: a guidance reason
             (``goal_outside_limits``, ``no_ik_solution``, ``start_in_collision``,
             ``goal_in_collision``, ``no_path``) when guidance could not plan, else

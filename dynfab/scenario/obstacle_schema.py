@@ -1,7 +1,7 @@
 """The ``obstacles:`` entries of a scenario: spheres, boxes, cylinders, capsules,
 half-space planes and triangle meshes, each static or moving along a trajectory of its
-centre, and scenes given as URDFs (static; :mod:`dynfab.scenario.scene_files` reads the
-files)."""
+centre, scenes given as URDFs and point clouds (static; :mod:`dynfab.scenario.scene_files`
+reads the files)."""
 
 from __future__ import annotations
 
@@ -19,6 +19,7 @@ from dynfab.geometry.shapes import (
     Cylinder,
     Plane,
     Mesh,
+    PointCloud,
     Shape,
     ShapeError,
     Sphere,
@@ -26,15 +27,15 @@ from dynfab.geometry.shapes import (
     unit_quaternion,
 )
 from dynfab.scenario.model_errors import tagged_union
-from dynfab.scenario.model_types import Items, Range, ScenarioModel, Text, fail
+from dynfab.scenario.model_types import Items, Range, ScenarioModel, Text, Whole, fail
 from dynfab.scenario.ranges import Coordinate, Length, Point3
 from dynfab.scenario.trajectory_schema import TrajectoryMapping, frozen_trajectory
 
 
-OBSTACLE_TYPES: tuple[str, ...] = ("sphere", "box", "cylinder", "capsule", "plane", "mesh", "urdf")
+OBSTACLE_TYPES: tuple[str, ...] = ("sphere", "box", "cylinder", "capsule", "plane", "mesh", "urdf", "points")
 
 
-ObstacleType = Literal["sphere", "box", "cylinder", "capsule", "plane", "mesh"]
+ObstacleType = Literal["sphere", "box", "cylinder", "capsule", "plane", "mesh", "points"]
 
 
 @dataclass(frozen=True)
@@ -56,6 +57,8 @@ class ObstacleSpec:
             file); a plane's takes +z onto its ``normal``.
         normal: A plane's unit normal, pointing out of the solid half-space; None otherwise.
         mesh: A mesh's triangles in its frame (scaled); None for other shapes.
+        cloud: A point cloud's kept points (world frame; ``position`` the origin); None for
+            other shapes.
     """
 
     type: ObstacleType
@@ -67,6 +70,7 @@ class ObstacleSpec:
     orientation: tuple[float, float, float, float] = IDENTITY_QUATERNION
     normal: tuple[float, float, float] | None = None
     mesh: Mesh | None = None
+    cloud: PointCloud | None = None
 
     @property
     def shape(self) -> Shape:
@@ -82,6 +86,9 @@ class ObstacleSpec:
         if self.type == "mesh":
             assert self.mesh is not None
             return self.mesh
+        if self.type == "points":
+            assert self.cloud is not None
+            return self.cloud
         return Plane()
 
 
@@ -179,20 +186,41 @@ class MeshMapping(_Placed):
         return _check_rotation(self)
 
 
+JointValue = Annotated[float, Range(-1e3, 1e3)]
+
+
 class UrdfMapping(ScenarioModel):
-    """``{type: urdf, file: kitchen.urdf, position, orientation, package_dirs: [...]}``: every
-    link's collision geometry at the pose of the scene's joints at zero, the scene's root
-    placed at ``position`` (static)."""
+    """``{type: urdf, file: kitchen.urdf, position, orientation, package_dirs: [...], joints: {name: value}}``:
+    every link's collision geometry at the pose of the scene's joints (``joints``: values of
+    its movable joints [rad or m], within their limits; the others at zero), the scene's
+    root placed at ``position`` (static)."""
 
     type: Literal["urdf"]
     file: FileName
     position: Point3 = (0.0, 0.0, 0.0)
     orientation: Quaternion = IDENTITY_QUATERNION
     package_dirs: Annotated[tuple[FileName, ...], Items(what="folders", allow_empty=True)] = ()
+    joints: dict[Annotated[str, Text(256)], JointValue] = {}
 
     @model_validator(mode="after")
     def _rotation(self) -> UrdfMapping:
         return _check_rotation(self)
+
+
+Voxel = Annotated[float, Range(0.001, 1.0)]
+CloudCap = Annotated[int, Whole(1, 10_000_000)]
+
+
+class PointsMapping(ScenarioModel):
+    """``{type: points, file: cloud.npy, voxel: h, max_points: M}``: measured surface points
+    (.npy N×3, .ply or .pcd; metres, world frame; relative to the scenario file), static,
+    downsampled to one point per voxel of edge ``h`` [m], at most ``M`` kept
+    (:mod:`dynfab.geometry.point_cloud`)."""
+
+    type: Literal["points"]
+    file: FileName
+    voxel: Voxel = 0.01
+    max_points: CloudCap = 1_000_000
 
 
 def _check_rotation(shape: BoxMapping | CylinderMapping | MeshMapping | UrdfMapping) -> Any:
@@ -207,7 +235,7 @@ def _check_rotation(shape: BoxMapping | CylinderMapping | MeshMapping | UrdfMapp
 
 ObstacleMapping = tagged_union({"sphere": SphereMapping, "box": BoxMapping, "cylinder": CylinderMapping,
                                 "capsule": CapsuleMapping, "plane": PlaneMapping, "mesh": MeshMapping,
-                                "urdf": UrdfMapping}, "type")
+                                "urdf": UrdfMapping, "points": PointsMapping}, "type")
 
 
 def obstacle_spec(obstacle: ScenarioModel) -> ObstacleSpec:

@@ -1,6 +1,18 @@
 """How a run went, in its metrics: guidance, recovery, fallbacks and, for a failure, why
 (docs/design.md section 5.5: ``guided``, ``plans``, ``plan_time_ms``, ``recovered``, ``fallbacks``,
-``failure``)."""
+``failure``).
+
+A ``success`` the fabric earned alone reads ``guided: false, recovered: 0, fallbacks: 0``.
+Every controller a run can have fills these keys:
+
+| controller | `guided` | `plans` | `recovered` | `fallbacks` |
+|---|---|---|---|---|
+| guided fabric | true (false once guidance found no plan and the scenario's own fabric took over) | first plan, replans, recovery paths (a first plan that failed is not counted; its wall time is `plan_time_ms`) | replans (blocked, stalled), recovery paths | braking actions, plus 1 if the fabric took over |
+| fabric, with or without stall recovery | false | recovery paths | recovery paths | braking actions |
+| MPC | false | 0 | 0 | failed solves (the last plan or braking executed) |
+
+A replayed recording (no controller) leaves them ``None``: what helped is not recorded.
+"""
 
 from __future__ import annotations
 
@@ -8,6 +20,7 @@ import dataclasses
 
 import numpy as np
 
+from dynfab.mpc import MpcController
 from dynfab.scenario.controllers import Controller
 from dynfab.scenario.guided_controller import GuidedController
 from dynfab.scenario.metrics import Metrics
@@ -25,16 +38,20 @@ def with_outcome(metrics: Metrics, controller: Controller | None, goal_positions
     if isinstance(controller, GuidedController):
         status = controller.status
         recoveries = len(controller.recovery_times)
-        outcome.update(guided=status.guided and controller.fallback is None,
-                       plans=status.plans + recoveries, plan_time_ms=status.plan_time_ms,
+        fell_back = controller.fallback is not None   # the first plan failed: it is in status.plans
+        outcome.update(guided=status.guided and not fell_back,
+                       plans=status.plans - fell_back + recoveries, plan_time_ms=status.plan_time_ms,
                        recovered=status.replans_blocked + status.replans_stalled + recoveries,
-                       fallbacks=controller.fallback_count + (controller.fallback is not None))
-        if controller.fallback is not None and not metrics.success:
+                       fallbacks=controller.fallback_count + fell_back)
+        if fell_back and not metrics.success:
             outcome["failure"] = status.failure
-    elif controller is not None and hasattr(controller, "planner"):
+    elif isinstance(controller, MpcController):
+        outcome.update(guided=False, plans=0, recovered=0, fallbacks=controller.failures)
+    elif controller is not None:   # a fabric controller, with stall recovery or without
         recoveries = len(getattr(controller, "recovery_times", []))
+        planner = getattr(controller, "planner", None)
         outcome.update(guided=False, plans=recoveries, recovered=recoveries,
-                       fallbacks=int(getattr(controller.planner, "fallback_count", 0)))
+                       fallbacks=int(getattr(planner, "fallback_count", 0)))
     return dataclasses.replace(metrics, **outcome)
 
 

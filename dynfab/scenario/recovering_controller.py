@@ -30,7 +30,8 @@ class RecoveringController:
 
     Attributes:
         inner: the wrapped controller (it writes the references and calls the planner).
-        recovery_times: when a global path was planned [s].
+        recovery_times: when a global path was planned and followed [s] (attempts that
+            found no path are not in it: the fabric went on alone).
     """
 
     def __init__(self, inner: FabricController, goal: np.ndarray, tolerance: float,
@@ -40,6 +41,7 @@ class RecoveringController:
                  reach: float = np.inf) -> None:
         self.inner = inner
         self.recovery_times: list[float] = []
+        self._attempts = 0
         self._goal = np.asarray(goal, dtype=float)
         self._tolerance = tolerance
         self._goal_point = goal_point
@@ -76,10 +78,11 @@ class RecoveringController:
     def _start_path(self, t: float, point: np.ndarray) -> None:
         """Plan from ``point`` to the goal (with the clearance, then without it)."""
         self._monitor.reset()
-        if len(self.recovery_times) >= self._recovery.attempts:
+        if self._attempts >= self._recovery.attempts:
             return
         spheres = self._spheres(t)
-        seed = len(self.recovery_times)
+        seed = self._attempts
+        self._attempts += 1
         for margin in (self._footprint + self._recovery.clearance, self._footprint):
             try:
                 waypoints = self._plan(point, self._goal, spheres, margin, seed)
@@ -89,7 +92,7 @@ class RecoveringController:
             self._follower = PathFollower(waypoints, self._lookahead)
             self._follow(self._follower.carrot(point)[0])
             return
-        self.recovery_times.append(t)   # no path: count the attempt, let the fabric go on
+        # no path: the attempt counts against the budget, the fabric goes on alone
 
     def _follow(self, target: np.ndarray) -> None:
         self.inner.planner.parameters.goal_position[0][:] = target

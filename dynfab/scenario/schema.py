@@ -293,8 +293,9 @@ def validate_for_robot(scenario: Scenario, robot: Robot) -> Scenario:
         if obstacle.position is not None:
             key = "point" if obstacle.type == "plane" else "position"
             fields.check_length(obstacle.position, f"obstacles[{i}].{key}", obstacle_lengths)
-        if robot.planar and obstacle.type == "mesh":
-            raise ScenarioError(f"obstacles[{i}].type", "a planar robot moves in the xy-plane; mesh obstacles are 3-D "
+        if robot.planar and obstacle.type in ("mesh", "points"):
+            raise ScenarioError(f"obstacles[{i}].type", f"a planar robot moves in the xy-plane; {obstacle.type} obstacles "
+                                "are 3-D "
                                 "(use spheres, boxes, cylinders or planes)")
         if robot.planar and obstacle.normal is not None and math.hypot(*obstacle.normal[:2]) < 1e-9:
             raise ScenarioError(f"obstacles[{i}].normal", "a planar robot moves in the xy-plane, which a "

@@ -7,11 +7,10 @@ Figures are drawn on matplotlib's Agg canvas (no pyplot, no display, no global s
 from __future__ import annotations
 
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
 from matplotlib.axes import Axes
-from matplotlib.figure import Figure
+from matplotlib.figure import Figure, SubFigure
 from matplotlib.patches import Circle
 from mpl_toolkits.mplot3d import Axes3D
 from numpy.typing import ArrayLike, NDArray
@@ -34,8 +33,19 @@ ShapeTrack = tuple[Shape, Sequence[float], ArrayLike]
 frame's origin over time (T, 3) [m]."""
 
 
-def plot_run(
-    path: str | Path,
+def run_panels(planar: bool, has_clearance: bool, has_reference: bool) -> int:
+    """Panels in a row of a planar run's drawing: the top view, the clearance, the
+    tracking error (3-D runs always take a 2 x 3 grid)."""
+    return 1 + has_clearance + has_reference if planar else 3
+
+
+def run_figure_size(planar: bool, panels: int) -> tuple[float, float]:
+    """Width and height [in] of one run's drawing (:func:`draw_run`)."""
+    return (5.5 * panels, 5.0) if planar else (16.0, 10.0)
+
+
+def draw_run(
+    figure: Figure | SubFigure,
     goal_link_positions: ArrayLike,
     goals: Sequence[GoalMarker],
     obstacles_over_time: ArrayLike,
@@ -47,8 +57,9 @@ def plot_run(
     base_path: ArrayLike | None = None,
     shapes: Sequence[ShapeTrack] = (),
     robot: RobotSnapshots | None = None,
+    clearance_label: str = "clearance",
 ) -> None:
-    """Save a PNG of a run.
+    """Draw a run on ``figure`` (a whole figure, or one of its subfigures to compare runs).
 
     3-D robots get a 3-D view plus top (x-y) and side (x-z) projections; planar robots a
     top view. Obstacles are drawn at their start (faint) and end positions with the path
@@ -56,7 +67,7 @@ def plot_run(
     dashed lines). A last panel shows the clearance over time if given.
 
     Args:
-        path: Output PNG file.
+        figure: Where to draw; sized by :func:`run_figure_size` for a figure of its own.
         goal_link_positions: Goal-link positions over time, shape (T, 3) or (T, 2) [m].
         goals: ``(position, tolerance)`` per goal; position (d,) or a reference (T, d).
         obstacles_over_time: Obstacle centres, shape (T, m, 3) or (T, m, 2) [m].
@@ -64,23 +75,23 @@ def plot_run(
         planar: Draw the top view only.
         clearance_over_time: Clearance at each sample, shape (T,) [m].
         times: Sample times, shape (T,) [s], for the clearance axis (else step indices).
-        title: Figure title.
+        title: The drawing's title.
         base_path: Positions (T, 2) of a mobile base [m], drawn in the top view.
         shapes: Box, cylinder, capsule and plane obstacles, drawn as wireframes at their
             end position (with the path of their origin if they move).
         robot: The robot's skeleton and collision spheres at a few instants, drawn in
             every view (the closest approach with the sphere obstacles where they were then).
+        clearance_label: What ``clearance_over_time`` measures (e.g. ``"mesh clearance"``),
+            the clearance panel's title and axis label.
     """
     positions = np.asarray(goal_link_positions, dtype=float)
     obstacles = np.asarray(obstacles_over_time, dtype=float)
     radii = np.asarray(obstacle_radii, dtype=float)
     markers = [(np.asarray(goal, dtype=float), float(tol)) for goal, tol in goals]
     tracks = [(shape, orientation, np.asarray(centres, dtype=float)) for shape, orientation, centres in shapes]
-    has_clearance = clearance_over_time is not None
     reference = markers[0][0] if markers and markers[0][0].ndim == 2 else None
     if planar:
-        panels = 1 + has_clearance + (reference is not None)
-        figure = Figure(figsize=(5.5 * panels, 5.0), layout="constrained")
+        panels = run_panels(True, clearance_over_time is not None, reference is not None)
         grid = figure.add_gridspec(1, panels)
         top = figure.add_subplot(grid[0, 0])
         _draw_projection(top, (0, 1), positions, markers, obstacles, radii)
@@ -92,7 +103,6 @@ def plot_run(
         top.legend(loc="best", fontsize="small")
         extra = [grid[0, k] for k in range(1, panels)]
     else:
-        figure = Figure(figsize=(16.0, 10.0), layout="constrained")
         grid = figure.add_gridspec(2, 3)
         view = figure.add_subplot(grid[0, 0], projection="3d")
         _draw_3d(view, positions, markers, obstacles, radii, tracks, robot)
@@ -108,11 +118,10 @@ def plot_run(
                 ax.legend(loc="best", fontsize="small")
         extra = [grid[1, 1], grid[1, 2]]
     if clearance_over_time is not None:
-        _draw_clearance(figure.add_subplot(extra.pop(0)), clearance_over_time, times)
+        _draw_clearance(figure.add_subplot(extra.pop(0)), clearance_over_time, times, clearance_label)
     if reference is not None:
         _draw_tracking_error(figure.add_subplot(extra.pop(0)), positions, reference, markers[0][1], times)
     figure.suptitle(title)
-    figure.savefig(Path(path), dpi=100)
 
 
 def _goal_points(markers: list[tuple[NDArray[np.float64], float]], dimension: int) -> NDArray[np.float64]:
@@ -219,6 +228,7 @@ def _draw_3d(
     radii: NDArray[np.float64],
     tracks: list[tuple[Shape, Sequence[float], NDArray[np.float64]]],
     robot: RobotSnapshots | None = None,
+    clearance_label: str = "clearance",
 ) -> None:
     """Draw the path, goals (with tolerance spheres), obstacles, shapes and the robot in 3-D."""
     extent = [positions]
@@ -259,17 +269,16 @@ def _draw_3d(
     ax.set_title("3-D view")
 
 
-def _draw_clearance(ax: Axes, clearance: ArrayLike, times: ArrayLike | None) -> None:
-    """Plot clearance over time with the collision threshold at zero."""
+def _draw_clearance(ax: Axes, clearance: ArrayLike, times: ArrayLike | None, label: str) -> None:
+    """Plot clearance over time with the collision threshold at zero; ``label`` names it."""
     values = np.asarray(clearance, dtype=float)
     x = np.arange(values.shape[0]) if times is None else np.asarray(times, dtype=float)
-    ax.plot(x, values, color=_PATH_COLOR)
+    ax.plot(x, values, color=_PATH_COLOR, label=label)
     ax.axhline(0.0, color=_OBSTACLE_COLOR, linestyle="--", linewidth=1, label="collision")
     finite = values[np.isfinite(values)]
-    if finite.size:
-        ax.set_title(f"clearance (min {finite.min():.3f} m)")
+    ax.set_title(f"{label} (min {finite.min():+.3f} m)" if finite.size else label)
     ax.set_xlabel("step" if times is None else "time [s]")
-    ax.set_ylabel("clearance [m]")
+    ax.set_ylabel(f"{label} [m]")
     ax.legend(loc="best", fontsize="small")
     ax.grid(True, alpha=0.3)
 

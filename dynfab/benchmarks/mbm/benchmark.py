@@ -31,6 +31,9 @@ from dynfab.benchmarks.mbm.conversion import PLANNER
 from dynfab.benchmarks.mbm.franka import franka
 from dynfab.benchmarks.mbm.problem_run import run_case
 from dynfab.benchmarks.mbm.problems import PROBLEM_TYPES, load_problems
+from dynfab.benchmarks.mbm.scene_configs import SCENE_TYPES
+from dynfab.benchmarks.mbm.scenes import VARIANT as SCENE_VARIANT
+from dynfab.benchmarks.mbm.scenes import prepare_scene_case, scene_problems
 from dynfab.benchmarks.mbm.tables import write_tables
 from dynfab.benchmarks.mbm.ur5 import ur5
 from dynfab.benchmarks.mbm.ur5_case import VARIANT as UR5_VARIANT
@@ -40,6 +43,10 @@ from dynfab.experiments.cluster import Cluster, series_executor
 from dynfab.experiments.series import Progress, RunError, SeriesError, exclusive, log_lines
 
 __all__ = ["BenchmarkError", "BenchmarkSettings", "run_benchmark"]
+
+
+#: Problems of a mesh scene when ``per_type`` is None (MBM's configs ask for 100).
+SCENE_PROBLEMS = 100
 
 
 class BenchmarkError(ValueError):
@@ -54,11 +61,13 @@ class BenchmarkSettings:
         variant: ``as-posed``, ``object-removed`` or ``moving-sphere`` (``robot`` panda);
             ``object-removed`` only for the UR5.
         robot: ``panda`` (the problems as posed) or ``ur5`` (:mod:`dynfab.benchmarks.mbm.ur5_case`).
-        types: Problem types, in report order.
-        per_type: The first this many problems of each type; None: all.
+        types: Problem types, in report order: those of the archive and the mesh scenes
+            (:mod:`dynfab.benchmarks.mbm.scenes`, generated from ``seed``).
+        per_type: The first this many problems of each type; None: all (a mesh scene:
+            :data:`SCENE_PROBLEMS`).
         planner: The scenario's planner.
         guidance: The scenario's ``guidance`` key; None leaves it out (the schema's default).
-        seed: Seed of the moving spheres.
+        seed: Seed of the moving spheres and of the mesh scenes' problems.
         skip: Problems of each type skipped before the first ``per_type`` (in number order).
     """
 
@@ -122,10 +131,17 @@ def _cases(settings: BenchmarkSettings) -> list[Case]:
     Raises:
         ValueError: An unknown robot, or a variant the UR5 does not have.
     """
-    problems = load_problems(settings.types, settings.per_type, skip=settings.skip)
+    scenes = tuple(t for t in settings.types if t in SCENE_TYPES)
+    problems = load_problems(tuple(t for t in settings.types if t not in SCENE_TYPES), settings.per_type,
+                             skip=settings.skip) if len(scenes) < len(settings.types) else ()
+    if scenes and (settings.robot, settings.variant) != ("panda", SCENE_VARIANT):
+        raise ValueError(f"the mesh scenes ({', '.join(scenes)}) run the Panda {SCENE_VARIANT} only (their queries "
+                         f"name no object to remove)")
     if settings.robot == "panda":
         return [prepare_case(problem, settings.variant, franka(), settings.planner, settings.seed)
-                for problem in problems]
+                for problem in problems] + [
+            prepare_scene_case(problem, settings.planner) for problem in
+            scene_problems(scenes, settings.per_type or SCENE_PROBLEMS, settings.skip, settings.seed, franka())]
     if settings.robot != "ur5":
         raise ValueError(f"unknown robot {settings.robot!r} (expected panda or ur5)")
     if settings.variant != "object-removed":
@@ -200,7 +216,8 @@ def _execute(cases: Sequence[Case], jobs: int, cluster: Cluster | None,
     if not cases:
         return
     with series_executor(jobs, cluster) as executor:
-        futures: dict[Future[dict[str, Any]], Case] = {executor.submit(run_case, case.mapping): case for case in cases}
+        futures: dict[Future[dict[str, Any]], Case] = {executor.submit(run_case, case.mapping, case.check_obstacles): case
+                                                       for case in cases}
         remaining = set(futures)
         while remaining:
             finished, remaining = wait(remaining, return_when=FIRST_COMPLETED)

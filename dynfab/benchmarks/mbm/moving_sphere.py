@@ -6,9 +6,11 @@ Drawn per problem from a seeded generator: radius in :data:`RADII`, speed in
 ``crossing_time`` in :data:`CROSSING_TIMES` at which its centre passes through the point
 at fraction ``s`` in :data:`FRACTIONS` of the line; it moves on a straight line at
 constant velocity (a ``linear`` trajectory), before and after. A draw is kept only if the
-sphere keeps :data:`START_MARGIN` from the arm at its start configuration at ``t = 0`` and
-never touches the arm at its goal configuration from ``crossing_time +``
-:data:`SETTLE_TIME` on (the goal stays reachable once the sphere has passed).
+sphere keeps :data:`START_MARGIN` from the arm at its start configuration at ``t = 0``,
+keeps :data:`START_MARGIN` from the links no avoidance can move out of its way
+(:data:`FIXED_LINKS`) for the whole run, and never touches the arm at its goal
+configuration from ``crossing_time +`` :data:`SETTLE_TIME` on (the goal stays reachable
+once the sphere has passed).
 """
 
 from __future__ import annotations
@@ -38,6 +40,11 @@ FRACTIONS = (0.35, 0.65)
 START_MARGIN = 0.05
 #: After the crossing, from when on the goal configuration must stay free [s].
 SETTLE_TIME = 1.5
+#: Links a sphere must keep :data:`START_MARGIN` from at all times: no joint moves
+#: ``panda_link0`` (the base) and joint 1 only turns ``panda_link1`` about its own vertical
+#: axis, so a sphere that meets them cannot be avoided by any controller (a training draw,
+#: bookshelf_thin/0016, swept through the base).
+FIXED_LINKS = ("panda_link0", "panda_link1")
 #: Draws tried before giving up.
 ATTEMPTS = 50
 
@@ -107,10 +114,17 @@ def _draw(hand_start: np.ndarray, hand_goal: np.ndarray, rng: np.random.Generato
 
 def _clear(sphere: CrossingSphere, start: Sequence[float], goal: Sequence[float], robot: Franka,
            duration: float) -> bool:
-    """The sphere (grown by :data:`START_MARGIN`) is off the arm at the start at t = 0, and off the arm at the goal
-    from the crossing on (sampled every 0.1 s)."""
+    """The sphere (grown by :data:`START_MARGIN`) is off the arm at the start at t = 0 and off
+    :data:`FIXED_LINKS` throughout, and off the arm at the goal from the crossing on (sampled
+    every 0.1 s)."""
     at_start = PlacedShape("sphere", Sphere(sphere.radius + START_MARGIN), (Placement(_triple(sphere.centre(0.0))),))
     if sweep_meshes(robot.meshes, np.array([start], dtype=float), [at_start]).obstacle_contacts:
+        return False
+    run = np.arange(0.0, duration + 0.1, 0.1)
+    grown = PlacedShape("sphere", Sphere(sphere.radius + START_MARGIN),
+                        tuple(Placement(_triple(sphere.centre(t))) for t in run))
+    swept = sweep_meshes(robot.meshes, np.repeat(np.array([start], dtype=float), len(run), axis=0), [grown])
+    if any(contact.first in FIXED_LINKS for contact in swept.obstacle_contacts):
         return False
     times = np.arange(sphere.crossing_time + SETTLE_TIME, duration + 0.1, 0.1)
     later = PlacedShape("sphere", Sphere(sphere.radius), tuple(Placement(_triple(sphere.centre(t))) for t in times))

@@ -14,6 +14,7 @@ in collision where the meshes do not).
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from typing import Any
 
 from dynfab.benchmarks.mbm.franka import franka_robot_mapping
@@ -26,8 +27,9 @@ from dynfab.scenario.schema import ScenarioError, scenario_from_dict
 __all__ = ["run_case"]
 
 
-def run_case(mapping: dict[str, Any]) -> dict[str, Any]:
-    """Run the scenario ``mapping`` and check it on the meshes (module doc)."""
+def run_case(mapping: dict[str, Any], check_obstacles: Sequence[dict[str, Any]] | None = None) -> dict[str, Any]:
+    """Run the scenario ``mapping`` and check it on the meshes (module doc), against
+    ``check_obstacles`` (scenario obstacle mappings) if given, else its own obstacles."""
     start = time.perf_counter()
     mapping = {"backend": series_backend(), **mapping}
     try:
@@ -36,6 +38,7 @@ def run_case(mapping: dict[str, Any]) -> dict[str, Any]:
         return {"metrics": None, "check": None, "refused": str(error), "wall_time_s": time.perf_counter() - start}
     recording = run_recording(result.robot, result.record, result.scenario.dt)
     measured = franka_robot_mapping() if mapping["robot"] == "panda" else mapping["robot"]
-    check = check_recording(scenario_from_dict({**mapping, "robot": measured}), recording)
+    truth = mapping["obstacles"] if check_obstacles is None else list(check_obstacles)
+    check = check_recording(scenario_from_dict({**mapping, "robot": measured, "obstacles": truth}), recording)
     return {"metrics": result.metrics.to_dict(), "check": check.to_dict(), "refused": None,
             "wall_time_s": time.perf_counter() - start}

@@ -27,6 +27,7 @@ from dynfab.benchmarks.mbm.conversion import DURATION, PLANNER, scenario_mapping
 from dynfab.benchmarks.mbm.franka import HAND_LINKS, Franka
 from dynfab.benchmarks.mbm.moveit import ProblemError
 from dynfab.benchmarks.mbm.moving_sphere import crossing_sphere
+from dynfab.benchmarks.mbm.point_clouds import as_point_cloud
 from dynfab.benchmarks.mbm.problems import PROBLEM_TYPES, Problem
 from dynfab.benchmarks.mbm.validity import invalid_reason, static_shapes
 from dynfab.geometry.exact_collision import exact_distance, placement_matrix, shape_geometry
@@ -35,7 +36,7 @@ from dynfab.scenario.schema import scenario_from_dict
 
 __all__ = ["GRASPABLE_PREFIXES", "VARIANTS", "Case", "grasped_object", "prepare_case"]
 
-VARIANTS: tuple[str, ...] = ("as-posed", "object-removed", "moving-sphere")
+VARIANTS: tuple[str, ...] = ("as-posed", "object-removed", "moving-sphere", "points")
 #: Collision object ids of the objects a goal grasps start with one of these.
 GRASPABLE_PREFIXES: tuple[str, ...] = ("Can", "Cube", "Object")
 
@@ -52,6 +53,8 @@ class Case:
             for the sphere).
         removed: The id of the removed object; None for ``as-posed``.
         invalid: Why the case is invalid, in one line; None if it is valid.
+        check_obstacles: The obstacles the run is checked against instead of the mapping's
+            (``points``: the true shapes); None: the mapping's.
     """
 
     problem: Problem
@@ -60,6 +63,7 @@ class Case:
     obstacle_names: tuple[str, ...]
     removed: str | None
     invalid: str | None
+    check_obstacles: tuple[dict[str, Any], ...] | None = None
 
 
 def prepare_case(problem: Problem, variant: str, robot: Franka, planner: str = PLANNER, seed: int = 0) -> Case:
@@ -73,6 +77,8 @@ def prepare_case(problem: Problem, variant: str, robot: Franka, planner: str = P
     """
     if variant not in VARIANTS:
         raise ValueError(f"unknown variant {variant!r} (expected one of {', '.join(VARIANTS)})")
+    if variant == "points":  # the scene as a noisy point cloud (dynfab/benchmarks/mbm/point_clouds.py)
+        return as_point_cloud(prepare_case(problem, "object-removed", robot, planner, seed), seed)
     objects = problem.objects
     removed = None
     if variant != "as-posed":
