@@ -8,6 +8,12 @@ model checks for self-collision: a URDF robot by its own, the built-in ``panda``
 ``boxer-panda`` by Franka's (:mod:`dynfab.robots.builtin_meshes`), so that MuJoCo's contacts,
 between two links as with an obstacle, are those of the meshes the metrics measure. The
 others collide by their collision spheres and sphere pairs.
+
+Under ``perception: camera`` the scenario's camera is a ``<camera>`` of the model; after
+every control period (and at t = 0) the controller (:class:`~dynfab.scenario.camera_controller.CameraController`)
+is given the chance to take a frame: MuJoCo renders its depth image then
+(:class:`~dynfab.sim.depth_render.MujocoDepthRenderer`), with the robot at its true
+configuration of that instant.
 """
 
 from __future__ import annotations
@@ -15,7 +21,7 @@ from __future__ import annotations
 import dataclasses
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -23,6 +29,7 @@ from dynfab.robots.builtin_meshes import builtin_collision_meshes
 from dynfab.robots.link_meshes import LinkMeshError
 from dynfab.robots.mesh_collision import MeshCollisionModel
 from dynfab.robots.robot import Robot
+from dynfab.scenario.camera_controller import CameraController
 from dynfab.scenario.fields import ScenarioError
 from dynfab.scenario.schema import Scenario
 from dynfab.sim.simulator import Controller, ProgressCallback
@@ -55,7 +62,9 @@ def run_mujoco(scenario: Scenario, robot: Robot, controller: Controller, centres
     """
     try:
         from dynfab.sim.mujoco_model import PHYSICS_TIMESTEP, MujocoModelError, SceneObstacle, build_scene
+        from dynfab.sim.depth_render import MujocoDepthRenderer
         from dynfab.sim.mujoco_sim import simulate_mujoco
+        from dynfab.sim.mujoco_state import RobotState
     except ImportError as error:
         raise ScenarioError("simulator", f"mujoco is not installed ({error.name}); pip install 'dynfab[mujoco]'") from None
     steps = scenario.dt / PHYSICS_TIMESTEP
@@ -71,11 +80,32 @@ def run_mujoco(scenario: Scenario, robot: Robot, controller: Controller, centres
     # a drive's maximum speed is configured below the hardware's
     driven = dataclasses.replace(robot, limits=scenario.planning_limits(robot.limits))
     try:
-        scene = build_scene(driven, obstacles, pairs, None if mesh_model is None else builtin_collision_meshes(robot))
+        scene = build_scene(driven, obstacles, pairs, None if mesh_model is None else builtin_collision_meshes(robot),
+                            cameras=() if scenario.camera is None else (scenario.camera,))
     except (MujocoModelError, LinkMeshError) as error:
         raise ScenarioError("robot", str(error).splitlines()[0]) from None
     simulation = scenario.simulation
     state = scenario.initial_state
-    return simulate_mujoco(controller, scene, state.q, state.qdot, scenario.dt, scenario.duration,
-                           control=simulation.control, delay=simulation.delay, noise=simulation.noise,
-                           obstacle_centres=centres, progress=progress, observer=observer)
+    renderer = None
+    if isinstance(controller, CameraController):
+        renderer = MujocoDepthRenderer(scene.model, controller.feed.camera.spec)
+        observer = _with_camera(controller, renderer, RobotState, scene, observer)
+    try:
+        return simulate_mujoco(controller, scene, state.q, state.qdot, scenario.dt, scenario.duration,
+                               control=simulation.control, delay=simulation.delay, noise=simulation.noise,
+                               obstacle_centres=centres, progress=progress, observer=observer)
+    finally:
+        if renderer is not None:
+            renderer.close()
+
+
+def _with_camera(controller: CameraController, renderer: Any, state: Any, scene: Any,
+                 observer: StepObserver | None) -> StepObserver:
+    """``observer`` preceded by the camera's chance to take a frame of ``data`` at ``t``."""
+
+    def observe(t: float, data: Any) -> None:
+        controller.capture(t, lambda: renderer.render(data), state(scene, data).read()[0])
+        if observer is not None:
+            observer(t, data)
+
+    return observe
