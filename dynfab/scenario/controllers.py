@@ -178,12 +178,13 @@ def with_surface_leaf(config: PlannerConfig, robot: Robot, obstacles: tuple[Obst
 
 
 def mesh_obstacles(planner: FabricPlanner, robot: Robot, obstacles: tuple[ObstacleSpec, ...]) -> MeshObstacles | None:
-    """What writes the planner's nearest-point leaf each tick; None without mesh obstacles."""
+    """What writes the planner's nearest-point leaf each tick from the scenario's meshes and
+    clouds; None without them (a camera's leaf is written by its feed)."""
     leaf = next((leaf for leaf in planner.config.leaves if isinstance(leaf, NearestSurfaceAvoidance)), None)
-    if leaf is None:
-        return None
     indices = tuple(k for k, obstacle in enumerate(obstacles) if obstacle.type == "mesh")
     clouds = tuple(obstacle.cloud for obstacle in obstacles if obstacle.cloud is not None)
+    if leaf is None or not (indices or clouds):
+        return None
     feed = SurfaceFeed(robot, leaf, planner.parameters.leaves[leaf.name])
     return MeshObstacles(indices, tuple(obstacles[k] for k in indices), feed, planner.config.dynamic, clouds)
 
