@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 
 from dynfab.perception.clusters import voxel_clusters
 
-__all__ = ["SUMMARY_POINTS", "ClusterSummary", "ClusterTracker"]
+__all__ = ["SUMMARY_POINTS", "ClusterSummary", "ClusterTracker", "MovingCluster"]
 
 #: A cluster's centroid and extents are computed from at most this many of its points, drawn
 #: at random (seeded; a large static surface costs no more than a ball, its quantiles then
@@ -53,6 +53,30 @@ class ClusterSummary:
     centroid: NDArray[np.float64]
     lo: NDArray[np.float64]
     hi: NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class MovingCluster:
+    """A tracked cluster that moves, as a ball that holds what was seen of it.
+
+    Attributes:
+        time: The frame it was seen in [s].
+        centre: The centre of its extent box ``(lo + hi) / 2`` (3,) [m].
+        radius: Half the box's diagonal ``‖hi − lo‖ / 2`` plus the clustering's voxel edge
+            (the quantiles trim its ends) [m]. The box of a ball's visible cap reaches from
+            its rim to its front, so this covers the ball when seen along an axis (1.5 times
+            its radius plus the edge).
+        velocity: Its velocity estimate (3,) [m/s].
+    """
+
+    time: float
+    centre: NDArray[np.float64]
+    radius: float
+    velocity: NDArray[np.float64]
+
+    def at(self, t: float) -> NDArray[np.float64]:
+        """Its centre moved to time ``t`` [s] at its velocity: ``centre + v (t − time)``."""
+        return self.centre + self.velocity * (t - self.time)
 
 
 class _Track:
@@ -116,6 +140,17 @@ class ClusterTracker:
         self.tracks = list(tracks.values())
         self._time = time
         return velocities
+
+    def moving(self, min_speed: float) -> list[MovingCluster]:
+        """The live tracks faster than ``min_speed`` [m/s], fastest first."""
+        found = []
+        for track in self.tracks:
+            velocity = track.velocity()
+            if np.linalg.norm(velocity) > min_speed:
+                latest = track.latest
+                found.append(MovingCluster(latest.time, (latest.lo + latest.hi) / 2,
+                                           float(np.linalg.norm(latest.hi - latest.lo)) / 2 + self.edge, velocity))
+        return sorted(found, key=lambda cluster: -float(np.linalg.norm(cluster.velocity)))
 
     def _summary(self, time: float, points: NDArray[np.float64]) -> ClusterSummary:
         if len(points) > SUMMARY_POINTS:  # a random sample: a stride would alias with the image's rows
