@@ -21,7 +21,7 @@ from __future__ import annotations
 import dataclasses
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -35,6 +35,11 @@ from dynfab.scenario.schema import Scenario
 from dynfab.sim.simulator import Controller, ProgressCallback
 
 if TYPE_CHECKING:
+    import mujoco
+
+    from dynfab.sim.depth_render import MujocoDepthRenderer
+    from dynfab.sim.mujoco_model import MujocoScene
+    from dynfab.sim.mujoco_state import RobotState
     from dynfab.sim.mujoco_sim import MujocoRun, StepObserver
 
 __all__ = ["run_mujoco"]
@@ -64,7 +69,6 @@ def run_mujoco(scenario: Scenario, robot: Robot, controller: Controller, centres
         from dynfab.sim.mujoco_model import PHYSICS_TIMESTEP, MujocoModelError, SceneObstacle, build_scene
         from dynfab.sim.depth_render import MujocoDepthRenderer
         from dynfab.sim.mujoco_sim import simulate_mujoco
-        from dynfab.sim.mujoco_state import RobotState
     except ImportError as error:
         raise ScenarioError("simulator", f"mujoco is not installed ({error.name}); pip install 'dynfab[mujoco]'") from None
     steps = scenario.dt / PHYSICS_TIMESTEP
@@ -86,26 +90,34 @@ def run_mujoco(scenario: Scenario, robot: Robot, controller: Controller, centres
         raise ScenarioError("robot", str(error).splitlines()[0]) from None
     simulation = scenario.simulation
     state = scenario.initial_state
-    renderer = None
+    camera = None
     if isinstance(controller, CameraController):
-        renderer = MujocoDepthRenderer(scene.model, controller.feed.camera.spec)
-        observer = _with_camera(controller, renderer, RobotState, scene, observer)
+        camera = _CameraObserver(controller, MujocoDepthRenderer(scene.model, controller.feed.camera.spec), scene,
+                                 observer)
+        observer = camera
     try:
         return simulate_mujoco(controller, scene, state.q, state.qdot, scenario.dt, scenario.duration,
                                control=simulation.control, delay=simulation.delay, noise=simulation.noise,
                                obstacle_centres=centres, progress=progress, observer=observer)
     finally:
-        if renderer is not None:
-            renderer.close()
+        if camera is not None:
+            camera.renderer.close()
 
 
-def _with_camera(controller: CameraController, renderer: Any, state: Any, scene: Any,
-                 observer: StepObserver | None) -> StepObserver:
-    """``observer`` preceded by the camera's chance to take a frame of ``data`` at ``t``."""
+class _CameraObserver:
+    """After each control period: the camera's chance to take a frame (the robot at its true
+    configuration), then the caller's observer."""
 
-    def observe(t: float, data: Any) -> None:
-        controller.capture(t, lambda: renderer.render(data), state(scene, data).read()[0])
-        if observer is not None:
-            observer(t, data)
+    def __init__(self, controller: CameraController, renderer: MujocoDepthRenderer, scene: MujocoScene,
+                 observer: StepObserver | None) -> None:
+        self.controller, self.renderer, self.scene, self.observer = controller, renderer, scene, observer
+        self._state: RobotState | None = None
 
-    return observe
+    def __call__(self, t: float, data: mujoco.MjData) -> None:
+        if self._state is None:
+            from dynfab.sim.mujoco_state import RobotState
+
+            self._state = RobotState(self.scene, data)
+        self.controller.capture(t, lambda: self.renderer.render(data), self._state.read()[0])
+        if self.observer is not None:
+            self.observer(t, data)
