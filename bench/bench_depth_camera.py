@@ -12,6 +12,9 @@ most points). Per resolution, medians over ``--frames`` frames of
 - frame: noise, robot filter, back-projection (:meth:`DepthCamera.frame`), render excluded;
 - render + frame: the two together;
 - velocities: the cluster tracker's update on the frame's points (3 cm voxels);
+- to the planner: the frame's points into the point-cloud feed the planner reads
+  (``PointCloudFeed.update_points``: 1 cm voxels, KD-tree), after the frame: frame + this is
+  "a depth frame becomes the planner's representation";
 
 beside the primitives' update: writing the same four spheres into the planner's parameters
 (``FabricController.retarget``, what the planner needs per tick when the scene is given as
@@ -36,9 +39,12 @@ import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
 from dynfab.geometry.shapes import Box, Sphere  # noqa: E402
+from dynfab.fabric.leaves.surface_points import NearestSurfaceAvoidance, moving_spheres  # noqa: E402
+from dynfab.fabric.planner import FabricPlanner, GoalConfig, PlannerConfig  # noqa: E402
 from dynfab.perception.camera_spec import CameraSpec  # noqa: E402
 from dynfab.perception.depth_camera import DepthCamera  # noqa: E402
 from dynfab.perception.motion_tracks import ClusterTracker  # noqa: E402
+from dynfab.perception.point_clouds import PointCloudFeed  # noqa: E402
 from dynfab.robots import load_robot  # noqa: E402
 from dynfab.scenario.controllers import make_controller  # noqa: E402
 from dynfab.scenario.references import scenario_references  # noqa: E402
@@ -69,9 +75,17 @@ def primitives_ms(repeats: int) -> float:
     return timed_ms(lambda: controller.retarget(controller.references, 0.5), repeats)[0]
 
 
+def cloud_feed(robot: object) -> PointCloudFeed:
+    """The feed of a planner's nearest-point leaf (the planner itself is not called)."""
+    leaf = NearestSurfaceAvoidance(spheres=moving_spheres(robot))
+    planner = FabricPlanner(robot, PlannerConfig(goals=(GoalConfig(link="panda_hand"),), leaves=(leaf,)))
+    return PointCloudFeed(robot, leaf, planner.parameters.leaves[leaf.name])
+
+
 def camera_rows(floor: bool, frames: int) -> list[dict]:
     scenario = load_scenario(SCENE)
     robot = load_robot("panda")
+    feed = cloud_feed(robot)
     q = np.array(scenario.initial_state.q)
     obstacles = [SceneObstacle(Sphere(o.radius), tuple(o.position), IDENTITY, False) for o in scenario.obstacles]
     if floor:
@@ -98,6 +112,7 @@ def camera_rows(floor: bool, frames: int) -> list[dict]:
             "frame_ms": timed_ms(lambda: camera.frame(0.0, depth, q), frames),
             "render_and_frame_ms": timed_ms(lambda: camera.frame(0.0, renderer.render(data), q), frames),
             "velocities_ms": timed_ms(lambda: tracker.update(float(next(clock)), frame.points), frames),
+            "to_planner_ms": timed_ms(lambda: feed.update_points(frame.points, None), frames),
         })
         renderer.close()
     return rows
@@ -122,7 +137,7 @@ def main() -> None:
           f"MUJOCO_GL={result['mujoco_gl']}; medians of {args.frames} frames")
     print(f"primitives' update (4 spheres + goal written, FabricController.retarget): {1e3 * primitives:.1f} µs")
     print(f"{'image':>8} {'floor':>5} {'returns':>7} {'points':>7} {'robot':>6} {'render ms':>12} {'frame ms':>12} "
-          f"{'both ms':>12} {'target':>9} {'frame/prim':>10} {'velocities ms':>14}")
+          f"{'both ms':>12} {'target':>9} {'frame/prim':>10} {'velocities ms':>14} {'to planner ms':>14}")
     for row in rows:
         ratio = row["frame_ms"][0] / primitives
         ok = "ok" if row["frame_ms"][0] <= row["target_ms"] else "MISS"
@@ -130,10 +145,12 @@ def main() -> None:
                          ("render_ms", "frame_ms", "render_and_frame_ms"))
         print(f"{row['resolution']:>8} {'yes' if row['floor'] else 'no':>5} {row['returns']:>7} {row['points']:>7} "
               f"{row['robot_pixels']:>6} {cells} {row['target_ms']:>4.0f} {ok:>4} {ratio:>9.0f}x "
-              f"{row['velocities_ms'][0]:6.2f} ({row['velocities_ms'][1]:5.2f})")
+              f"{row['velocities_ms'][0]:6.2f} ({row['velocities_ms'][1]:5.2f}) "
+              f"{row['to_planner_ms'][0]:6.2f} ({row['to_planner_ms'][1]:5.2f})")
     print("median (minimum) per frame. render: MuJoCo offscreen depth; frame: noise + robot filter + "
           "back-projection (render excluded; the target applies to it); both: render included; "
-          "velocities: ClusterTracker.update on the frame's points; frame/prim: frame over the primitives' update")
+          "velocities: ClusterTracker.update on the frame's points; to planner: PointCloudFeed.update_points of "
+          "the frame's points (after the frame); frame/prim: frame over the primitives' update")
 
 
 if __name__ == "__main__":
