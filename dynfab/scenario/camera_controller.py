@@ -18,8 +18,11 @@ obstacles that way, and the nearest-point leaf alone did not keep a ball thrown 
 0.5 m/s off the hand, even fed the ball's true surface and velocity.
 
 Until the first frame has arrived the robot knows nothing of its scene and holds still
-(q̈ = 0; it starts at rest). Guidance plans its first path at the first frame, among the
-points seen then, and each new cloud replaces the obstacles its later plans avoid.
+(q̈ = 0; it starts at rest). Guidance plans its first path at the first frame, and its
+plans avoid the latest frame's points as renewed every :data:`GUIDANCE_PERIOD`, each
+extended :data:`BEHIND` away from the camera (:func:`~dynfab.perception.occlusion.behind_surfaces`:
+what lies behind a seen surface is unknown, so a plan must not route the arm through the
+unseen back of an obstacle), at 1 cm voxels.
 """
 
 from __future__ import annotations
@@ -34,7 +37,9 @@ from dynfab.fabric.leaves.surface_points import NearestSurfaceAvoidance
 from dynfab.fabric.planner import FabricPlanner
 from dynfab.geometry.shapes import Placement
 from dynfab.motion.configuration_checker import PlacedObstacle
+from dynfab.geometry.point_cloud import PointCloud
 from dynfab.perception.camera_feed import CameraFeed
+from dynfab.perception.occlusion import behind_surfaces
 from dynfab.perception.depth_camera import DepthCamera, DepthRender
 from dynfab.robots.robot import Robot
 from dynfab.scenario.guided_controller import GuidedController, make_scenario_controller
@@ -42,8 +47,14 @@ from dynfab.scenario.references import scenario_references
 from dynfab.scenario.obstacle_schema import ObstacleSpec
 from dynfab.scenario.schema import Scenario
 
-__all__ = ["MIN_SPEED", "TRACKED_SLOTS", "CameraController", "make_camera_controller"]
+__all__ = ["BEHIND", "GUIDANCE_PERIOD", "MIN_SPEED", "TRACKED_SLOTS", "CameraController", "make_camera_controller"]
 
+#: How far behind the seen surfaces the global planner takes space as solid [m] (the
+#: diameter of Experiment 1's spheres), and the step of that extension [m].
+BEHIND, BEHIND_STEP = 0.3, 0.03
+#: How often the global planner's cloud is renewed [s] (its plans are made at the first frame
+#: and when the robot stalls; a grid is built per plan).
+GUIDANCE_PERIOD = 0.5
 #: Sphere obstacle slots for tracked moving clusters.
 TRACKED_SLOTS = 3
 #: A cluster slower than this [m/s] is not tracked as moving (static clutter reads a few cm/s).
@@ -64,10 +75,11 @@ class CameraController:
     def __init__(self, inner: Any, feed: CameraFeed) -> None:
         self.inner = inner
         self.feed = feed
+        self._guidance_due = 0.0
 
     def __getattr__(self, name: str) -> Any:
         """The inner controller's attributes (status, solver times, ... for the metrics)."""
-        if name in ("inner", "feed"):
+        if name in ("inner", "feed", "_guidance_due"):
             raise AttributeError(name)
         return getattr(self.inner, name)
 
@@ -79,15 +91,25 @@ class CameraController:
         planner: FabricPlanner = self.inner.planner
         leaf = next(leaf for leaf in planner.config.leaves if isinstance(leaf, NearestSurfaceAvoidance))
         self.feed.attach(leaf, planner.parameters.leaves[leaf.name])
-        new = self.feed.write(t, q, planner.config.dynamic)
+        self.feed.write(t, q, planner.config.dynamic)
         if self.feed.latest is None:
             return np.zeros_like(qdot)
         self._track(t, planner)
-        if new and isinstance(self.inner, GuidedController) and self.feed.cloud is not None:
-            seen = () if self.feed.cloud.empty else (PlacedObstacle(self.feed.cloud, Placement((0.0, 0.0, 0.0))),)
-            self.inner.guided.set_obstacles(seen)
+        if isinstance(self.inner, GuidedController) and t >= self._guidance_due:
+            self._guidance_due = t + GUIDANCE_PERIOD
+            self.inner.guided.set_obstacles(self._guidance_obstacles())
         return self.inner(t, q, qdot)
 
+
+    def _guidance_obstacles(self) -> tuple[PlacedObstacle, ...]:
+        """The latest frame's points, extended behind the seen surfaces, as one cloud."""
+        frame = self.feed.latest
+        assert frame is not None
+        if len(frame.points) == 0:
+            return ()
+        solid = behind_surfaces(frame.points, self.feed.camera.spec.position, BEHIND, BEHIND_STEP)
+        cloud = PointCloud.from_points(solid, source="camera")
+        return (PlacedObstacle(cloud, Placement((0.0, 0.0, 0.0))),)
 
     def _track(self, t: float, planner: FabricPlanner) -> None:
         """Write the fastest moving clusters into the sphere slots, the others inactive."""
