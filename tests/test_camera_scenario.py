@@ -105,3 +105,16 @@ def test_a_ball_thrown_at_the_hand_seen_only_by_the_camera_is_avoided() -> None:
     document["camera"] = {**CAMERA, "position": [0.0, 0.0, 3.0], "look_at": [0.0, 0.0, 10.0]}  # at the sky
     blind = run_scenario(scenario_from_dict(document)).metrics
     assert blind.collision  # the ball does hit a robot that does not see it
+
+
+def test_space_behind_seen_surfaces_is_extended_along_the_rays() -> None:
+    from dynfab.perception.occlusion import behind_surfaces
+
+    points = np.array([[2.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    solid = behind_surfaces(points, (0.0, 0.0, 0.0), thickness=0.3, step=0.03)
+    assert solid.shape == (11 * 2, 3)
+    along_x = solid[np.abs(solid[:, 1]) + np.abs(solid[:, 2]) < 1e-12]
+    np.testing.assert_allclose(np.sort(along_x[:, 0]), 2.0 + 0.03 * np.arange(11))
+    np.testing.assert_allclose(solid[solid[:, 0] == 0.0][:, 2].max(), 1.3)
+    with pytest.raises(ValueError, match="step > 0"):
+        behind_surfaces(points, (0.0, 0.0, 0.0), thickness=0.3, step=0.0)
