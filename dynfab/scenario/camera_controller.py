@@ -13,7 +13,10 @@ What moves is also tracked: each cluster of the cloud faster than :data:`MIN_SPE
 (:meth:`~dynfab.perception.motion_tracks.ClusterTracker.moving`, fastest first) takes one of
 :data:`TRACKED_SLOTS` sphere obstacle slots of the planner, as the ball that holds what was
 seen of it, moved to the current time at its estimated velocity (which a dynamic fabric is
-given too); free slots are inactive (radius 0). The paper's dynamic fabrics avoid tracked
+given too); free slots are inactive (radius 0). Where the ``fabric:`` block leaves them unset,
+these slots keep the plain fabric's obstacle barrier (:data:`TRACKED_BARRIER`: range 0.2 m,
+``λ`` 0.5) under guidance too, whose own obstacle barrier (range 0.1 m) is made for a scene
+its plan already avoids, not for a ball coming at 0.5 m/s. The paper's dynamic fabrics avoid tracked
 obstacles that way, and the nearest-point leaf alone did not keep a ball thrown at
 0.5 m/s off the hand, even fed the ball's true surface and velocity.
 
@@ -44,10 +47,11 @@ from dynfab.perception.depth_camera import DepthCamera, DepthRender
 from dynfab.robots.robot import Robot
 from dynfab.scenario.guided_controller import GuidedController, make_scenario_controller
 from dynfab.scenario.references import scenario_references
+from dynfab.scenario.fabric_schema import BarrierSpec
 from dynfab.scenario.obstacle_schema import ObstacleSpec
 from dynfab.scenario.schema import Scenario
 
-__all__ = ["BEHIND", "GUIDANCE_PERIOD", "MIN_SPEED", "TRACKED_SLOTS", "CameraController", "make_camera_controller"]
+__all__ = ["BEHIND", "GUIDANCE_PERIOD", "MIN_SPEED", "TRACKED_BARRIER", "TRACKED_SLOTS", "CameraController", "make_camera_controller"]
 
 #: How far behind the seen surfaces the global planner takes space as solid [m] (the
 #: diameter of Experiment 1's spheres), and the step of that extension [m].
@@ -59,6 +63,9 @@ GUIDANCE_PERIOD = 0.5
 TRACKED_SLOTS = 3
 #: A cluster slower than this [m/s] is not tracked as moving (static clutter reads a few cm/s).
 MIN_SPEED = 0.1
+#: The tracked slots' barrier where the scenario's ``fabric.obstacle`` leaves it unset: the
+#: plain fabric's defaults (:class:`~dynfab.fabric.leaves.obstacle.SphereObstacleAvoidance`).
+TRACKED_BARRIER = BarrierSpec(energy_gain=0.5, range=0.2)
 #: What holds a tracked slot's place in the scenario the controller is built from: a 1 mm
 #: sphere 100 m below the robot (the slots are written every tick).
 _SLOT = ObstacleSpec(type="sphere", radius=1e-3, position=(0.0, 0.0, -100.0))
@@ -130,6 +137,10 @@ class CameraController:
 def make_camera_controller(scenario: Scenario, robot: Robot, seed: int = 0) -> CameraController:
     """The controller of a ``perception: camera`` scenario (validated for ``robot``)."""
     assert scenario.camera is not None
-    blind = dataclasses.replace(scenario, obstacles=(_SLOT,) * TRACKED_SLOTS)
+    barrier = scenario.fabric.obstacle
+    tracked = BarrierSpec(gain=barrier.gain, energy_gain=TRACKED_BARRIER.energy_gain if barrier.energy_gain is None
+                          else barrier.energy_gain, range=TRACKED_BARRIER.range if barrier.range is None else barrier.range)
+    blind = dataclasses.replace(scenario, obstacles=(_SLOT,) * TRACKED_SLOTS,
+                                fabric=dataclasses.replace(scenario.fabric, obstacle=tracked))
     inner = make_scenario_controller(blind, robot, scenario_references(blind, robot))
     return CameraController(inner, CameraFeed(robot, DepthCamera(scenario.camera, robot, seed=seed)))
