@@ -13,7 +13,8 @@ most points). Per resolution, medians over ``--frames`` frames of
 - render + frame: the two together;
 - velocities: the cluster tracker's update on the frame's points (3 cm voxels);
 - to the planner: the frame's points into the point-cloud feed the planner reads
-  (``PointCloudFeed.update_points``: 1 cm voxels, KD-tree), after the frame: frame + this is
+  (``PointCloudFeed.update_points``: 1 cm voxels, and its KD-tree, built at the first query),
+  after the frame: frame + this is
   "a depth frame becomes the planner's representation";
 
 beside the primitives' update: writing the same four spheres into the planner's parameters
@@ -112,7 +113,7 @@ def camera_rows(floor: bool, frames: int) -> list[dict]:
             "frame_ms": timed_ms(lambda: camera.frame(0.0, depth, q), frames),
             "render_and_frame_ms": timed_ms(lambda: camera.frame(0.0, renderer.render(data), q), frames),
             "velocities_ms": timed_ms(lambda: tracker.update(float(next(clock)), frame.points), frames),
-            "to_planner_ms": timed_ms(lambda: feed.update_points(frame.points, None), frames),
+            "to_planner_ms": timed_ms(lambda: (feed.update_points(frame.points, None), feed.cloud.tree), frames),
         })
         renderer.close()
     return rows
@@ -150,7 +151,7 @@ def main() -> None:
     print("median (minimum) per frame. render: MuJoCo offscreen depth; frame: noise + robot filter + "
           "back-projection (render excluded; the target applies to it); both: render included; "
           "velocities: ClusterTracker.update on the frame's points; to planner: PointCloudFeed.update_points of "
-          "the frame's points (after the frame); frame/prim: frame over the primitives' update")
+          "the frame's points and its KD-tree (after the frame); frame/prim: frame over the primitives' update")
 
 
 if __name__ == "__main__":
