@@ -157,7 +157,8 @@ def make_controller(scenario: Scenario, robot: Robot, references: References) ->
     config = replace(PlannerConfig.for_robot(robot, goals, spheres, _FABRIC_PLANNERS[scenario.planner],
                                              shape_slots_of(scenario.obstacles)),
                      control_period=scenario.dt, backend=scenario.backend)
-    config = with_surface_leaf(scenario.fabric.configured(config), robot, scenario.obstacles)
+    config = with_surface_leaf(scenario.fabric.configured(config), robot, scenario.obstacles,
+                               scenario.perception == "camera")
     planner = FabricPlanner(robot, config)
     slots = place_obstacles(scenario.obstacles, planner.parameters)
     references = planner_references(scenario, references)
@@ -167,21 +168,23 @@ def make_controller(scenario: Scenario, robot: Robot, references: References) ->
                             mesh_obstacles(planner, robot, scenario.obstacles))
 
 
-def with_surface_leaf(config: PlannerConfig, robot: Robot, obstacles: tuple[ObstacleSpec, ...]) -> PlannerConfig:
-    """``config`` with the nearest-point leaf of the mesh obstacles (if any), whose barrier is
-    the shape obstacles' (the default one if shapes are off)."""
+def with_surface_leaf(config: PlannerConfig, robot: Robot, obstacles: tuple[ObstacleSpec, ...],
+                      perceived: bool = False) -> PlannerConfig:
+    """``config`` with the nearest-point leaf of the mesh obstacles or of a camera's cloud
+    (if any), whose barrier is the shape obstacles' (the default one if shapes are off)."""
     barrier = (config.shape_avoidance or ShapeObstacleAvoidance()).barrier
-    leaf = surface_leaf(robot, obstacles, barrier)
+    leaf = surface_leaf(robot, obstacles, barrier, perceived)
     return config if leaf is None else replace(config, leaves=config.leaves + (leaf,))
 
 
 def mesh_obstacles(planner: FabricPlanner, robot: Robot, obstacles: tuple[ObstacleSpec, ...]) -> MeshObstacles | None:
-    """What writes the planner's nearest-point leaf each tick; None without mesh obstacles."""
+    """What writes the planner's nearest-point leaf each tick from the scenario's meshes and
+    clouds; None without them (a camera's leaf is written by its feed)."""
     leaf = next((leaf for leaf in planner.config.leaves if isinstance(leaf, NearestSurfaceAvoidance)), None)
-    if leaf is None:
-        return None
     indices = tuple(k for k, obstacle in enumerate(obstacles) if obstacle.type == "mesh")
     clouds = tuple(obstacle.cloud for obstacle in obstacles if obstacle.cloud is not None)
+    if leaf is None or not (indices or clouds):
+        return None
     feed = SurfaceFeed(robot, leaf, planner.parameters.leaves[leaf.name])
     return MeshObstacles(indices, tuple(obstacles[k] for k in indices), feed, planner.config.dynamic, clouds)
 

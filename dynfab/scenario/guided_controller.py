@@ -229,7 +229,7 @@ def guided_planner_config(robot: Robot, scenario: Scenario) -> PlannerConfig:
                       offset=GUIDED_OBSTACLE_BUFFER)
     spheres = sum(obstacle.type == "sphere" for obstacle in scenario.obstacles)
     attractor = GoalAttractor(gain=GUIDED_GOAL_GAIN, sharpness=GUIDED_GOAL_SHARPNESS)
-    leaf = surface_leaf(robot, scenario.obstacles, barrier)
+    leaf = surface_leaf(robot, scenario.obstacles, barrier, scenario.perception == "camera")
     return PlannerConfig(goals=(guided_goal_config(attractor=attractor),), leaves=() if leaf is None else (leaf,),
                          obstacle_slots=spheres, shape_slots=shape_slots_of(scenario.obstacles), dynamic=True,
                          obstacle_avoidance=SphereObstacleAvoidance(barrier),

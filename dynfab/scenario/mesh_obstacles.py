@@ -51,9 +51,10 @@ class MeshObstacles:
         self.feed.write(q, placed, self.clouds)
 
 
-def surface_leaf(robot: Robot, obstacles: Sequence[ObstacleSpec], barrier: Barrier) -> NearestSurfaceAvoidance | None:
-    """The nearest-point leaf of a scenario with mesh obstacles or point clouds (on every
-    sphere a joint moves), or None without them."""
-    if not any(obstacle.type in ("mesh", "points") for obstacle in obstacles):
+def surface_leaf(robot: Robot, obstacles: Sequence[ObstacleSpec], barrier: Barrier,
+                 perceived: bool = False) -> NearestSurfaceAvoidance | None:
+    """The nearest-point leaf of a scenario with mesh obstacles or point clouds, or whose
+    scene is ``perceived`` by a camera (on every sphere a joint moves); None otherwise."""
+    if not perceived and not any(obstacle.type in ("mesh", "points") for obstacle in obstacles):
         return None
     return NearestSurfaceAvoidance(spheres=moving_spheres(robot), barrier=barrier)

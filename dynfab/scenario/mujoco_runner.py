@@ -8,6 +8,12 @@ model checks for self-collision: a URDF robot by its own, the built-in ``panda``
 ``boxer-panda`` by Franka's (:mod:`dynfab.robots.builtin_meshes`), so that MuJoCo's contacts,
 between two links as with an obstacle, are those of the meshes the metrics measure. The
 others collide by their collision spheres and sphere pairs.
+
+Under ``perception: camera`` the scenario's camera is a ``<camera>`` of the model; after
+every control period (and at t = 0) the controller (:class:`~dynfab.scenario.camera_controller.CameraController`)
+is given the chance to take a frame: MuJoCo renders its depth image then
+(:class:`~dynfab.sim.depth_render.MujocoDepthRenderer`), with the robot at its true
+configuration of that instant.
 """
 
 from __future__ import annotations
@@ -23,11 +29,17 @@ from dynfab.robots.builtin_meshes import builtin_collision_meshes
 from dynfab.robots.link_meshes import LinkMeshError
 from dynfab.robots.mesh_collision import MeshCollisionModel
 from dynfab.robots.robot import Robot
+from dynfab.scenario.camera_controller import CameraController
 from dynfab.scenario.fields import ScenarioError
 from dynfab.scenario.schema import Scenario
 from dynfab.sim.simulator import Controller, ProgressCallback
 
 if TYPE_CHECKING:
+    import mujoco
+
+    from dynfab.sim.depth_render import MujocoDepthRenderer
+    from dynfab.sim.mujoco_model import MujocoScene
+    from dynfab.sim.mujoco_state import RobotState
     from dynfab.sim.mujoco_sim import MujocoRun, StepObserver
 
 __all__ = ["run_mujoco"]
@@ -55,6 +67,7 @@ def run_mujoco(scenario: Scenario, robot: Robot, controller: Controller, centres
     """
     try:
         from dynfab.sim.mujoco_model import PHYSICS_TIMESTEP, MujocoModelError, SceneObstacle, build_scene
+        from dynfab.sim.depth_render import MujocoDepthRenderer
         from dynfab.sim.mujoco_sim import simulate_mujoco
     except ImportError as error:
         raise ScenarioError("simulator", f"mujoco is not installed ({error.name}); pip install 'dynfab[mujoco]'") from None
@@ -71,11 +84,40 @@ def run_mujoco(scenario: Scenario, robot: Robot, controller: Controller, centres
     # a drive's maximum speed is configured below the hardware's
     driven = dataclasses.replace(robot, limits=scenario.planning_limits(robot.limits))
     try:
-        scene = build_scene(driven, obstacles, pairs, None if mesh_model is None else builtin_collision_meshes(robot))
+        scene = build_scene(driven, obstacles, pairs, None if mesh_model is None else builtin_collision_meshes(robot),
+                            cameras=() if scenario.camera is None else (scenario.camera,))
     except (MujocoModelError, LinkMeshError) as error:
         raise ScenarioError("robot", str(error).splitlines()[0]) from None
     simulation = scenario.simulation
     state = scenario.initial_state
-    return simulate_mujoco(controller, scene, state.q, state.qdot, scenario.dt, scenario.duration,
-                           control=simulation.control, delay=simulation.delay, noise=simulation.noise,
-                           obstacle_centres=centres, progress=progress, observer=observer)
+    camera = None
+    if isinstance(controller, CameraController):
+        camera = _CameraObserver(controller, MujocoDepthRenderer(scene.model, controller.feed.camera.spec), scene,
+                                 observer)
+        observer = camera
+    try:
+        return simulate_mujoco(controller, scene, state.q, state.qdot, scenario.dt, scenario.duration,
+                               control=simulation.control, delay=simulation.delay, noise=simulation.noise,
+                               obstacle_centres=centres, progress=progress, observer=observer)
+    finally:
+        if camera is not None:
+            camera.renderer.close()
+
+
+class _CameraObserver:
+    """After each control period: the camera's chance to take a frame (the robot at its true
+    configuration), then the caller's observer."""
+
+    def __init__(self, controller: CameraController, renderer: MujocoDepthRenderer, scene: MujocoScene,
+                 observer: StepObserver | None) -> None:
+        self.controller, self.renderer, self.scene, self.observer = controller, renderer, scene, observer
+        self._state: RobotState | None = None
+
+    def __call__(self, t: float, data: mujoco.MjData) -> None:
+        if self._state is None:
+            from dynfab.sim.mujoco_state import RobotState
+
+            self._state = RobotState(self.scene, data)
+        self.controller.capture(t, lambda: self.renderer.render(data), self._state.read()[0])
+        if self.observer is not None:
+            self.observer(t, data)

@@ -22,6 +22,7 @@ import numpy as np
 
 from dynfab.mpc import MpcController
 from dynfab.scenario.controllers import Controller
+from dynfab.scenario.camera_controller import CameraController
 from dynfab.scenario.guided_controller import GuidedController
 from dynfab.scenario.metrics import Metrics
 
@@ -35,6 +36,8 @@ def with_outcome(metrics: Metrics, controller: Controller | None, goal_positions
     reference (T, d)."""
     final = float(np.linalg.norm(goal_positions[-1] - goal_reference[-1])) if len(goal_positions) else None
     outcome: dict[str, object] = {"final_distance": final, "failure": _failure(metrics)}
+    if isinstance(controller, CameraController):  # fed by a camera: the outcome is its controller's
+        controller = controller.inner
     if isinstance(controller, GuidedController):
         status = controller.status
         recoveries = len(controller.recovery_times)

@@ -14,6 +14,7 @@ import numpy as np
 from dynfab.geometry.orientation import direction_angle, rotation_angle
 from dynfab.motion.references import References
 from dynfab.robots.mesh_sweep import MeshSweep, sweep_meshes
+from dynfab.scenario.camera_controller import make_camera_controller
 from dynfab.scenario.controllers import Controller
 from dynfab.scenario.guided_controller import make_scenario_controller
 from dynfab.scenario.outcome import with_outcome
@@ -149,7 +150,10 @@ def run_scenario(scenario: Scenario, progress: Callable[[int, int], None] | None
     mesh_model = mesh_model_for(robot)
     start_centres = obstacle_centres(references, np.zeros(1))
     check_start_collisions(state.q, robot, mesh_model, obstacle_shapes(scenario.obstacles, start_centres))
-    controller = make_scenario_controller(scenario, robot, references)
+    if scenario.perception == "camera":
+        controller = make_camera_controller(scenario, robot)
+    else:
+        controller = make_scenario_controller(scenario, robot, references)
     contacts: tuple[Contact, ...] = ()
     stop_reason = None
     if scenario.simulation.simulator == "mujoco":

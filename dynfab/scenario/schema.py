@@ -24,7 +24,9 @@ from typing import TYPE_CHECKING, Annotated
 from pydantic import Field, ValidationError, model_validator
 
 from dynfab.fabric.backends import BACKENDS, default_backend
+from dynfab.perception.camera_spec import CameraSpec
 from dynfab.scenario import fields
+from dynfab.scenario.camera_schema import PERCEPTION, CameraMapping
 from dynfab.scenario.fabric_schema import FabricMapping, FabricSpec
 from dynfab.scenario.fields import TRAJECTORY_TYPES, ScenarioError
 from dynfab.scenario.goal_schema import DEFAULT_ANGLE_TOLERANCE, GoalMapping, GoalSpec, GoalType, goal_spec
@@ -104,6 +106,10 @@ class Scenario:
             machine; :mod:`dynfab.fabric.backends`).
         fabric: Leaf and root parameters of a fabric planner (``fabric:``,
             :mod:`dynfab.scenario.fabric_schema`); the planner's defaults where unset.
+        camera: A depth camera rendered by MuJoCo (``camera:``,
+            :mod:`dynfab.scenario.camera_schema`), or None.
+        perception: ``truth`` (the planner is given the obstacles) or ``camera`` (it knows
+            the scene only through the camera; the obstacles stay in the physics and metrics).
     """
 
     robot: str | BuiltinRobotSpec | UrdfRobotSpec
@@ -120,6 +126,8 @@ class Scenario:
     backend: str = field(default_factory=default_backend)
     fabric: FabricSpec = FabricSpec()
     guidance: bool = True
+    camera: CameraSpec | None = None
+    perception: str = "truth"
 
     def planning_limits(self, limits: MotionLimits) -> MotionLimits:
         """``limits`` as a planner (and a base's wheel drive) works with them here: every
@@ -161,6 +169,8 @@ class ScenarioDocument(ScenarioModel):
     guidance: Annotated[bool, Flag()] = True
     backend: Annotated[str, Choice(BACKENDS)] = Field(default_factory=default_backend)
     fabric: FabricMapping = FabricMapping()
+    camera: CameraMapping | None = None
+    perception: Annotated[str, PERCEPTION] = "truth"
 
     @model_validator(mode="after")
     def _consistent(self) -> ScenarioDocument:
@@ -176,6 +186,14 @@ class ScenarioDocument(ScenarioModel):
                 if key in self.model_fields_set:
                     raise fail("applies to simulator: mujoco only (the kinematic simulator follows the planner "
                                "exactly)", key)
+            if self.camera is not None:
+                raise fail("applies to simulator: mujoco only (MuJoCo renders the camera's depth images)", "camera")
+        if self.perception == "camera":
+            if self.camera is None:
+                raise fail("camera needs a camera: block (position, look_at, ...)", "perception")
+            if self.planner == "mpc":
+                raise fail("camera needs a fabric planner (the mpc planner avoids spheres only), got planner: mpc",
+                           "perception")
         return self
 
     def scenario(self, base_dir: Path) -> Scenario:
@@ -201,6 +219,8 @@ class ScenarioDocument(ScenarioModel):
             guidance=self.guidance,
             backend=self.backend,
             fabric=self.fabric.spec(),
+            camera=None if self.camera is None else self.camera.spec(),
+            perception=self.perception,
         )
 
 

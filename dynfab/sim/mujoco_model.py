@@ -21,6 +21,10 @@ cylinder (the disc the planner sees). Contacts (bit masks, MuJoCo's ``contype`` 
 ``conaffinity``): robot geoms touch obstacles; robot geoms touch each other only in the
 robot's self-collision pairs (explicit ``<pair>``\\ s); obstacles never touch each other.
 
+Cameras (``cameras``): fixed ``<camera>``\\ s in the world, one per
+:class:`~dynfab.perception.camera_spec.CameraSpec`, for depth rendering
+(:mod:`dynfab.sim.depth_render`).
+
 A differential-drive base (``robot.base``): the body below ``base_yaw`` floats (a free
 joint) on a floor plane at z = 0, carried by two drive wheels (hinges with velocity
 actuators, radius and track from :class:`~dynfab.robots.robot.DifferentialDriveBase`,
@@ -41,13 +45,15 @@ import numpy as np
 import trimesh
 
 from dynfab.geometry.shapes import Box, Capsule, Cylinder, Plane, Shape, Sphere
+from dynfab.perception.camera_spec import CameraSpec
 from dynfab.robots.robot import BASE_JOINTS, DifferentialDriveBase, Robot
 from dynfab.robots.urdf import Joint, UrdfModel
 from dynfab.sim.mjcf_values import joint_motion, mjcf_numbers, origin_matrix, pose_attributes
 from dynfab.sim.mujoco_meshes import link_mesh_file, mesh_file
 from dynfab.sim.mujoco_warnings import route_warnings_to_stderr
 
-__all__ = ["ARMATURE", "PHYSICS_TIMESTEP", "MujocoModelError", "MujocoScene", "SceneObstacle", "build_scene"]
+__all__ = ["ARMATURE", "PHYSICS_TIMESTEP", "MujocoModelError", "MujocoScene", "SceneObstacle", "build_scene",
+           "camera_name"]
 
 #: Physics step [s] (1 kHz).
 PHYSICS_TIMESTEP = 0.001
@@ -138,7 +144,8 @@ class MujocoScene:
 
 def build_scene(robot: Robot, obstacles: Sequence[SceneObstacle] = (),
                 self_collision_links: Sequence[tuple[str, str]] = (),
-                link_meshes: Mapping[str, Sequence[trimesh.Trimesh]] | None = None) -> MujocoScene:
+                link_meshes: Mapping[str, Sequence[trimesh.Trimesh]] | None = None,
+                cameras: Sequence[CameraSpec] = ()) -> MujocoScene:
     """Compile ``robot`` among ``obstacles`` into a MuJoCo model (module doc).
 
     Args:
@@ -149,11 +156,14 @@ def build_scene(robot: Robot, obstacles: Sequence[SceneObstacle] = (),
         link_meshes: Collision meshes by link, each in its link's frame [m], instead of
             the URDF's (a built-in robot: :func:`dynfab.robots.builtin_meshes.builtin_collision_meshes`);
             None: the URDF's, or the collision spheres if it has none.
+        cameras: Depth cameras, fixed in the world: ``<camera>`` ``k`` is named
+            :func:`camera_name` ``(k)``, placed and aimed as the spec says, with its vertical
+            field of view; the offscreen buffer is made large enough for its image.
 
     Raises:
         MujocoModelError: A moving link without mass; a collision mesh that is missing.
     """
-    xml = _Builder(robot, link_meshes).xml(obstacles, self_collision_links)
+    xml = _Builder(robot, link_meshes).xml(obstacles, self_collision_links, cameras)
     try:
         model = mujoco.MjModel.from_xml_string(xml)
     except ValueError as error:
@@ -188,6 +198,11 @@ def _scene(model: mujoco.MjModel, robot: Robot, obstacles: Sequence[SceneObstacl
                        mocap=mocap, robot_bodies=robot_bodies, obstacle_of_geom=geoms)
 
 
+def camera_name(k: int) -> str:
+    """The MJCF name of the ``k``-th camera given to :func:`build_scene`."""
+    return f"depth_camera{k}"
+
+
 def _mesh_geom(link: str, k: int) -> str:
     """The name of ``link``'s ``k``-th collision mesh geom: ``<link>_collision``, then
     ``<link>_collision1``, ..."""
@@ -210,7 +225,7 @@ class _Builder:
         ET.SubElement(self.root, "option", timestep=str(PHYSICS_TIMESTEP), integrator="implicitfast",
                       cone="elliptic", impratio="10", noslip_iterations="5")
         visual = ET.SubElement(self.root, "visual")
-        ET.SubElement(visual, "global", offwidth="1280", offheight="720")
+        self.buffer = ET.SubElement(visual, "global", offwidth="1280", offheight="720")
         self.asset = ET.SubElement(self.root, "asset")
         self.world = ET.SubElement(self.root, "worldbody")
         ET.SubElement(self.world, "light", pos="0 0 4", dir="0 0 -1", directional="true")
@@ -218,7 +233,8 @@ class _Builder:
         self.contact = ET.SubElement(self.root, "contact")
         self.equality = ET.SubElement(self.root, "equality")
 
-    def xml(self, obstacles: Sequence[SceneObstacle], self_collision_links: Sequence[tuple[str, str]]) -> str:
+    def xml(self, obstacles: Sequence[SceneObstacle], self_collision_links: Sequence[tuple[str, str]],
+            cameras: Sequence[CameraSpec] = ()) -> str:
         if self.robot.base is None and self.kin.root_link == "world":  # MuJoCo's name for the world body
             self._geoms(self.world, "world")
             for joint in self.model.child_joints("world"):
@@ -230,7 +246,17 @@ class _Builder:
         for k, obstacle in enumerate(obstacles):
             self._obstacle(k, obstacle)
         self._self_pairs(self_collision_links)
+        for k, camera in enumerate(cameras):
+            self._camera(k, camera)
         return ET.tostring(self.root, encoding="unicode")
+
+    def _camera(self, k: int, camera: CameraSpec) -> None:
+        """A fixed camera: MJCF's ``xyaxes`` are the image's right and up axes in the world."""
+        axes = camera.rotation
+        ET.SubElement(self.world, "camera", name=camera_name(k), pos=mjcf_numbers(camera.position),
+                      xyaxes=mjcf_numbers(np.concatenate([axes[:, 0], axes[:, 1]])), fovy=repr(camera.fov))
+        for attribute, size in (("offwidth", camera.width), ("offheight", camera.height)):
+            self.buffer.set(attribute, str(max(int(self.buffer.get(attribute)), size)))
 
     # ---------------------------------------------------------------- robot tree
     def _subtree(self, parent: ET.Element, link: str, attributes: dict[str, str]) -> None:

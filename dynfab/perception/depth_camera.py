@@ -1,0 +1,129 @@
+"""A depth camera as the planner receives it: frames at ``rate``, noisy, the robot removed,
+``delay`` late.
+
+Each control tick the loop calls :meth:`DepthCamera.tick` with the simulated time ``t``, a
+function that renders the current depth image and the robot's configuration ``q``. A frame is
+taken at ``t = 0`` and then whenever ``t`` reaches the next multiple of the period ``1/rate``
+(sim time; a tick later than that takes it, and the schedule keeps its multiples, so the mean
+rate is ``rate`` whenever the ticks are faster). A frame is
+
+1. the rendered depth ``d`` [m] per pixel, plus Gaussian noise ``d + σ ε``, ``ε ~ N(0, 1)``
+   (seeded) on the pixels with a return;
+2. back-projected (:class:`~dynfab.perception.depth_image.DepthProjector`);
+3. without the robot's pixels: those within ``r_i + margin`` of a collision sphere at the
+   configuration ``q`` of the frame's time (:func:`~dynfab.perception.self_filter.robot_pixels`);
+4. buffered as ``(time, points)`` and released by :meth:`DepthCamera.release` once
+   ``t >= time + delay``.
+
+The renderer is any ``() -> depth image`` (H, W) [m] with ``inf`` where nothing was hit:
+MuJoCo's in :class:`dynfab.sim.depth_render.MujocoDepthRenderer`, or a real sensor's.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from dynfab.perception.camera_spec import CameraSpec
+from dynfab.perception.depth_image import DepthProjector
+from dynfab.perception.self_filter import robot_pixels
+from dynfab.robots.robot import Robot
+
+__all__ = ["ROBOT_MARGIN", "CameraFrame", "DepthCamera"]
+
+#: Default margin around the robot's collision spheres within which points are its own [m].
+ROBOT_MARGIN = 0.02
+#: Times closer than this count as equal [s] (sim times are sums of periods).
+_EPSILON = 1e-9
+
+DepthRender = Callable[[], NDArray[np.floating]]
+"""``() -> depth (height, width) [m]``, ``inf`` where nothing was hit."""
+
+
+@dataclass(frozen=True)
+class CameraFrame:
+    """One frame's points.
+
+    Attributes:
+        time: When it was taken [s] (sim time).
+        points: (N, 3) world points [m] without the robot's, read-only.
+        robot_points: Pixels removed as the robot's.
+        configuration: The robot's configuration at ``time`` (read-only).
+    """
+
+    time: float
+    points: NDArray[np.float64]
+    robot_points: int
+    configuration: NDArray[np.float64]
+
+
+class DepthCamera:
+    """Frames of one depth camera (module docstring).
+
+    Attributes:
+        spec: The camera.
+        projector: Its back-projection.
+        margin: Added to every sphere's radius when filtering the robot [m].
+    """
+
+    def __init__(self, spec: CameraSpec, robot: Robot, margin: float = ROBOT_MARGIN, seed: int = 0) -> None:
+        if not margin >= 0.0:
+            raise ValueError(f"margin must be >= 0, got {margin}")
+        self.spec = spec
+        self.projector = DepthProjector(spec)
+        self.margin = margin
+        self._rng = np.random.default_rng(seed)
+        q = ca.SX.sym("q", robot.kinematics.dof)
+        self._centres = ca.Function("sphere_centres", [q], [robot.sphere_centers(q)])
+        self._radii = np.asarray(robot.sphere_radii, dtype=float) + margin
+        self._next = 0.0
+        self._buffer: deque[CameraFrame] = deque()
+
+    def due(self, t: float) -> bool:
+        """Whether a frame is to be taken at time ``t`` [s]."""
+        return t >= self._next - _EPSILON
+
+    def tick(self, t: float, render: DepthRender, q: ArrayLike) -> CameraFrame | None:
+        """Take a frame at ``t`` [s] if one is due (rendering it then only) and buffer it;
+        the frame taken, or None."""
+        if not self.due(t):
+            return None
+        while self._next <= t + _EPSILON:
+            self._next += self.spec.period
+        frame = self.frame(t, render(), q)
+        self._buffer.append(frame)
+        return frame
+
+    def release(self, t: float) -> list[CameraFrame]:
+        """The buffered frames that are ``delay`` old at ``t`` [s], oldest first (each once)."""
+        released = []
+        while self._buffer and self._buffer[0].time + self.spec.delay <= t + _EPSILON:
+            released.append(self._buffer.popleft())
+        return released
+
+    def frame(self, t: float, depth: NDArray[np.floating], q: ArrayLike) -> CameraFrame:
+        """Steps 1-3 of the module docstring on one depth image (H, W) [m] taken at ``t``
+        with the robot at ``q``.
+
+        Raises:
+            ValueError: ``depth`` is not (height, width).
+        """
+        depth = np.asarray(depth)
+        self.projector.check(depth)
+        returns = DepthProjector.returns(depth)
+        if self.spec.noise > 0.0:
+            depth = depth.astype(np.float32, copy=True)
+            depth[returns] += self._rng.standard_normal(int(returns.sum()), dtype=np.float32) * self.spec.noise
+            returns &= depth > 0.0
+        configuration = np.array(q, dtype=float).reshape(-1)
+        centres = np.asarray(self._centres(configuration), dtype=float).reshape(-1, 3)
+        robot = robot_pixels(depth, returns, self.projector, centres, self._radii)
+        points = self.projector.points(depth, returns & ~robot)
+        points.setflags(write=False)
+        configuration.setflags(write=False)
+        return CameraFrame(float(t), points, int(robot.sum()), configuration)
