@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dynfab.perception.camera_spec import CameraSpec
-from dynfab.sim.mujoco_model import camera_name
+from dynfab.sim.mjcf_cameras import camera_name
 
 __all__ = ["MujocoDepthRenderer"]
 

@@ -21,9 +21,7 @@ cylinder (the disc the planner sees). Contacts (bit masks, MuJoCo's ``contype`` 
 ``conaffinity``): robot geoms touch obstacles; robot geoms touch each other only in the
 robot's self-collision pairs (explicit ``<pair>``\\ s); obstacles never touch each other.
 
-Cameras (``cameras``): fixed ``<camera>``\\ s in the world, one per
-:class:`~dynfab.perception.camera_spec.CameraSpec`, for depth rendering
-(:mod:`dynfab.sim.depth_render`).
+Cameras (``cameras``): fixed ``<camera>``\\ s in the world (:mod:`dynfab.sim.mjcf_cameras`).
 
 A differential-drive base (``robot.base``): the body below ``base_yaw`` floats (a free
 joint) on a floor plane at z = 0, carried by two drive wheels (hinges with velocity
@@ -38,18 +36,19 @@ from __future__ import annotations
 import math
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 import trimesh
 
-from dynfab.geometry.shapes import Box, Capsule, Cylinder, Plane, Shape, Sphere
+from dynfab.geometry.shapes import Box, Capsule, Cylinder, Plane, Sphere
 from dynfab.perception.camera_spec import CameraSpec
-from dynfab.robots.robot import BASE_JOINTS, DifferentialDriveBase, Robot
+from dynfab.robots.robot import BASE_JOINTS, Robot
 from dynfab.robots.urdf import Joint, UrdfModel
+from dynfab.sim.mjcf_cameras import add_camera, camera_name
 from dynfab.sim.mjcf_values import joint_motion, mjcf_numbers, origin_matrix, pose_attributes
 from dynfab.sim.mujoco_meshes import link_mesh_file, mesh_file
+from dynfab.sim.mujoco_scene import MujocoModelError, MujocoScene, SceneObstacle
 from dynfab.sim.mujoco_warnings import route_warnings_to_stderr
 
 __all__ = ["ARMATURE", "PHYSICS_TIMESTEP", "MujocoModelError", "MujocoScene", "SceneObstacle", "build_scene",
@@ -77,69 +76,6 @@ _ROBOT_RGBA = "0.95 0.55 0.1 1"
 _OBSTACLE_RGBA = "0.2 0.4 0.9 0.8"
 
 route_warnings_to_stderr()
-
-
-class MujocoModelError(ValueError):
-    """The robot cannot be simulated by MuJoCo; the one-line message names the link."""
-
-
-@dataclass(frozen=True)
-class SceneObstacle:
-    """An obstacle as MuJoCo sees it.
-
-    Attributes:
-        shape: Its geometry in its own frame (a plane: the solid half-space z <= 0).
-        position: Centre (a plane: its point) at t = 0 [m].
-        orientation: Unit quaternion (w, x, y, z) of its frame.
-        moving: True if its centre follows a trajectory (a mocap body).
-    """
-
-    shape: Shape
-    position: tuple[float, float, float]
-    orientation: tuple[float, float, float, float]
-    moving: bool
-
-
-@dataclass(frozen=True, eq=False)
-class MujocoScene:
-    """A compiled model and where the robot's coordinates live in it.
-
-    Attributes:
-        model: The compiled MuJoCo model.
-        joint_qpos: qpos address of each joint coordinate (the arm part of ``q``; all of
-            it without a base), shape (n_joints,).
-        joint_dof: qvel address of each of them, shape (n_joints,).
-        joint_actuators: The motor (torque) actuator of each of them.
-        effort: Effort limit of each of them [N m or N] (``robot.limits.effort``; ``inf``
-            if unknown).
-        lower: Lower position limit of each of them [rad or m] (the URDF's; ``-inf``: none).
-        upper: Upper position limit of each of them [rad or m].
-        base_qpos: qpos address of the base's free joint, or None without a base.
-        base_dof: qvel address of the base's free joint, or None.
-        wheel_actuators: Velocity actuators of the (left, right) drive wheels, or None.
-        base: The differential-drive base (wheel radius, track), or None.
-        base_speed_limit: The base's velocity limits ``(v_max, ω_max)`` [m/s, rad/s]
-            (``robot.limits.velocity``), or None without a base.
-        mocap: Mocap index of each obstacle (None for a static one).
-        robot_bodies: Body ids of the robot.
-        obstacle_of_geom: Obstacle index of each obstacle geom id.
-    """
-
-    model: mujoco.MjModel
-    joint_qpos: np.ndarray
-    joint_dof: np.ndarray
-    joint_actuators: np.ndarray
-    effort: np.ndarray
-    lower: np.ndarray
-    upper: np.ndarray
-    base_qpos: int | None
-    base_dof: int | None
-    wheel_actuators: tuple[int, int] | None
-    base: DifferentialDriveBase | None
-    base_speed_limit: np.ndarray | None
-    mocap: tuple[int | None, ...]
-    robot_bodies: frozenset[int]
-    obstacle_of_geom: dict[int, int]
 
 
 def build_scene(robot: Robot, obstacles: Sequence[SceneObstacle] = (),
@@ -198,11 +134,6 @@ def _scene(model: mujoco.MjModel, robot: Robot, obstacles: Sequence[SceneObstacl
                        mocap=mocap, robot_bodies=robot_bodies, obstacle_of_geom=geoms)
 
 
-def camera_name(k: int) -> str:
-    """The MJCF name of the ``k``-th camera given to :func:`build_scene`."""
-    return f"depth_camera{k}"
-
-
 def _mesh_geom(link: str, k: int) -> str:
     """The name of ``link``'s ``k``-th collision mesh geom: ``<link>_collision``, then
     ``<link>_collision1``, ..."""
@@ -247,16 +178,8 @@ class _Builder:
             self._obstacle(k, obstacle)
         self._self_pairs(self_collision_links)
         for k, camera in enumerate(cameras):
-            self._camera(k, camera)
+            add_camera(self.world, self.buffer, k, camera)
         return ET.tostring(self.root, encoding="unicode")
-
-    def _camera(self, k: int, camera: CameraSpec) -> None:
-        """A fixed camera: MJCF's ``xyaxes`` are the image's right and up axes in the world."""
-        axes = camera.rotation
-        ET.SubElement(self.world, "camera", name=camera_name(k), pos=mjcf_numbers(camera.position),
-                      xyaxes=mjcf_numbers(np.concatenate([axes[:, 0], axes[:, 1]])), fovy=repr(camera.fov))
-        for attribute, size in (("offwidth", camera.width), ("offheight", camera.height)):
-            self.buffer.set(attribute, str(max(int(self.buffer.get(attribute)), size)))
 
     # ---------------------------------------------------------------- robot tree
     def _subtree(self, parent: ET.Element, link: str, attributes: dict[str, str]) -> None:
