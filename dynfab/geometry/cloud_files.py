@@ -19,6 +19,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from dynfab.geometry.bounded_files import bounded_file
+
 __all__ = ["MAX_CLOUD_BYTES", "CloudFileError", "read_points"]
 
 #: Largest cloud file read [bytes] (4·10⁷ points of three float32, or 2·10⁷ of float64).
@@ -40,13 +42,7 @@ def read_points(path: str | os.PathLike[str]) -> NDArray[np.floating]:
         CloudFileError: the file is missing, larger than :data:`MAX_CLOUD_BYTES`, of another
             format, or malformed; the message says which.
     """
-    path = Path(path)
-    if not path.is_file():
-        raise CloudFileError(f"file not found: {path}")
-    size = path.stat().st_size
-    if size > MAX_CLOUD_BYTES:
-        raise CloudFileError(f"{path.name} is {size / 1e6:.0f} MB, more than the {MAX_CLOUD_BYTES / 1e6:.0f} MB a "
-                             "point-cloud file may have (downsample it)")
+    path = bounded_file(path, MAX_CLOUD_BYTES, "a point-cloud file", "downsample it", CloudFileError)
     suffix = path.suffix.lower()
     readers = {".npy": _read_npy, ".ply": _read_ply, ".pcd": _read_pcd}
     if suffix not in readers:

@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
 
+from dynfab.geometry.bounded_files import bounded_file
 from dynfab.geometry.mesh_shape import Mesh
 
 __all__ = ["MAX_MESH_BYTES", "MAX_MESH_FACES", "MeshFileError", "read_mesh"]
@@ -44,13 +44,7 @@ def read_mesh(path: str | os.PathLike[str], scale: Sequence[float] = (1.0, 1.0, 
     """
     import trimesh
 
-    path = Path(path)
-    if not path.is_file():
-        raise MeshFileError(f"file not found: {path}")
-    size = path.stat().st_size
-    if size > MAX_MESH_BYTES:
-        raise MeshFileError(f"{path.name} is {size / 1e6:.0f} MB, more than the {MAX_MESH_BYTES / 1e6:.0f} MB "
-                            "a mesh file may have (simplify it)")
+    path = bounded_file(path, MAX_MESH_BYTES, "a mesh file", "simplify it", MeshFileError)
     try:
         loaded = trimesh.load(str(path), force="mesh", process=False)
     except Exception as exc:  # trimesh raises many kinds of errors on bad files
