@@ -88,7 +88,7 @@ class GuidedController:
 
     def __init__(self, inner: FabricController, guided: GuidedFabric, goal: GoalTargets,
                  moving: Callable[[float], tuple[PlacedObstacle, ...]], fallback: Callable[[], Controller],
-                 static_slots: tuple[AllowanceSlot, ...] = ()) -> None:
+                 static_slots: tuple[AllowanceSlot | None, ...] = ()) -> None:
         self.inner = inner
         self.guided = guided
         self._static_slots = static_slots
@@ -136,7 +136,8 @@ class GuidedController:
         allowances = self.guided.allowances()
         if not np.array_equal(allowances, self._written):  # they change once per plan: not every tick
             for slot, allowance in zip(self._static_slots, allowances):
-                slot.write(self.inner.planner.parameters, float(allowance))
+                if slot is not None:  # a mesh or a point cloud has no slot to take an allowance
+                    slot.write(self.inner.planner.parameters, float(allowance))
             self._written = allowances
         return self.inner(t, q, qdot)
 
@@ -158,10 +159,7 @@ class AllowanceSlot:
 
     def write(self, params: RuntimeParameters, allowance: float) -> None:
         """Let the fabric's spheres enter the obstacle by ``allowance`` [m] (a negative one
-        keeps them that much farther; a mesh or a point cloud has no slot and takes none:
-        its nearest-point leaf keeps its full range)."""
-        if self.kind in ("mesh", "points"):
-            return
+        keeps them that much farther)."""
         if self.kind == "sphere":
             params.obstacle_radius[self.row] = max(SMALLEST_RADIUS, self.radius - allowance)
         else:
@@ -207,11 +205,12 @@ def make_scenario_controller(scenario: Scenario, robot: Robot, references: Refer
                              (), moving_indices, slots, mesh_obstacles(fabric, planning_robot, scenario.obstacles))
     guided = GuidedFabric(fabric, settings)
     guided.set_obstacles(_placed(scenario, references, 0.0, static=True))
-    allowance_slots = [AllowanceSlot(obstacle.type, -1 if slot is None else slot.row,
-                                     obstacle.radius if obstacle.type == "sphere" else 0.0)
+    # one per obstacle, None for a mesh or a point cloud: no slot (its nearest-point leaf keeps its full range)
+    allowance_slots = [None if slot is None else
+                       AllowanceSlot(obstacle.type, slot.row, obstacle.radius if obstacle.type == "sphere" else 0.0)
                        for obstacle, slot in zip(scenario.obstacles, slots)]
     for obstacle, slot in zip(scenario.obstacles, allowance_slots):
-        if obstacle.trajectory is not None:
+        if obstacle.trajectory is not None and slot is not None:
             slot.write(fabric.parameters, -GUIDED_MOVING_MARGIN)
     static_slots = tuple(slot for obstacle, slot in zip(scenario.obstacles, allowance_slots)
                          if obstacle.trajectory is None)
