@@ -18,7 +18,6 @@ moves, as it does for tracked obstacles; a static fabric is given positions only
 
 from __future__ import annotations
 
-import casadi as ca
 import numpy as np
 from numpy.typing import NDArray
 
@@ -53,7 +52,6 @@ class CameraFeed:
         self._leaf: NearestSurfaceAvoidance | None = None
         self._views: LeafViews | None = None
         self._velocities = np.zeros((0, 3))
-        self._centres: ca.Function | None = None
 
     @property
     def cloud(self) -> PointCloud | None:
@@ -67,8 +65,6 @@ class CameraFeed:
             return
         self._leaf, self._views = leaf, views
         self._feed = PointCloudFeed(self._robot, leaf, views)
-        q = ca.SX.sym("q", self._robot.kinematics.dof)
-        self._centres = ca.Function("leaf_centres", [q], [self._robot.sphere_centers(q)[list(leaf.spheres), :]])
         if self.latest is not None:
             self._feed.update_points(self.latest.points, None)
 
@@ -83,7 +79,7 @@ class CameraFeed:
         Raises:
             RuntimeError: No leaf attached.
         """
-        if self._feed is None or self._views is None or self._centres is None:
+        if self._feed is None or self._views is None:
             raise RuntimeError("CameraFeed.write before attach: no leaf to write")
         frames = self.camera.release(t)
         for frame in frames:
@@ -97,9 +93,7 @@ class CameraFeed:
         active = np.asarray(self._views["active"], dtype=float) > 0.5
         velocities = np.zeros((len(active), 3))
         if active.any():
-            centres = np.asarray(self._centres(q), dtype=float).reshape(-1, 3)[active]
-            _, nearest = self._feed.cloud.tree.query(centres)
-            velocities[active] = self._velocities[np.asarray(nearest, dtype=np.int64)]
+            velocities[active] = self._velocities[self._feed.nearest.index[active]]
             points = np.asarray(self._views["points"]).reshape(-1, 3).copy()
             points[active] += velocities[active] * (t - self.latest.time)
             self._views["points"] = points

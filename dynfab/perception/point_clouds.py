@@ -17,8 +17,9 @@ Each control tick :meth:`PointCloudFeed.write` finds, per sphere of the leaf, th
 kept point ``c`` within the leaf's reach and writes the point ``c + δ n``, the normal
 ``n = (p − c)/‖p − c‖`` and ``active`` into the leaf
 (:class:`~dynfab.fabric.leaves.surface_points.NearestSurfaceAvoidance`), ``δ = h√3/2``: the
-leaf's clearance ``‖p − c‖ − δ − r`` never exceeds the distance to a measured point. An
-empty cloud (or one the filter empties) leaves every sphere inactive: no cloud obstacle.
+leaf's clearance ``‖p − c‖ − δ − r`` never exceeds the distance to a measured point; one
+KD-tree query and two buffer evaluations (:mod:`dynfab.perception.nearest_cloud_points`).
+An empty cloud (or one the filter empties) leaves every sphere inactive: no cloud obstacle.
 
 The global planner reads the same kept points: pass ``feed.cloud`` to the guided fabric as
 an obstacle (its checker builds a distance grid of it, :mod:`dynfab.geometry.cloud_grid`).
@@ -35,7 +36,7 @@ from numpy.typing import ArrayLike, NDArray
 from dynfab.fabric.leaves.surface_points import NearestSurfaceAvoidance
 from dynfab.fabric.parameters import LeafViews
 from dynfab.geometry.point_cloud import DEFAULT_VOXEL, MAX_CLOUD_POINTS, PointCloud
-from dynfab.perception.surfaces import SurfaceFeed
+from dynfab.perception.nearest_cloud_points import NearestCloudPoints
 from dynfab.robots.robot import Robot
 
 __all__ = ["CloudUpdate", "PointCloudFeed", "RobotFilter"]
@@ -98,21 +99,24 @@ class RobotFilter:
 
 
 class PointCloudFeed:
-    """Gives a planner's nearest-point leaf the latest point cloud (module docstring).
+    """Gives a planner's nearest-point leaf the latest point cloud (module docstring);
+    ``backend`` (``"c"`` or ``"vm"``, default :func:`~dynfab.fabric.backends.default_backend`)
+    evaluates the per-tick functions.
 
     Attributes:
         voxel: The voxel edge asked for [m].
         max_points: Most points kept.
         cloud: The points the planner sees (empty until the first update).
+        nearest: What writes the leaf each tick (its ``index``: each sphere's nearest point).
     """
 
     def __init__(self, robot: Robot, leaf: NearestSurfaceAvoidance, views: LeafViews, voxel: float = DEFAULT_VOXEL,
-                 max_points: int = MAX_CLOUD_POINTS, margin: float = ROBOT_MARGIN) -> None:
+                 max_points: int = MAX_CLOUD_POINTS, margin: float = ROBOT_MARGIN, backend: str | None = None) -> None:
         self.voxel = voxel
         self.max_points = max_points
         self.cloud = PointCloud(np.zeros((0, 3)), voxel)
         self._filter = RobotFilter(robot, margin)
-        self._surfaces = SurfaceFeed(robot, leaf, views)
+        self.nearest = NearestCloudPoints(robot, leaf, views, backend)
 
     def update_points(self, points: ArrayLike, q: ArrayLike | None) -> CloudUpdate:
         """Replace the cloud by ``points`` (N, 3) [m, world frame] taken at configuration
@@ -133,4 +137,4 @@ class PointCloudFeed:
 
     def write(self, q: NDArray[np.float64]) -> None:
         """Write the leaf's nearest points for configuration ``q`` (every tick)."""
-        self._surfaces.write(q, (), (self.cloud,))
+        self.nearest.write(q, self.cloud)
