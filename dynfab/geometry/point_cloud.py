@@ -46,7 +46,7 @@ if TYPE_CHECKING:
 
     from dynfab.geometry.mesh_distance import NearestPoints
 
-__all__ = ["CHUNK", "DEFAULT_VOXEL", "MAX_CLOUD_POINTS", "PointCloud", "downsampled", "finite_rows"]
+__all__ = ["CHUNK", "DEFAULT_VOXEL", "MAX_CLOUD_POINTS", "PointCloud", "downsampled", "finite_rows", "kd_tree"]
 
 #: Default voxel edge ``h`` [m].
 DEFAULT_VOXEL = 0.01
@@ -121,10 +121,7 @@ class PointCloud:
     @cached_property
     def tree(self) -> KDTree:
         """A KD-tree of the kept points (pykdtree, built on first use; a non-empty cloud)."""
-        os.environ.setdefault("OMP_NUM_THREADS", "1")  # read once, when pykdtree's OpenMP starts
-        from pykdtree.kdtree import KDTree
-
-        return KDTree(np.ascontiguousarray(self.points))
+        return kd_tree(self.points)
 
     @property
     def bounds(self) -> NDArray[np.float64]:
@@ -190,10 +187,22 @@ class PointCloud:
         return Mesh(vertices, np.arange(3 * count).reshape(-1, 3), source=self.source or "point cloud")
 
 
+def kd_tree(points: NDArray[np.float64]) -> KDTree:
+    """pykdtree's KD-tree of ``points`` (N, d), its queries on one OpenMP thread (module
+    docstring: ``OMP_NUM_THREADS=1`` unless set before the first tree)."""
+    os.environ.setdefault("OMP_NUM_THREADS", "1")  # read once, when pykdtree's OpenMP starts
+    from pykdtree.kdtree import KDTree
+
+    return KDTree(np.ascontiguousarray(points))
+
+
 def finite_rows(points: NDArray[np.float64]) -> tuple[NDArray[np.float64], int]:
-    """The rows of ``points`` (N, 3) whose three coordinates are finite, and how many were not."""
-    keep = np.isfinite(points).all(axis=1)
-    return points[keep], int(len(points) - keep.sum())
+    """The rows of ``points`` (N, 3) whose three coordinates are finite, and how many were not
+    (``points`` itself when all are: one pass over the array, no row mask or copy)."""
+    if np.isfinite(points).all():
+        return points, 0
+    keep = np.isfinite(points[:, 0]) & np.isfinite(points[:, 1]) & np.isfinite(points[:, 2])
+    return points[keep], int(len(points) - np.count_nonzero(keep))
 
 
 def downsampled(raw: NDArray[np.floating], voxel: float, max_points: int) -> tuple[NDArray[np.float64], float, int]:
@@ -229,7 +238,7 @@ _MASK = (1 << _BITS) - 1
 def _cells(points: NDArray[np.float64], edge: float) -> NDArray[np.int64]:
     """Packed keys of the cells ``⌊p / h⌋`` of finite points."""
     cells = np.floor(points / edge)
-    if cells.size and np.abs(cells).max() >= _OFFSET:
+    if cells.size and (cells.min() < -_OFFSET or cells.max() >= _OFFSET):
         raise ValueError(f"point cloud: a coordinate of {np.abs(points).max():.3g} m is more than "
                          f"{_OFFSET} cells of {edge} m from the origin")
     return _pack(cells.astype(np.int64))

@@ -10,7 +10,7 @@ taken, and
    (:class:`~dynfab.geometry.point_cloud.PointCloud`, bounded memory);
 2. removes the robot's own body: every kept point within ``r_i + margin`` of a robot
    collision sphere ``(p_i(q), r_i)`` (the points in the box around all the spheres, then
-   their distances to every sphere);
+   one query each in a 4-D KD-tree of the spheres: :func:`~dynfab.perception.self_filter.robot_points`);
 3. builds a KD-tree of what is left.
 
 Each control tick :meth:`PointCloudFeed.write` finds, per sphere of the leaf, the nearest
@@ -37,6 +37,7 @@ from dynfab.fabric.leaves.surface_points import NearestSurfaceAvoidance
 from dynfab.fabric.parameters import LeafViews
 from dynfab.geometry.point_cloud import DEFAULT_VOXEL, MAX_CLOUD_POINTS, PointCloud
 from dynfab.perception.nearest_cloud_points import NearestCloudPoints
+from dynfab.perception.self_filter import robot_points
 from dynfab.robots.robot import Robot
 
 __all__ = ["CloudUpdate", "PointCloudFeed", "RobotFilter"]
@@ -84,18 +85,11 @@ class RobotFilter:
         if cloud.empty or len(self._radii) == 0:
             return cloud, 0
         centres = np.asarray(self._centres(np.asarray(q, dtype=float)), dtype=float).reshape(-1, 3)
-        low = (centres - self._radii[:, None]).min(axis=0)
-        high = (centres + self._radii[:, None]).max(axis=0)
-        near = np.flatnonzero(np.all((cloud.points >= low) & (cloud.points <= high), axis=1))
-        if near.size == 0:
+        robot = robot_points(cloud.points, centres, self._radii)
+        hits = int(np.count_nonzero(robot))
+        if hits == 0:
             return cloud, 0
-        gaps = np.linalg.norm(cloud.points[near, None, :] - centres[None, :, :], axis=2)
-        hit = near[(gaps <= self._radii[None, :]).any(axis=1)]
-        if hit.size == 0:
-            return cloud, 0
-        keep = np.ones(len(cloud.points), dtype=bool)
-        keep[hit] = False
-        return PointCloud(cloud.points[keep], cloud.voxel, cloud.dropped, cloud.source), int(hit.size)
+        return PointCloud(cloud.points[~robot], cloud.voxel, cloud.dropped, cloud.source), hits
 
 
 class PointCloudFeed:
