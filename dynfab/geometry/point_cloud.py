@@ -54,6 +54,9 @@ DEFAULT_VOXEL = 0.01
 MAX_CLOUD_POINTS = 1_000_000
 #: Raw points reduced at once (bounds the temporaries).
 CHUNK = 1_000_000
+#: Points per leaf of the KD-tree: 32 builds a 52-118 k point cloud 20-25 % faster than
+#: pykdtree's 16, with the same query time (58 Panda spheres, CPU time, 2026-11-26).
+_LEAF_SIZE = 32
 #: Edge of the triangle standing for each point in exact collision checks [m].
 _SPECK = 1e-4
 
@@ -193,7 +196,7 @@ def kd_tree(points: NDArray[np.float64]) -> KDTree:
     os.environ.setdefault("OMP_NUM_THREADS", "1")  # read once, when pykdtree's OpenMP starts
     from pykdtree.kdtree import KDTree
 
-    return KDTree(np.ascontiguousarray(points))
+    return KDTree(np.ascontiguousarray(points), leafsize=_LEAF_SIZE)
 
 
 def finite_rows(points: NDArray[np.float64]) -> tuple[NDArray[np.float64], int]:
@@ -227,7 +230,7 @@ def downsampled(raw: NDArray[np.floating], voxel: float, max_points: int) -> tup
         while len(keys) > max_points:
             edge *= 2.0
             keys = _distinct(_pack(np.floor_divide(_unpack(keys), 2)))
-    return (_unpack(keys) + 0.5) * edge, edge, dropped
+    return _centres(keys, edge), edge, dropped
 
 
 _BITS = 21
@@ -236,21 +239,41 @@ _MASK = (1 << _BITS) - 1
 
 
 def _cells(points: NDArray[np.float64], edge: float) -> NDArray[np.int64]:
-    """Packed keys of the cells ``⌊p / h⌋`` of finite points."""
+    """Packed keys of the cells ``⌊p / h⌋`` of finite points (the offset added in floating point,
+    exact for cells within ±2²⁰; one (N, 3) temporary)."""
     cells = np.floor(points / edge)
     if cells.size and (cells.min() < -_OFFSET or cells.max() >= _OFFSET):
         raise ValueError(f"point cloud: a coordinate of {np.abs(points).max():.3g} m is more than "
                          f"{_OFFSET} cells of {edge} m from the origin")
-    return _pack(cells.astype(np.int64))
+    cells += _OFFSET
+    return _packed(cells.astype(np.int64))
 
 
 def _pack(cells: NDArray[np.int64]) -> NDArray[np.int64]:
-    shifted = cells + _OFFSET
-    return (shifted[:, 0] << (2 * _BITS)) | (shifted[:, 1] << _BITS) | shifted[:, 2]
+    return _packed(cells + _OFFSET)
+
+
+def _packed(shifted: NDArray[np.int64]) -> NDArray[np.int64]:
+    """Keys of cells already shifted by the offset (non-negative, below 2²¹)."""
+    keys = shifted[:, 0] << (2 * _BITS)
+    keys |= shifted[:, 1] << _BITS
+    keys |= shifted[:, 2]
+    return keys
 
 
 def _unpack(keys: NDArray[np.int64]) -> NDArray[np.int64]:
     return np.stack([(keys >> (2 * _BITS)) & _MASK, (keys >> _BITS) & _MASK, keys & _MASK], axis=1) - _OFFSET
+
+
+def _centres(keys: NDArray[np.int64], edge: float) -> NDArray[np.float64]:
+    """The centres ``(cell + ½) h`` of packed cells (N, 3) [m]."""
+    centres = np.empty((len(keys), 3))
+    centres[:, 0] = keys >> (2 * _BITS)
+    centres[:, 1] = (keys >> _BITS) & _MASK
+    centres[:, 2] = keys & _MASK
+    centres -= _OFFSET - 0.5
+    centres *= edge
+    return centres
 
 
 def _distinct(keys: NDArray[np.int64]) -> NDArray[np.int64]:
