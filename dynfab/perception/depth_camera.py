@@ -7,8 +7,12 @@ taken at ``t = 0`` and then whenever ``t`` reaches the next multiple of the peri
 (sim time; a tick later than that takes it, and the schedule keeps its multiples, so the mean
 rate is ``rate`` whenever the ticks are faster). A frame is
 
+0. with a ``workspace`` ball (:class:`~dynfab.perception.workspace.Workspace`, e.g.
+   :func:`~dynfab.perception.workspace.robot_workspace`: the robot's reach plus the fabric's range), only the pixels whose points lie in it are kept (a per-pixel depth range computed
+   once, :meth:`~dynfab.perception.depth_image.DepthProjector.ball_depths`): what no robot
+   sphere can come near costs nothing further; none by default;
 1. the rendered depth ``d`` [m] per pixel, plus Gaussian noise ``d + σ ε``, ``ε ~ N(0, 1)``
-   (seeded) on the pixels with a return;
+   (seeded) on the pixels with a return (and in the workspace);
 2. back-projected (:class:`~dynfab.perception.depth_image.DepthProjector`);
 3. without the robot's pixels: those within ``r_i + margin`` of a collision sphere at the
    configuration ``q`` of the frame's time (:func:`~dynfab.perception.self_filter.robot_pixels`);
@@ -32,6 +36,7 @@ from numpy.typing import ArrayLike, NDArray
 from dynfab.perception.camera_spec import CameraSpec
 from dynfab.perception.depth_image import DepthProjector
 from dynfab.perception.self_filter import robot_pixels
+from dynfab.perception.workspace import Workspace
 from dynfab.robots.robot import Robot
 
 __all__ = ["ROBOT_MARGIN", "CameraFrame", "DepthCamera"]
@@ -69,9 +74,12 @@ class DepthCamera:
         spec: The camera.
         projector: Its back-projection.
         margin: Added to every sphere's radius when filtering the robot [m].
+
+    ``workspace``: keep only the points in this ball (step 0); None keeps every point.
     """
 
-    def __init__(self, spec: CameraSpec, robot: Robot, margin: float = ROBOT_MARGIN, seed: int = 0) -> None:
+    def __init__(self, spec: CameraSpec, robot: Robot, margin: float = ROBOT_MARGIN, seed: int = 0,
+                 workspace: Workspace | None = None) -> None:
         if not margin >= 0.0:
             raise ValueError(f"margin must be >= 0, got {margin}")
         self.spec = spec
@@ -81,6 +89,8 @@ class DepthCamera:
         q = ca.SX.sym("q", robot.kinematics.dof)
         self._centres = ca.Function("sphere_centres", [q], [robot.sphere_centers(q)])
         self._radii = np.asarray(robot.sphere_radii, dtype=float) + margin
+        self._depth_range = None if workspace is None else self.projector.ball_depths(
+            np.array(workspace.centre), workspace.radius)
         self._next = 0.0
         self._buffer: deque[CameraFrame] = deque()
 
@@ -116,6 +126,9 @@ class DepthCamera:
         depth = np.asarray(depth)
         self.projector.check(depth)
         returns = DepthProjector.returns(depth)
+        if self._depth_range is not None:
+            near, far = self._depth_range
+            returns &= (depth >= near) & (depth <= far)
         if self.spec.noise > 0.0:
             depth = depth.astype(np.float32, copy=True)
             depth[returns] += self._rng.standard_normal(int(returns.sum()), dtype=np.float32) * self.spec.noise

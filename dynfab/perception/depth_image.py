@@ -71,6 +71,24 @@ class DepthProjector:
         points += self.origin
         return points
 
+    def ball_depths(self, centre: NDArray[np.float64], radius: float) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+        """Per pixel, the depths between which its point lies in the ball ``(centre (3,), radius)``
+        [m]: ``‖o + d r − c‖ <= R`` is the quadratic ``‖r‖² d² − 2 d rᵀa + ‖a‖² − R² <= 0``
+        (``a = c − o``), so ``d ∈ [(rᵀa − √D)/‖r‖², (rᵀa + √D)/‖r‖²]``, ``D = (rᵀa)² −
+        ‖r‖²(‖a‖² − R²)``; a ray that misses the ball (``D < 0``) gets the empty range
+        ``[inf, −inf]``. Two (height, width) float32 images, read-only."""
+        offset = np.asarray(centre, dtype=float) - self.origin
+        along = self.rays.astype(float) @ offset
+        norms = self.ray_norms.astype(float)
+        discriminant = along ** 2 - norms * (offset @ offset - radius ** 2)
+        root = np.sqrt(np.maximum(discriminant, 0.0))
+        hit = discriminant >= 0.0
+        near = np.where(hit, (along - root) / norms, np.inf).astype(np.float32)
+        far = np.where(hit, (along + root) / norms, -np.inf).astype(np.float32)
+        for array in (near, far):
+            array.setflags(write=False)
+        return near, far
+
     def windows(self, centres: NDArray[np.float64], radii: NDArray[np.float64]) -> NDArray[np.int64]:
         """Per ball (``centres`` (k, 3), ``radii`` (k,) [m]), the pixels whose rays may meet it:
         rows ``[v0, v1)`` and columns ``[u0, u1)`` as (k, 4) ``(v0, v1, u0, u1)``. It is the
