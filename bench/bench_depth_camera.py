@@ -14,8 +14,13 @@ most points). Per resolution, medians over ``--frames`` frames of
 - velocities: the cluster tracker's update on the frame's points (3 cm voxels);
 - to the planner: the frame's points into the point-cloud feed the planner reads
   (``PointCloudFeed.update_points``: 1 cm voxels, and its KD-tree, built at the first query),
-  after the frame: frame + this is
-  "a depth frame becomes the planner's representation";
+  after the frame;
+- frame -> representation: frame and to the planner in one timed span, a new frame each time
+  (issue 20's "a depth frame becomes the planner's representation"), as wall time and as
+  the thread's CPU time (``time.thread_time``: what the work costs, without the waits for a
+  core that a loaded machine adds); and the same with the camera cropped to the Panda's
+  workspace ball (``robot_workspace(robot, 0.3)``: its reach bound plus 0.3 m, the
+  nearest-point leaf's 0.2 m range and 0.1 m more);
 
 beside the primitives' update: writing the same four spheres into the planner's parameters
 (``FabricController.retarget``, what the planner needs per tick when the scene is given as
@@ -46,6 +51,7 @@ from dynfab.perception.camera_spec import CameraSpec  # noqa: E402
 from dynfab.perception.depth_camera import DepthCamera  # noqa: E402
 from dynfab.perception.motion_tracks import ClusterTracker  # noqa: E402
 from dynfab.perception.point_clouds import PointCloudFeed  # noqa: E402
+from dynfab.perception.workspace import robot_workspace  # noqa: E402
 from dynfab.robots import load_robot  # noqa: E402
 from dynfab.scenario.controllers import make_controller  # noqa: E402
 from dynfab.scenario.references import scenario_references  # noqa: E402
@@ -66,6 +72,24 @@ def timed_ms(call: Callable[[], object], repeats: int) -> tuple[float, float]:
         call()
         times.append(time.perf_counter() - start)
     return 1e3 * statistics.median(times), 1e3 * min(times)
+
+
+def timed_cpu_ms(call: Callable[[], object], repeats: int) -> tuple[float, float, float]:
+    """Median and minimum wall time and median CPU time of this thread of ``call`` [ms]."""
+    walls, cpus = [], []
+    for _ in range(repeats):
+        wall, cpu = time.perf_counter(), time.thread_time()
+        call()
+        cpus.append(time.thread_time() - cpu)
+        walls.append(time.perf_counter() - wall)
+    return 1e3 * statistics.median(walls), 1e3 * min(walls), 1e3 * statistics.median(cpus)
+
+
+def representation(camera: DepthCamera, feed: PointCloudFeed, depth: np.ndarray, q: np.ndarray) -> None:
+    """A depth frame into the planner's representation: the frame, its points into the feed's
+    cloud, the cloud's KD-tree."""
+    feed.update_points(camera.frame(0.0, depth, q).points, None)
+    feed.cloud.tree
 
 
 def primitives_ms(repeats: int) -> float:
@@ -104,6 +128,8 @@ def camera_rows(floor: bool, frames: int) -> list[dict]:
         depth = renderer.render(data)
         renderer.render(data)  # warm
         frame = camera.frame(0.0, depth, q)
+        cropped = DepthCamera(spec, robot, workspace=robot_workspace(robot, 0.3))
+        cropped_points = len(cropped.frame(0.0, depth, q).points)
         tracker = ClusterTracker()
         clock = iter(np.arange(10 * frames) / 30.0)
         rows.append({
@@ -114,6 +140,11 @@ def camera_rows(floor: bool, frames: int) -> list[dict]:
             "render_and_frame_ms": timed_ms(lambda: camera.frame(0.0, renderer.render(data), q), frames),
             "velocities_ms": timed_ms(lambda: tracker.update(float(next(clock)), frame.points), frames),
             "to_planner_ms": timed_ms(lambda: (feed.update_points(frame.points, None), feed.cloud.tree), frames),
+            "representation_ms": timed_cpu_ms(lambda: representation(camera, feed, depth, q), frames),
+            "kept": len(feed.cloud.points),
+            "cropped_points": cropped_points,
+            "cropped_representation_ms": timed_cpu_ms(lambda: representation(cropped, feed, depth, q), frames),
+            "cropped_kept": len(feed.cloud.points),
         })
         renderer.close()
     return rows
@@ -148,6 +179,19 @@ def main() -> None:
               f"{row['robot_pixels']:>6} {cells} {row['target_ms']:>4.0f} {ok:>4} {ratio:>9.0f}x "
               f"{row['velocities_ms'][0]:6.2f} ({row['velocities_ms'][1]:5.2f}) "
               f"{row['to_planner_ms'][0]:6.2f} ({row['to_planner_ms'][1]:5.2f})")
+    print()
+    print("frame -> representation (frame + update_points + KD-tree, render excluded): wall median (min), "
+          "CPU median; ratio: wall median over the primitives' update")
+    print(f"{'image':>8} {'floor':>5} {'crop':>5} {'points':>7} {'kept':>7} {'wall ms':>14} {'cpu ms':>7} "
+          f"{'target':>7} {'wall':>5} {'cpu':>5} {'ratio':>7}")
+    for row in rows:
+        for crop, key, points, kept in ((False, "representation_ms", "points", "kept"),
+                                        (True, "cropped_representation_ms", "cropped_points", "cropped_kept")):
+            wall, low, cpu = row[key]
+            verdicts = ["ok" if value <= row["target_ms"] else "MISS" for value in (wall, cpu)]
+            print(f"{row['resolution']:>8} {'yes' if row['floor'] else 'no':>5} {'yes' if crop else 'no':>5} "
+                  f"{row[points]:>7} {row[kept]:>7} {wall:6.2f} ({low:5.2f}) {cpu:7.2f} {row['target_ms']:>7.0f} "
+                  f"{verdicts[0]:>5} {verdicts[1]:>5} {wall / primitives:>6.0f}x")
     print("median (minimum) per frame. render: MuJoCo offscreen depth; frame: noise + robot filter + "
           "back-projection (render excluded; the target applies to it); both: render included; "
           "velocities: ClusterTracker.update on the frame's points; to planner: PointCloudFeed.update_points of "
