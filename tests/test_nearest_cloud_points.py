@@ -85,3 +85,10 @@ def test_each_active_sphere_indexes_its_nearest_kept_point(setting: tuple) -> No
     chosen = cloud.points[writer.index[active]]
     np.testing.assert_allclose(np.linalg.norm(centres[active] - chosen, axis=1), gaps, atol=1e-12)
     assert (writer.index[active] == truth).mean() > 0.9  # the same point, up to ties between lattice points
+
+
+def test_a_configuration_of_the_wrong_length_is_refused(setting: tuple) -> None:
+    robot, leaf, views, _ = setting
+    writer = NearestCloudPoints(robot, leaf, views, "vm")
+    with pytest.raises(ValueError, match=r"q must have shape \(7,\), got \(6,\)"):
+        writer.write(np.zeros(6), PointCloud(np.zeros((0, 3)), 0.01))

@@ -8,7 +8,8 @@ taken at ``t = 0`` and then whenever ``t`` reaches the next multiple of the peri
 rate is ``rate`` whenever the ticks are faster). A frame is
 
 0. with a ``workspace`` ball (:class:`~dynfab.perception.workspace.Workspace`, e.g.
-   :func:`~dynfab.perception.workspace.robot_workspace`: the robot's reach plus the fabric's range), only the pixels whose points lie in it are kept (a per-pixel depth range computed
+   :func:`~dynfab.perception.workspace.robot_workspace`: the robot's reach plus the fabric's
+   range), only the pixels whose points lie in it are kept (a per-pixel depth range computed
    once, :meth:`~dynfab.perception.depth_image.DepthProjector.ball_depths`): what no robot
    sphere can come near costs nothing further; none by default;
 1. the rendered depth ``d`` [m] per pixel, plus Gaussian noise ``d + σ ε``, ``ε ~ N(0, 1)``

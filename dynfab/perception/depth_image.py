@@ -71,7 +71,8 @@ class DepthProjector:
         points += self.origin
         return points
 
-    def ball_depths(self, centre: NDArray[np.float64], radius: float) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+    def ball_depths(self, centre: NDArray[np.float64],
+                    radius: float) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
         """Per pixel, the depths between which its point lies in the ball ``(centre (3,), radius)``
         [m]: ``‖o + d r − c‖ <= R`` is the quadratic ``‖r‖² d² − 2 d rᵀa + ‖a‖² − R² <= 0``
         (``a = c − o``), so ``d ∈ [(rᵀa − √D)/‖r‖², (rᵀa + √D)/‖r‖²]``, ``D = (rᵀa)² −

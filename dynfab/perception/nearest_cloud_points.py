@@ -108,6 +108,8 @@ class NearestCloudPoints:
         Raises:
             ValueError: ``q`` has the wrong length.
         """
+        if np.shape(q) != self._q.shape:
+            raise ValueError(f"q must have shape {self._q.shape}, got {np.shape(q)}")
         if self._count == 0:
             return
         self._q[:] = q
