@@ -6,7 +6,7 @@ leaf (centres ``x_i(q)``, radii ``r_i``) and a cloud of kept points ``C`` (voxel
 lowering ``δ = h√3/2``, :class:`~dynfab.geometry.point_cloud.PointCloud`), a tick is
 
 1. the centres ``x_i(q)`` (K, 3) [m]: a CasADi function of ``q`` evaluated on fixed buffers
-   (no argument conversion: about 1.5 µs for the Panda's 58 spheres);
+   (no argument conversion: 0.2 µs compiled, 1.5 µs in the VM, for the Panda's 58 spheres);
 2. one KD-tree query of all ``K`` centres, bounded by ``max_i reach_i + δ``, giving per
    sphere its nearest kept point ``c_i`` and whether one is within the bound (``f_i``);
 3. a second CasADi function of ``(x, c, f, δ)`` whose outputs are the leaf's own parameter
@@ -26,7 +26,7 @@ lowering ``δ = h√3/2``, :class:`~dynfab.geometry.point_cloud.PointCloud`), a 
 An empty cloud skips the query and writes every sphere inactive. Both functions are
 compiled to C on the ``"c"`` backend (:mod:`dynfab.fabric.c_backend`: cached as the planners'
 libraries are, by their code; the CasADi VM without a compiler): the Panda's writer costs
-about 9 µs in the VM.
+1.2 µs compiled, about 9 µs in the VM; the query about 10 µs (a 53 k-point table scene).
 """
 
 from __future__ import annotations
