@@ -4,8 +4,11 @@ reference paths, updated from a :class:`~dynfab.viz.view_world.SceneState`.
 Scene tree: ``/robot/L`` one frame per link L that carries meshes (its pose from the
 kinematics at ``q``); ``/spheres/i`` the collision spheres (hidden until asked for);
 ``/obstacles/k`` and ``/goals/k`` (drag handles when ``draggable``, with the shape as a
-child, so that the browser moves the shape with the handle at once); ``/paths/...`` the
-reference paths of path goals and moving obstacles over the scenario's duration.
+child ``/obstacles/k/shape``, so that the browser moves the shape with the handle at once;
+a mesh's triangles and a point cloud's points as :mod:`dynfab.viz.view_sensing` bounds
+them; a cloud, static for the planner, gets no handle); ``/paths/...`` the reference paths
+of path goals and moving obstacles over the scenario's duration; ``/camera`` the depth
+camera's frustum (with ``/camera_axis`` its optical axis).
 """
 
 from __future__ import annotations
@@ -16,7 +19,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from dynfab.viz.robot_visuals import LinkPoses, RobotLook
+from dynfab.geometry.mesh_shape import Mesh
+from dynfab.geometry.point_cloud import PointCloud
 from dynfab.viz.shape_meshes import shape_mesh
+from dynfab.viz.view_sensing import add_camera, add_cloud, add_mesh
 from dynfab.viz.view_world import SceneState, ViewWorld
 
 if TYPE_CHECKING:
@@ -43,6 +49,8 @@ class ViewScene:
     Attributes:
         goal_handles: per draggable goal index, its drag handle (live view only).
         obstacle_handles: per obstacle index, its drag handle (live view only).
+        obstacle_shapes: per obstacle, the node of its geometry (a mesh or a point cloud).
+        camera: the depth camera's frustum node, or None without a camera.
     """
 
     def __init__(self, server: viser.ViserServer, world: ViewWorld, look: RobotLook,
@@ -64,7 +72,10 @@ class ViewScene:
                                                   visible=False) for i, s in enumerate(spheres)]
         self.goal_handles: dict[int, viser.TransformControlsHandle] = {}
         self.obstacle_handles: dict[int, viser.TransformControlsHandle] = {}
+        self.obstacle_shapes: list[viser.SceneNodeHandle] = []
         self._obstacle_nodes = [self._add_obstacle(k, obstacle_dragged) for k in range(len(world.scenario.obstacles))]
+        camera = world.scenario.camera
+        self.camera = None if camera is None else add_camera(scene, "/camera", camera)
         self._goal_nodes = {k: self._add_goal(k, goal_dragged) for k in range(len(world.scenario.goals))
                             if world.draggable_goal(k)}
         self.draw_paths()
@@ -111,6 +122,8 @@ class ViewScene:
         (at least 1 m)."""
         points = [pose[:3, 3] for pose in self._poses(state.q)]
         points += [p for p in state.goal_points if p is not None] + list(state.obstacle_centres)
+        if self._world.scenario.camera is not None:
+            points.append(np.asarray(self._world.scenario.camera.position))
         low, high = np.min(points, axis=0), np.max(points, axis=0)
         centre = 0.5 * (low + high)
         size = max(float(np.max(high - low)), 1.0)
@@ -140,12 +153,18 @@ class ViewScene:
         centre = self._world.obstacle_centres(0.0)[k]
         planar = self._world.robot.planar and obstacle.type == "sphere"
         name = f"/obstacles/{k}"
-        node = self._anchor(name, centre, k, dragged, self.obstacle_handles)
-        mesh = shape_mesh(obstacle.shape, planar)
+        shape, scene, wxyz = obstacle.shape, self._server.scene, np.asarray(obstacle.orientation)
+        node = self._anchor(name, centre, k, None if isinstance(shape, PointCloud) else dragged, self.obstacle_handles)
         opacity = 0.4 if obstacle.type == "plane" else 0.8
-        self._server.scene.add_mesh_simple(f"{name}/shape", np.asarray(mesh.vertices, dtype=np.float32),
-                                           np.asarray(mesh.faces, dtype=np.uint32), color=OBSTACLE_COLOR,
-                                           opacity=opacity, wxyz=np.asarray(obstacle.orientation))
+        if isinstance(shape, PointCloud):
+            self.obstacle_shapes.append(add_cloud(scene, f"{name}/shape", shape, wxyz))
+        elif isinstance(shape, Mesh):
+            self.obstacle_shapes.append(add_mesh(scene, f"{name}/shape", shape, wxyz, OBSTACLE_COLOR, opacity))
+        else:
+            mesh = shape_mesh(shape, planar)
+            self.obstacle_shapes.append(scene.add_mesh_simple(
+                f"{name}/shape", np.asarray(mesh.vertices, dtype=np.float32), np.asarray(mesh.faces, dtype=np.uint32),
+                color=OBSTACLE_COLOR, opacity=opacity, wxyz=wxyz))
         return node
 
     def _add_goal(self, k: int, dragged: Dragged | None) -> viser.SceneNodeHandle:
