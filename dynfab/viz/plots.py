@@ -19,7 +19,13 @@ from dynfab.geometry.shapes import Shape
 from dynfab.perception.camera_spec import CameraSpec
 from dynfab.viz.body_drawing import draw_body_3d, draw_body_projection, focus_box
 from dynfab.viz.robot_snapshots import RobotSnapshots
-from dynfab.viz.scene_drawing import draw_camera_3d, draw_camera_projection, draw_shape_3d, draw_shape_projection
+from dynfab.viz.scene_drawing import (
+    draw_camera_3d,
+    draw_camera_projection,
+    draw_shape_3d,
+    draw_shape_projection,
+    shape_label,
+)
 
 _PATH_COLOR = "C0"
 _GOAL_COLOR = "C2"
@@ -103,7 +109,7 @@ def draw_run(
         _draw_shapes(top, (0, 1), tracks, camera)
         if robot is not None:
             draw_body_projection(top, (0, 1), robot, obstacles, radii, _times(times))
-            _focus(top, (0, 1), focus_box(robot, _kept_points(markers, positions.shape[1], camera)))
+            _focus(top, (0, 1), focus_box(robot, _kept_points(markers, camera)))
         _draw_base(top, base_path)
         top.legend(loc="best", fontsize="small")
         extra = [grid[0, k] for k in range(1, panels)]
@@ -117,7 +123,7 @@ def draw_run(
             _draw_shapes(ax, axes, tracks, camera)
             if robot is not None:
                 draw_body_projection(ax, axes, robot, obstacles, radii, _times(times))
-                _focus(ax, axes, focus_box(robot, _kept_points(markers, positions.shape[1], camera)))
+                _focus(ax, axes, focus_box(robot, _kept_points(markers, camera)))
             if axes == (0, 1):
                 _draw_base(ax, base_path)
                 ax.legend(loc="best", fontsize="small")
@@ -129,8 +135,8 @@ def draw_run(
     figure.suptitle(title)
 
 
-def _kept_points(markers: list[tuple[NDArray[np.float64], float]], dimension: int,
-                 camera: CameraSpec | None) -> NDArray[np.float64]:
+def _kept_points(markers: list[tuple[NDArray[np.float64], float]], camera: CameraSpec | None
+                 ) -> NDArray[np.float64]:
     """The points (k, 3) to keep in a focused view: the goals (zero-padded planar ones) and
     the camera's optical centre."""
     points = [goal if goal.ndim == 1 else goal[-1] for goal, _ in markers]
@@ -221,10 +227,10 @@ def _draw_shapes(ax: Axes, axes: tuple[int, int], tracks: list[tuple[Shape, Sequ
                  camera: CameraSpec | None) -> None:
     """The shapes at their end positions and the camera's frustum, projected on two axes
     (one legend entry per kind of shape)."""
-    labelled: set[type] = set()
+    labelled: set[str] = set()
     for shape, orientation, centres in tracks:
-        draw_shape_projection(ax, axes, shape, orientation, centres, type(shape) not in labelled)
-        labelled.add(type(shape))
+        draw_shape_projection(ax, axes, shape, orientation, centres, shape_label(shape) not in labelled)
+        labelled.add(shape_label(shape))
     if camera is not None:
         draw_camera_projection(ax, axes, camera, True)
 
@@ -267,7 +273,7 @@ def _draw_3d(
     points = np.vstack(extent)
     low, high = points.min(axis=0), points.max(axis=0)
     if robot is not None:  # where the robot worked, not the far ends of obstacle tracks
-        low, high = focus_box(robot, _kept_points(goals, 3, camera))
+        low, high = focus_box(robot, _kept_points(goals, camera))
     ax.set_xlim(low[0], high[0])
     ax.set_ylim(low[1], high[1])
     ax.set_zlim(low[2], high[2])

@@ -85,6 +85,11 @@ def draw_shape_projection(ax: Axes, axes: tuple[int, int], shape: Shape, orienta
         ax.plot(line[:, i], line[:, j], color=OBSTACLE_COLOR, linewidth=1, alpha=0.6, label=label)
 
 
+def shape_label(shape: Shape) -> str:
+    """The legend entry of ``shape``'s kind: a mesh, a point cloud, or a (primitive) shape."""
+    return MESH_LABEL if isinstance(shape, Mesh) else CLOUD_LABEL if isinstance(shape, PointCloud) else SHAPE_LABEL
+
+
 def draw_camera_3d(ax: Axes3D, camera: CameraSpec) -> NDArray[np.float64]:
     """The camera's frustum (:func:`~dynfab.viz.scene_samples.frustum_segments`), its
     optical axis and centre; returns the points drawn (6, 3)."""
