@@ -212,3 +212,42 @@ def _browser_corners(frustum: object) -> np.ndarray:
     local = np.array([[x, -y, z], [-x, -y, z], [-x, y, z], [x, y, z]])  # OpenCV: y down
     w, *vector = frustum.wxyz
     return local @ quaternion_matrix((w, *vector)).T + np.asarray(frustum.position)
+
+
+def test_the_live_view_shows_what_the_camera_sees_where_the_obstacles_are(tmp_path: Path) -> None:
+    """With ``perception: camera`` the view renders the camera's frames from its own state:
+    the points lie on the sphere in view (none on the robot), a frame comes once per period,
+    and a sphere moved (as a drag does) is seen where it was moved to."""
+    viser = pytest.importorskip("viser")
+    from dynfab.viz.robot_visuals import robot_look
+    from dynfab.viz.view_camera import CameraView
+    from dynfab.viz.view_scene import ViewScene
+    from dynfab.viz.view_world import ViewWorld
+
+    ball = np.array([0.5, -0.4, 0.5])
+    scenario = {"robot": "panda", "planner": "dynamic-fabric", "dt": 0.01, "duration": 1.0, "simulator": "mujoco",
+                "initial_state": {"q": START}, "perception": "camera",
+                "goal": [{"type": "position", "link": "panda_hand", "position": [0.45, 0.0, 0.4], "tolerance": 0.05}],
+                "obstacles": [{"type": "sphere", "radius": 0.1, "position": ball.tolist()}],
+                "camera": {"position": [1.6, -1.4, 1.4], "look_at": [0.3, -0.2, 0.45], "width": 160, "height": 120,
+                           "fov": 60, "rate": 10}}
+    (tmp_path / "camera.yaml").write_text(json.dumps(scenario))
+    world = ViewWorld(load_scenario(tmp_path / "camera.yaml"))
+    camera = CameraView(world)
+    server = viser.ViserServer(host="127.0.0.1", port=_free_port(), verbose=False)
+    try:
+        scene = ViewScene(server, world, robot_look(world.robot), camera_view=camera)
+        state = world.state(0.0, np.array(START))
+        scene.update(state, moving_only=False)
+        first = np.array(scene.camera_points.points, dtype=float)
+        on_ball = np.abs(np.linalg.norm(first - ball, axis=1) - 0.1)
+        assert len(first) > 100 and on_ball.max() < 0.005
+        scene.update(world.state(0.05, np.array(START)), moving_only=False)  # within the 0.1 s period
+        np.testing.assert_array_equal(scene.camera_points.points, first.astype(np.float32))
+        moved = dataclasses.replace(world.state(0.1, np.array(START)), obstacle_centres=np.array([ball + [0, 0.1, 0]]))
+        scene.update(moved, moving_only=False)
+        later = np.array(scene.camera_points.points, dtype=float)
+        assert np.abs(np.linalg.norm(later - (ball + [0, 0.1, 0]), axis=1) - 0.1).max() < 0.005
+    finally:
+        camera.close()
+        server.stop()

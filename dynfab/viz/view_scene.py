@@ -8,11 +8,14 @@ child ``/obstacles/k/shape``, so that the browser moves the shape with the handl
 a mesh's triangles and a point cloud's points as :mod:`dynfab.viz.view_sensing` bounds
 them; a cloud, static for the planner, gets no handle); ``/paths/...`` the reference paths
 of path goals and moving obstacles over the scenario's duration; ``/camera`` the depth
-camera's frustum (with ``/camera_axis`` its optical axis).
+camera's frustum (with ``/camera_axis`` its optical axis) and, given a
+:class:`~dynfab.viz.view_camera.CameraView`, ``/camera_points`` the points of its latest
+frame.
 """
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
@@ -22,7 +25,8 @@ from dynfab.viz.robot_visuals import LinkPoses, RobotLook
 from dynfab.geometry.mesh_shape import Mesh
 from dynfab.geometry.point_cloud import PointCloud
 from dynfab.viz.shape_meshes import shape_mesh
-from dynfab.viz.view_sensing import add_camera, add_cloud, add_mesh
+from dynfab.viz.view_camera import CameraView, CameraViewError
+from dynfab.viz.view_sensing import CAMERA_POINTS_COLOR, MIN_POINT_SIZE, add_camera, add_cloud, add_mesh
 from dynfab.viz.view_world import SceneState, ViewWorld
 
 if TYPE_CHECKING:
@@ -51,12 +55,15 @@ class ViewScene:
         obstacle_handles: per obstacle index, its drag handle (live view only).
         obstacle_shapes: per obstacle, the node of its geometry (a mesh or a point cloud).
         camera: the depth camera's frustum node, or None without a camera.
+        camera_points: the node of the camera's latest points, or None before a frame.
     """
 
     def __init__(self, server: viser.ViserServer, world: ViewWorld, look: RobotLook,
-                 goal_dragged: Dragged | None = None, obstacle_dragged: Dragged | None = None) -> None:
+                 goal_dragged: Dragged | None = None, obstacle_dragged: Dragged | None = None,
+                 camera_view: CameraView | None = None) -> None:
         """Add everything to ``server``'s scene; handles call ``goal_dragged`` /
-        ``obstacle_dragged`` (without them: no handles, as in a replay)."""
+        ``obstacle_dragged`` (without them: no handles, as in a replay); ``camera_view``
+        takes the frames whose points :meth:`update` shows."""
         self._server = server
         self._world = world
         scene = server.scene
@@ -76,6 +83,8 @@ class ViewScene:
         self._obstacle_nodes = [self._add_obstacle(k, obstacle_dragged) for k in range(len(world.scenario.obstacles))]
         camera = world.scenario.camera
         self.camera = None if camera is None else add_camera(scene, "/camera", camera)
+        self.camera_points: viser.PointCloudHandle | None = None
+        self._camera_view = camera_view
         self._goal_nodes = {k: self._add_goal(k, goal_dragged) for k in range(len(world.scenario.goals))
                             if world.draggable_goal(k)}
         self.draw_paths()
@@ -114,6 +123,27 @@ class ViewScene:
                 point = state.goal_points[k]
                 if point is not None and (not moving_only or self._world.goal_moves(k)):
                     node.position = point
+        self._show_camera_points(state)
+
+    def _show_camera_points(self, state: SceneState) -> None:
+        """The points of the camera's frame if one is due at ``state.t``; a camera that
+        cannot render here is said once on stderr and left out."""
+        if self._camera_view is None:
+            return
+        try:
+            points = self._camera_view.points(state)
+        except CameraViewError as error:
+            print(f"dynfab: the camera's points are not shown: {error}", file=sys.stderr)
+            self._camera_view = None
+            return
+        if points is None:
+            return
+        drawn = points.astype(np.float32).reshape(-1, 3)
+        if self.camera_points is None:
+            self.camera_points = self._server.scene.add_point_cloud(
+                "/camera_points", drawn, CAMERA_POINTS_COLOR, point_size=MIN_POINT_SIZE, precision="float32")
+        else:
+            self.camera_points.points = drawn
 
     def _frame_scene(self, state: SceneState) -> None:
         """A floor grid under the robot, goals and obstacles (twice the size of the box

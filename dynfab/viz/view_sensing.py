@@ -29,7 +29,7 @@ from dynfab.viz.scene_samples import drawn_points, even_subset, frustum_depth
 if TYPE_CHECKING:
     import viser
 
-__all__ = ["MIN_POINT_SIZE", "VIEW_MAX_FACES", "VIEW_MAX_POINTS", "add_camera", "add_cloud", "add_mesh",
+__all__ = ["CAMERA_POINTS_COLOR", "MIN_POINT_SIZE", "VIEW_MAX_FACES", "VIEW_MAX_POINTS", "add_camera", "add_cloud", "add_mesh",
            "frustum_scale", "opencv_wxyz"]
 
 #: Most triangles of one mesh sent to the browser.
@@ -39,6 +39,7 @@ VIEW_MAX_POINTS = 200_000
 #: Smallest drawn point [m].
 MIN_POINT_SIZE = 0.005
 CLOUD_COLOR = (150, 90, 200)
+CAMERA_POINTS_COLOR = (240, 150, 30)
 CAMERA_COLOR = (70, 70, 70)
 
 

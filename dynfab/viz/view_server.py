@@ -5,7 +5,9 @@ A background thread runs the loop: about :data:`FRAME_RATE` times a second it ad
 the session by the wall time since the last frame and redraws the scene; the panel's
 numbers are refreshed :data:`PANEL_RATE` times a second. GUI and drag callbacks (viser's
 threads) and the loop share the session under one lock. Closing the browser tab only
-disconnects a client; the server runs until :meth:`View.stop`.
+disconnects a client; the server runs until :meth:`View.stop`. With ``perception: camera``
+the live view also shows the points the camera sees (:mod:`dynfab.viz.view_camera`,
+rendered in the loop's thread); a replay shows its frustum only.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ import numpy as np
 from dynfab.scenario.schema import ScenarioError
 from dynfab.viz.replay_session import ReplaySession
 from dynfab.viz.robot_visuals import RobotLook
+from dynfab.viz.view_camera import CameraView
 from dynfab.viz.view_scene import ViewScene
 from dynfab.viz.view_session import ViewSession
 
@@ -132,7 +135,8 @@ class LiveView(View):
     def __init__(self, session: ViewSession, look: RobotLook, port: int) -> None:
         super().__init__(port, f"dynfab view: {session.scenario.path.name if session.scenario.path else 'scenario'}")
         self.session = session
-        self._scene = ViewScene(self.server, session.world, look, self.drag_goal, self.drag_obstacle)
+        camera = CameraView(session.world) if session.scenario.perception == "camera" else None
+        self._scene = ViewScene(self.server, session.world, look, self.drag_goal, self.drag_obstacle, camera)
         self._steps = 0
         self._rate = math.nan
         self._rate_clock = (time.perf_counter(), 0.0)
