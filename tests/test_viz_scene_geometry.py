@@ -9,6 +9,7 @@ import io
 import json
 import math
 import socket
+import time
 from pathlib import Path
 
 import numpy as np
@@ -217,11 +218,14 @@ def _browser_corners(frustum: object) -> np.ndarray:
 def test_the_live_view_shows_what_the_camera_sees_where_the_obstacles_are(tmp_path: Path) -> None:
     """With ``perception: camera`` the view renders the camera's frames from its own state:
     the points lie on the sphere in view (none on the robot), a frame comes once per period,
-    and a sphere moved (as a drag does) is seen where it was moved to."""
+    a sphere moved (as a drag does) is seen where it was moved to, and the running live view
+    shows them."""
     viser = pytest.importorskip("viser")
     from dynfab.viz.robot_visuals import robot_look
     from dynfab.viz.view_camera import CameraView
     from dynfab.viz.view_scene import ViewScene
+    from dynfab.viz.view_server import LiveView
+    from dynfab.viz.view_session import ViewSession
     from dynfab.viz.view_world import ViewWorld
 
     ball = np.array([0.5, -0.4, 0.5])
@@ -233,21 +237,37 @@ def test_the_live_view_shows_what_the_camera_sees_where_the_obstacles_are(tmp_pa
                            "fov": 60, "rate": 10}}
     (tmp_path / "camera.yaml").write_text(json.dumps(scenario))
     world = ViewWorld(load_scenario(tmp_path / "camera.yaml"))
-    camera = CameraView(world)
     server = viser.ViserServer(host="127.0.0.1", port=_free_port(), verbose=False)
+    scene = ViewScene(server, world, robot_look(world.robot), camera_view=CameraView(world))
     try:
-        scene = ViewScene(server, world, robot_look(world.robot), camera_view=camera)
         state = world.state(0.0, np.array(START))
-        scene.update(state, moving_only=False)
+        scene.show_camera_points(state)
         first = np.array(scene.camera_points.points, dtype=float)
         on_ball = np.abs(np.linalg.norm(first - ball, axis=1) - 0.1)
         assert len(first) > 100 and on_ball.max() < 0.005
-        scene.update(world.state(0.05, np.array(START)), moving_only=False)  # within the 0.1 s period
+        scene.show_camera_points(world.state(0.05, np.array(START)))  # within the 0.1 s period
         np.testing.assert_array_equal(scene.camera_points.points, first.astype(np.float32))
         moved = dataclasses.replace(world.state(0.1, np.array(START)), obstacle_centres=np.array([ball + [0, 0.1, 0]]))
-        scene.update(moved, moving_only=False)
+        scene.show_camera_points(moved)
         later = np.array(scene.camera_points.points, dtype=float)
         assert np.abs(np.linalg.norm(later - (ball + [0, 0.1, 0]), axis=1) - 0.1).max() < 0.005
     finally:
-        camera.close()
+        scene.close()
         server.stop()
+    live = LiveView(ViewSession(world.scenario), robot_look(world.robot), _free_port())
+    live.start()  # frames are rendered in the loop's thread, where MuJoCo's context lives
+    try:
+        for _ in range(600):
+            if live._scene.camera_points is not None:
+                break
+            time.sleep(0.1)
+        seen = np.array(live._scene.camera_points.points, dtype=float)
+        assert len(seen) > 100 and np.abs(np.linalg.norm(seen - ball, axis=1) - 0.1).max() < 0.005
+        for _ in range(600):  # three more frames
+            if live.session.t >= 0.35 or not live._thread.is_alive():
+                break
+            time.sleep(0.1)
+        assert live.session.t >= 0.35, live.session.message
+        assert live._thread.is_alive()  # rendering in the loop's thread raised nothing
+    finally:
+        live.stop()

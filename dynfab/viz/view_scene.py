@@ -63,7 +63,7 @@ class ViewScene:
                  camera_view: CameraView | None = None) -> None:
         """Add everything to ``server``'s scene; handles call ``goal_dragged`` /
         ``obstacle_dragged`` (without them: no handles, as in a replay); ``camera_view``
-        takes the frames whose points :meth:`update` shows."""
+        takes the frames whose points :meth:`show_camera_points` shows."""
         self._server = server
         self._world = world
         scene = server.scene
@@ -123,11 +123,16 @@ class ViewScene:
                 point = state.goal_points[k]
                 if point is not None and (not moving_only or self._world.goal_moves(k)):
                     node.position = point
-        self._show_camera_points(state)
 
-    def _show_camera_points(self, state: SceneState) -> None:
+    def close(self) -> None:
+        """Free what the camera view holds (call it from the thread that showed its points)."""
+        if self._camera_view is not None:
+            self._camera_view.close()
+
+    def show_camera_points(self, state: SceneState) -> None:
         """The points of the camera's frame if one is due at ``state.t``; a camera that
-        cannot render here is said once on stderr and left out."""
+        cannot render here is said once on stderr and left out. Call it from one thread
+        only (MuJoCo's OpenGL context stays current in the thread that made it)."""
         if self._camera_view is None:
             return
         try:

@@ -86,6 +86,8 @@ class View:
         frame_steps: control periods simulated per frame over the last second (live).
     """
 
+    _scene: ViewScene
+
     def __init__(self, port: int, title: str) -> None:
         import viser
 
@@ -106,20 +108,25 @@ class View:
         self._stop.set()
         if self._thread.is_alive():
             self._thread.join(timeout=5.0)
+        elif self._thread.ident is None:  # the loop never ran: anything rendered, rendered here
+            self._scene.close()
         self.server.stop()
 
     def _loop(self) -> None:
         last = time.perf_counter()
         next_panel = last
-        while not self._stop.is_set():
-            now = time.perf_counter()
-            with self._lock:
-                self._frame(now - last)
-                if now >= next_panel:
-                    self._panel()
-                    next_panel = now + 1.0 / PANEL_RATE
-            last = now
-            self._stop.wait(max(0.0, 1.0 / FRAME_RATE - (time.perf_counter() - now)))
+        try:
+            while not self._stop.is_set():
+                now = time.perf_counter()
+                with self._lock:
+                    self._frame(now - last)
+                    if now >= next_panel:
+                        self._panel()
+                        next_panel = now + 1.0 / PANEL_RATE
+                last = now
+                self._stop.wait(max(0.0, 1.0 / FRAME_RATE - (time.perf_counter() - now)))
+        finally:
+            self._scene.close()  # MuJoCo's OpenGL context is freed in the thread it is current in
 
     def _frame(self, wall_seconds: float) -> None:
         raise NotImplementedError
@@ -209,7 +216,9 @@ class LiveView(View):
 
     def _frame(self, wall_seconds: float) -> None:
         self._steps += self.session.advance(wall_seconds)
-        self._scene.update(self.session.scene(), moving_only=True)
+        scene = self.session.scene()
+        self._scene.update(scene, moving_only=True)
+        self._scene.show_camera_points(scene)
 
     def _panel(self) -> None:
         now = time.perf_counter()
