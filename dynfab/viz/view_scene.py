@@ -21,9 +21,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from dynfab.viz.robot_visuals import LinkPoses, RobotLook
 from dynfab.geometry.mesh_shape import Mesh
 from dynfab.geometry.point_cloud import PointCloud
+from dynfab.viz.robot_visuals import LinkPoses, RobotLook
 from dynfab.viz.shape_meshes import shape_mesh
 from dynfab.viz.view_camera import CameraView, CameraViewError
 from dynfab.viz.view_sensing import CAMERA_POINTS_COLOR, MIN_POINT_SIZE, add_camera, add_cloud, add_mesh
