@@ -39,8 +39,8 @@ def read_mesh(path: str | os.PathLike[str], scale: Sequence[float] = (1.0, 1.0, 
 
     Raises:
         MeshFileError: the file is missing, larger than :data:`MAX_MESH_BYTES`, cannot be
-            read as triangles, has none, more than :data:`MAX_MESH_FACES`, or non-finite
-            vertices; the message says which.
+            read as triangles, has none (or none with an area), more than
+            :data:`MAX_MESH_FACES`, or non-finite vertices; the message says which.
     """
     import trimesh
 
@@ -58,4 +58,7 @@ def read_mesh(path: str | os.PathLike[str], scale: Sequence[float] = (1.0, 1.0, 
     vertices = np.asarray(loaded.vertices, dtype=float) * np.asarray(scale, dtype=float)
     if not np.isfinite(vertices).all():
         raise MeshFileError(f"{path.name} has NaN or infinite vertices")
-    return Mesh(vertices, faces, source=path.name)
+    try:
+        return Mesh(vertices, faces, source=path.name)
+    except ValueError as error:  # faces that index missing vertices, or none with an area
+        raise MeshFileError(str(error).replace(f"mesh {path.name}", path.name)) from None

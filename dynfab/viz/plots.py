@@ -16,9 +16,16 @@ from mpl_toolkits.mplot3d import Axes3D
 from numpy.typing import ArrayLike, NDArray
 
 from dynfab.geometry.shapes import Shape
+from dynfab.perception.camera_spec import CameraSpec
 from dynfab.viz.body_drawing import draw_body_3d, draw_body_projection, focus_box
 from dynfab.viz.robot_snapshots import RobotSnapshots
-from dynfab.viz.shape_outlines import shape_outline
+from dynfab.viz.scene_drawing import (
+    draw_camera_3d,
+    draw_camera_projection,
+    draw_shape_3d,
+    draw_shape_projection,
+    shape_label,
+)
 
 _PATH_COLOR = "C0"
 _GOAL_COLOR = "C2"
@@ -29,8 +36,8 @@ GoalMarker = tuple[ArrayLike, float]
 """``(position, tolerance)``: a goal point (d,) or a reference path (T, d), and [m]."""
 
 ShapeTrack = tuple[Shape, Sequence[float], ArrayLike]
-"""``(shape, orientation, centres)``: an obstacle shape, its quaternion (w, x, y, z) and its
-frame's origin over time (T, 3) [m]."""
+"""``(shape, orientation, centres)``: an obstacle shape (a primitive, a mesh or a point
+cloud), its quaternion (w, x, y, z) and its frame's origin over time (T, 3) [m]."""
 
 
 def run_panels(planar: bool, has_clearance: bool, has_reference: bool) -> int:
@@ -58,6 +65,7 @@ def draw_run(
     shapes: Sequence[ShapeTrack] = (),
     robot: RobotSnapshots | None = None,
     clearance_label: str = "clearance",
+    camera: CameraSpec | None = None,
 ) -> None:
     """Draw a run on ``figure`` (a whole figure, or one of its subfigures to compare runs).
 
@@ -78,11 +86,14 @@ def draw_run(
         title: The drawing's title.
         base_path: Positions (T, 2) of a mobile base [m], drawn in the top view.
         shapes: Box, cylinder, capsule and plane obstacles, drawn as wireframes at their
-            end position (with the path of their origin if they move).
+            end position (with the path of their origin if they move); meshes as their
+            triangles, point clouds as their points (bounded samples,
+            :mod:`dynfab.viz.scene_drawing`).
         robot: The robot's skeleton and collision spheres at a few instants, drawn in
             every view (the closest approach with the sphere obstacles where they were then).
         clearance_label: What ``clearance_over_time`` measures (e.g. ``"mesh clearance"``),
             the clearance panel's title and axis label.
+        camera: A depth camera, drawn as its frustum (kept in the focused views).
     """
     positions = np.asarray(goal_link_positions, dtype=float)
     obstacles = np.asarray(obstacles_over_time, dtype=float)
@@ -95,24 +106,24 @@ def draw_run(
         grid = figure.add_gridspec(1, panels)
         top = figure.add_subplot(grid[0, 0])
         _draw_projection(top, (0, 1), positions, markers, obstacles, radii)
-        _draw_shapes(top, (0, 1), tracks)
+        _draw_shapes(top, (0, 1), tracks, camera)
         if robot is not None:
             draw_body_projection(top, (0, 1), robot, obstacles, radii, _times(times))
-            _focus(top, (0, 1), focus_box(robot, _goal_points(markers, positions.shape[1])))
+            _focus(top, (0, 1), focus_box(robot, _kept_points(markers, camera)))
         _draw_base(top, base_path)
         top.legend(loc="best", fontsize="small")
         extra = [grid[0, k] for k in range(1, panels)]
     else:
         grid = figure.add_gridspec(2, 3)
         view = figure.add_subplot(grid[0, 0], projection="3d")
-        _draw_3d(view, positions, markers, obstacles, radii, tracks, robot)
+        _draw_3d(view, positions, markers, obstacles, radii, tracks, robot, camera)
         for slot, axes in ((grid[0, 1], (0, 1)), (grid[0, 2], (1, 2)), (grid[1, 0], (0, 2))):
             ax = figure.add_subplot(slot)
             _draw_projection(ax, axes, positions, markers, obstacles, radii)
-            _draw_shapes(ax, axes, tracks)
+            _draw_shapes(ax, axes, tracks, camera)
             if robot is not None:
                 draw_body_projection(ax, axes, robot, obstacles, radii, _times(times))
-                _focus(ax, axes, focus_box(robot, _goal_points(markers, positions.shape[1])))
+                _focus(ax, axes, focus_box(robot, _kept_points(markers, camera)))
             if axes == (0, 1):
                 _draw_base(ax, base_path)
                 ax.legend(loc="best", fontsize="small")
@@ -124,9 +135,13 @@ def draw_run(
     figure.suptitle(title)
 
 
-def _goal_points(markers: list[tuple[NDArray[np.float64], float]], dimension: int) -> NDArray[np.float64]:
-    """The goal points (k, 3) to keep in a focused view (zero-padded planar ones)."""
+def _kept_points(markers: list[tuple[NDArray[np.float64], float]], camera: CameraSpec | None
+                 ) -> NDArray[np.float64]:
+    """The points (k, 3) to keep in a focused view: the goals (zero-padded planar ones) and
+    the camera's optical centre."""
     points = [goal if goal.ndim == 1 else goal[-1] for goal, _ in markers]
+    if camera is not None:
+        points.append(np.asarray(camera.position))
     return np.array([np.pad(p[:3], (0, 3 - min(p.size, 3))) for p in points]).reshape(-1, 3)
 
 
@@ -208,16 +223,16 @@ def _draw_projection(
     ax.grid(True, alpha=0.3)
 
 
-def _draw_shapes(ax: Axes, axes: tuple[int, int], tracks: list[tuple[Shape, Sequence[float], NDArray[np.float64]]]
-                 ) -> None:
-    """Wireframes of the shapes at their end positions, projected on two axes."""
-    i, j = axes
-    for k, (shape, orientation, centres) in enumerate(tracks):
-        if np.ptp(centres[:, [i, j]], axis=0).max() > 0.0:
-            ax.plot(centres[:, i], centres[:, j], ":", color=_OBSTACLE_COLOR, linewidth=1)
-        for n, line in enumerate(shape_outline(shape, orientation, centres[-1])):
-            label = "shape" if k == 0 and n == 0 else None
-            ax.plot(line[:, i], line[:, j], color=_OBSTACLE_COLOR, linewidth=1, alpha=0.6, label=label)
+def _draw_shapes(ax: Axes, axes: tuple[int, int], tracks: list[tuple[Shape, Sequence[float], NDArray[np.float64]]],
+                 camera: CameraSpec | None) -> None:
+    """The shapes at their end positions and the camera's frustum, projected on two axes
+    (one legend entry per kind of shape)."""
+    labelled: set[str] = set()
+    for shape, orientation, centres in tracks:
+        draw_shape_projection(ax, axes, shape, orientation, centres, shape_label(shape) not in labelled)
+        labelled.add(shape_label(shape))
+    if camera is not None:
+        draw_camera_projection(ax, axes, camera, True)
 
 
 def _draw_3d(
@@ -228,17 +243,17 @@ def _draw_3d(
     radii: NDArray[np.float64],
     tracks: list[tuple[Shape, Sequence[float], NDArray[np.float64]]],
     robot: RobotSnapshots | None = None,
-    clearance_label: str = "clearance",
+    camera: CameraSpec | None = None,
 ) -> None:
-    """Draw the path, goals (with tolerance spheres), obstacles, shapes and the robot in 3-D."""
+    """Draw the path, goals (with tolerance spheres), obstacles, shapes, the camera's frustum
+    and the robot in 3-D."""
     extent = [positions]
     if robot is not None:
         extent += draw_body_3d(ax, robot)
     for shape, orientation, centres in tracks:
-        ax.plot(*centres.T, ":", color=_OBSTACLE_COLOR, linewidth=1)
-        for line in shape_outline(shape, orientation, centres[-1]):
-            ax.plot(line[:, 0], line[:, 1], line[:, 2], color=_OBSTACLE_COLOR, linewidth=1, alpha=0.6)
-            extent.append(line)
+        extent.append(draw_shape_3d(ax, shape, orientation, centres))
+    if camera is not None:
+        extent.append(draw_camera_3d(ax, camera))
     for k, radius in enumerate(radii):
         centers = obstacles[:, k, :]
         ax.plot(*centers.T, ":", color=_OBSTACLE_COLOR, linewidth=1)
@@ -258,7 +273,7 @@ def _draw_3d(
     points = np.vstack(extent)
     low, high = points.min(axis=0), points.max(axis=0)
     if robot is not None:  # where the robot worked, not the far ends of obstacle tracks
-        low, high = focus_box(robot, _goal_points(goals, 3))
+        low, high = focus_box(robot, _kept_points(goals, camera))
     ax.set_xlim(low[0], high[0])
     ax.set_ylim(low[1], high[1])
     ax.set_zlim(low[2], high[2])

@@ -99,4 +99,5 @@ def _draw_result(target: Figure | SubFigure, result: RunResult, title: str) -> N
     draw_run(target, positions, markers, result.obstacle_centers[:, spheres], [obstacles[k].radius for k in spheres],
              robot.planar, clearance_over_time=clearance if obstacles else None, times=result.record.t,
              clearance_label=clearance_label, title=title,
-             base_path=None if robot.base is None else result.record.q[:, :2], shapes=shapes, robot=snapshots)
+             base_path=None if robot.base is None else result.record.q[:, :2], shapes=shapes, robot=snapshots,
+             camera=result.scenario.camera)

@@ -4,19 +4,29 @@ reference paths, updated from a :class:`~dynfab.viz.view_world.SceneState`.
 Scene tree: ``/robot/L`` one frame per link L that carries meshes (its pose from the
 kinematics at ``q``); ``/spheres/i`` the collision spheres (hidden until asked for);
 ``/obstacles/k`` and ``/goals/k`` (drag handles when ``draggable``, with the shape as a
-child, so that the browser moves the shape with the handle at once); ``/paths/...`` the
-reference paths of path goals and moving obstacles over the scenario's duration.
+child ``/obstacles/k/shape``, so that the browser moves the shape with the handle at once;
+a mesh's triangles and a point cloud's points as :mod:`dynfab.viz.view_sensing` bounds
+them; a cloud, static for the planner, gets no handle); ``/paths/...`` the reference paths
+of path goals and moving obstacles over the scenario's duration; ``/camera`` the depth
+camera's frustum (with ``/camera_axis`` its optical axis) and, given a
+:class:`~dynfab.viz.view_camera.CameraView`, ``/camera_points`` the points of its latest
+frame.
 """
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from dynfab.geometry.mesh_shape import Mesh
+from dynfab.geometry.point_cloud import PointCloud
 from dynfab.viz.robot_visuals import LinkPoses, RobotLook
 from dynfab.viz.shape_meshes import shape_mesh
+from dynfab.viz.view_camera import CameraView, CameraViewError
+from dynfab.viz.view_sensing import CAMERA_POINTS_COLOR, MIN_POINT_SIZE, add_camera, add_cloud, add_mesh
 from dynfab.viz.view_world import SceneState, ViewWorld
 
 if TYPE_CHECKING:
@@ -43,12 +53,17 @@ class ViewScene:
     Attributes:
         goal_handles: per draggable goal index, its drag handle (live view only).
         obstacle_handles: per obstacle index, its drag handle (live view only).
+        obstacle_shapes: per obstacle, the node of its geometry (a mesh or a point cloud).
+        camera: the depth camera's frustum node, or None without a camera.
+        camera_points: the node of the camera's latest points, or None before a frame.
     """
 
     def __init__(self, server: viser.ViserServer, world: ViewWorld, look: RobotLook,
-                 goal_dragged: Dragged | None = None, obstacle_dragged: Dragged | None = None) -> None:
+                 goal_dragged: Dragged | None = None, obstacle_dragged: Dragged | None = None,
+                 camera_view: CameraView | None = None) -> None:
         """Add everything to ``server``'s scene; handles call ``goal_dragged`` /
-        ``obstacle_dragged`` (without them: no handles, as in a replay)."""
+        ``obstacle_dragged`` (without them: no handles, as in a replay); ``camera_view``
+        takes the frames whose points :meth:`show_camera_points` shows."""
         self._server = server
         self._world = world
         scene = server.scene
@@ -64,7 +79,12 @@ class ViewScene:
                                                   visible=False) for i, s in enumerate(spheres)]
         self.goal_handles: dict[int, viser.TransformControlsHandle] = {}
         self.obstacle_handles: dict[int, viser.TransformControlsHandle] = {}
+        self.obstacle_shapes: list[viser.SceneNodeHandle] = []
         self._obstacle_nodes = [self._add_obstacle(k, obstacle_dragged) for k in range(len(world.scenario.obstacles))]
+        camera = world.scenario.camera
+        self.camera = None if camera is None else add_camera(scene, "/camera", camera)
+        self.camera_points: viser.PointCloudHandle | None = None
+        self._camera_view = camera_view
         self._goal_nodes = {k: self._add_goal(k, goal_dragged) for k in range(len(world.scenario.goals))
                             if world.draggable_goal(k)}
         self.draw_paths()
@@ -104,6 +124,32 @@ class ViewScene:
                 if point is not None and (not moving_only or self._world.goal_moves(k)):
                     node.position = point
 
+    def close(self) -> None:
+        """Free what the camera view holds (call it from the thread that showed its points)."""
+        if self._camera_view is not None:
+            self._camera_view.close()
+
+    def show_camera_points(self, state: SceneState) -> None:
+        """The points of the camera's frame if one is due at ``state.t``; a camera that
+        cannot render here is said once on stderr and left out. Call it from one thread
+        only (MuJoCo's OpenGL context stays current in the thread that made it)."""
+        if self._camera_view is None:
+            return
+        try:
+            points = self._camera_view.points(state)
+        except CameraViewError as error:
+            print(f"dynfab: the camera's points are not shown: {error}", file=sys.stderr)
+            self._camera_view = None
+            return
+        if points is None:
+            return
+        drawn = points.astype(np.float32).reshape(-1, 3)
+        if self.camera_points is None:
+            self.camera_points = self._server.scene.add_point_cloud(
+                "/camera_points", drawn, CAMERA_POINTS_COLOR, point_size=MIN_POINT_SIZE, precision="float32")
+        else:
+            self.camera_points.points = drawn
+
     def _frame_scene(self, state: SceneState) -> None:
         """A floor grid under the robot, goals and obstacles (twice the size of the box
         around them, at least :data:`GRID_SIZE`), and the browser's camera looking at them
@@ -111,6 +157,8 @@ class ViewScene:
         (at least 1 m)."""
         points = [pose[:3, 3] for pose in self._poses(state.q)]
         points += [p for p in state.goal_points if p is not None] + list(state.obstacle_centres)
+        if self._world.scenario.camera is not None:
+            points.append(np.asarray(self._world.scenario.camera.position))
         low, high = np.min(points, axis=0), np.max(points, axis=0)
         centre = 0.5 * (low + high)
         size = max(float(np.max(high - low)), 1.0)
@@ -140,12 +188,18 @@ class ViewScene:
         centre = self._world.obstacle_centres(0.0)[k]
         planar = self._world.robot.planar and obstacle.type == "sphere"
         name = f"/obstacles/{k}"
-        node = self._anchor(name, centre, k, dragged, self.obstacle_handles)
-        mesh = shape_mesh(obstacle.shape, planar)
+        shape, scene, wxyz = obstacle.shape, self._server.scene, np.asarray(obstacle.orientation)
+        node = self._anchor(name, centre, k, None if isinstance(shape, PointCloud) else dragged, self.obstacle_handles)
         opacity = 0.4 if obstacle.type == "plane" else 0.8
-        self._server.scene.add_mesh_simple(f"{name}/shape", np.asarray(mesh.vertices, dtype=np.float32),
-                                           np.asarray(mesh.faces, dtype=np.uint32), color=OBSTACLE_COLOR,
-                                           opacity=opacity, wxyz=np.asarray(obstacle.orientation))
+        if isinstance(shape, PointCloud):
+            self.obstacle_shapes.append(add_cloud(scene, f"{name}/shape", shape, wxyz))
+        elif isinstance(shape, Mesh):
+            self.obstacle_shapes.append(add_mesh(scene, f"{name}/shape", shape, wxyz, OBSTACLE_COLOR, opacity))
+        else:
+            mesh = shape_mesh(shape, planar)
+            self.obstacle_shapes.append(scene.add_mesh_simple(
+                f"{name}/shape", np.asarray(mesh.vertices, dtype=np.float32), np.asarray(mesh.faces, dtype=np.uint32),
+                color=OBSTACLE_COLOR, opacity=opacity, wxyz=wxyz))
         return node
 
     def _add_goal(self, k: int, dragged: Dragged | None) -> viser.SceneNodeHandle:

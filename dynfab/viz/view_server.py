@@ -5,7 +5,9 @@ A background thread runs the loop: about :data:`FRAME_RATE` times a second it ad
 the session by the wall time since the last frame and redraws the scene; the panel's
 numbers are refreshed :data:`PANEL_RATE` times a second. GUI and drag callbacks (viser's
 threads) and the loop share the session under one lock. Closing the browser tab only
-disconnects a client; the server runs until :meth:`View.stop`.
+disconnects a client; the server runs until :meth:`View.stop`. With ``perception: camera``
+the live view also shows the points the camera sees (:mod:`dynfab.viz.view_camera`,
+rendered in the loop's thread); a replay shows its frustum only.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ import numpy as np
 from dynfab.scenario.schema import ScenarioError
 from dynfab.viz.replay_session import ReplaySession
 from dynfab.viz.robot_visuals import RobotLook
+from dynfab.viz.view_camera import CameraView
 from dynfab.viz.view_scene import ViewScene
 from dynfab.viz.view_session import ViewSession
 
@@ -83,6 +86,8 @@ class View:
         frame_steps: control periods simulated per frame over the last second (live).
     """
 
+    _scene: ViewScene
+
     def __init__(self, port: int, title: str) -> None:
         import viser
 
@@ -103,20 +108,25 @@ class View:
         self._stop.set()
         if self._thread.is_alive():
             self._thread.join(timeout=5.0)
+        elif self._thread.ident is None:  # the loop never ran: anything rendered, rendered here
+            self._scene.close()
         self.server.stop()
 
     def _loop(self) -> None:
         last = time.perf_counter()
         next_panel = last
-        while not self._stop.is_set():
-            now = time.perf_counter()
-            with self._lock:
-                self._frame(now - last)
-                if now >= next_panel:
-                    self._panel()
-                    next_panel = now + 1.0 / PANEL_RATE
-            last = now
-            self._stop.wait(max(0.0, 1.0 / FRAME_RATE - (time.perf_counter() - now)))
+        try:
+            while not self._stop.is_set():
+                now = time.perf_counter()
+                with self._lock:
+                    self._frame(now - last)
+                    if now >= next_panel:
+                        self._panel()
+                        next_panel = now + 1.0 / PANEL_RATE
+                last = now
+                self._stop.wait(max(0.0, 1.0 / FRAME_RATE - (time.perf_counter() - now)))
+        finally:
+            self._scene.close()  # MuJoCo's OpenGL context is freed in the thread it is current in
 
     def _frame(self, wall_seconds: float) -> None:
         raise NotImplementedError
@@ -132,7 +142,8 @@ class LiveView(View):
     def __init__(self, session: ViewSession, look: RobotLook, port: int) -> None:
         super().__init__(port, f"dynfab view: {session.scenario.path.name if session.scenario.path else 'scenario'}")
         self.session = session
-        self._scene = ViewScene(self.server, session.world, look, self.drag_goal, self.drag_obstacle)
+        camera = CameraView(session.world) if session.scenario.perception == "camera" else None
+        self._scene = ViewScene(self.server, session.world, look, self.drag_goal, self.drag_obstacle, camera)
         self._steps = 0
         self._rate = math.nan
         self._rate_clock = (time.perf_counter(), 0.0)
@@ -205,7 +216,9 @@ class LiveView(View):
 
     def _frame(self, wall_seconds: float) -> None:
         self._steps += self.session.advance(wall_seconds)
-        self._scene.update(self.session.scene(), moving_only=True)
+        scene = self.session.scene()
+        self._scene.update(scene, moving_only=True)
+        self._scene.show_camera_points(scene)
 
     def _panel(self) -> None:
         now = time.perf_counter()
