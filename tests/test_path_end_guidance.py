@@ -126,7 +126,8 @@ def test_a_turning_axis_goal_is_not_guided_and_says_why(panda) -> None:
 
 
 def test_a_path_end_out_of_reach_leaves_the_path_to_the_fabric_and_status_says_why(panda) -> None:
-    data = _through_the_wall(panda, {"type": "spline", "waypoints": [_hand(panda), [1.5, 0.5, 0.3]], "duration": 1.0})
+    out_of_reach = {"type": "spline", "waypoints": [_hand(panda), [1.5, 0.5, 0.3]], "duration": 1.0}
+    data = _through_the_wall(panda, out_of_reach)
     data["duration"] = 2.0
     result = run_scenario(scenario_from_dict(data))
     metrics = result.metrics

@@ -51,7 +51,8 @@ from dynfab.scenario.references import goal_axes
 from dynfab.scenario.path_end import PathEndController, path_end_refusal, path_end_time
 from dynfab.scenario.schema import GoalSpec, Scenario, ScenarioError
 
-__all__ = ["AllowanceSlot", "GuidedController", "check_guided_ends", "guidance_refusal", "guided_planner_config", "make_scenario_controller"]
+__all__ = ["AllowanceSlot", "GuidedController", "check_guided_ends", "guidance_refusal", "guided_planner_config",
+           "make_scenario_controller"]
 
 #: The guided fabric's constants below were chosen on MBM problems 10-11 (gain, range) and 13-16
 #: (energy, buffer) of the shared set, object removed; results are reported on problems 17 on.
@@ -191,7 +192,7 @@ def guidance_refusal(scenario: Scenario, robot: Robot) -> str | None:
         if goal.type == "path" and path_end_refusal(goal) is not None:
             return f"goal[{i}].trajectory: {path_end_refusal(goal)}"
         if goal.type == "path" and scenario.perception == "camera":
-            return "path ends are not guided under perception: camera"
+            return f"goal[{i}]: path ends are not guided under perception: camera"
     if any(goal.type == "path" for goal in scenario.goals) and any(goal.type == "joint" for goal in scenario.goals):
         return "a path goal with a joint goal: the end of the path and the joint goal are two configurations"
     return None
