@@ -56,7 +56,7 @@ def path_end_refusal(goal: GoalSpec) -> str | None:
     """Why the end of path goal ``goal`` cannot be guided, or None if it can (module docstring)."""
     assert goal.type == "path" and goal.trajectory is not None
     kind = str(goal.trajectory.get("type"))
-    return None if kind in ENDING_PATHS else _NO_END.get(kind, f"a {kind} path has no known end")
+    return None if kind in ENDING_PATHS else _NO_END[kind]
 
 
 def path_end_time(scenario: Scenario, references: References) -> float:
