@@ -118,6 +118,16 @@ def test_a_path_end_asked_to_be_guided_where_guidance_is_off_is_refused_and_guid
                       FabricController)
 
 
+def test_a_path_that_ends_when_the_run_does_is_not_guided_and_asking_for_it_is_refused(panda) -> None:
+    data = _through_the_wall(panda)
+    data["duration"] = PATH_TIME
+    scenario = validate_for_robot(scenario_from_dict(data), panda)
+    assert guidance_refusal(scenario, panda) == "goal[0].trajectory: the path ends at 4 s, not before the run does (4 s)"
+    data["goal"][0]["guided_end"] = True
+    with pytest.raises(ScenarioError, match=r"^goal\[0\]\.guided_end: the end of this path cannot be guided"):
+        run_scenario(scenario_from_dict(data))
+
+
 def test_a_turning_axis_goal_is_not_guided_and_says_why(panda) -> None:
     data = _through_the_wall(panda)
     data["goal"] = [{"type": "axis", "axis": [0, 0, 1], "direction": [0, 0, -1], "angular_velocity": [0, 0, 0.2]}]

@@ -189,8 +189,8 @@ def guidance_refusal(scenario: Scenario, robot: Robot) -> str | None:
             return f"goal[{i}]: an axis goal that turns moves: it has no configuration to plan to"
         if goal.type == "path" and goal.guided_end is False:
             return f"goal[{i}].guided_end: false"
-        if goal.type == "path" and path_end_refusal(goal) is not None:
-            return f"goal[{i}].trajectory: {path_end_refusal(goal)}"
+        if goal.type == "path" and path_end_refusal(goal, scenario.duration) is not None:
+            return f"goal[{i}].trajectory: {path_end_refusal(goal, scenario.duration)}"
         if goal.type == "path" and scenario.perception == "camera":
             return f"goal[{i}]: path ends are not guided under perception: camera"
     if any(goal.type == "path" for goal in scenario.goals) and any(goal.type == "joint" for goal in scenario.goals):

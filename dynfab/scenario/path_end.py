@@ -52,11 +52,15 @@ _NO_END = {
 }
 
 
-def path_end_refusal(goal: GoalSpec) -> str | None:
-    """Why the end of path goal ``goal`` cannot be guided, or None if it can (module docstring)."""
+def path_end_refusal(goal: GoalSpec, run_duration: float) -> str | None:
+    """Why the end of path goal ``goal`` cannot be guided in a run of ``run_duration`` [s],
+    or None if it can (module docstring): its path has no end, or ends when the run does."""
     assert goal.type == "path" and goal.trajectory is not None
     kind = str(goal.trajectory.get("type"))
-    return None if kind in ENDING_PATHS else _NO_END[kind]
+    if kind not in ENDING_PATHS:
+        return _NO_END[kind]
+    end = float(goal.trajectory["duration"])
+    return None if end < run_duration else f"the path ends at {end:g} s, not before the run does ({run_duration:g} s)"
 
 
 def path_end_time(scenario: Scenario, references: References) -> float:
