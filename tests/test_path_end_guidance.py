@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from dynfab.motion.inverse_kinematics import AxisTarget, PointTarget
+from dynfab.motion.joint_trajectory import SHORTEST_PATH, time_path
 from dynfab.robots import load_robot
 from dynfab.scenario.controllers import FabricController
 from dynfab.scenario.guided_controller import goal_targets, guidance_refusal, make_scenario_controller
@@ -148,3 +149,15 @@ def test_a_path_end_out_of_reach_leaves_the_path_to_the_fabric_and_status_says_w
     # a path goal counts as reached once within tolerance of its reference (here at t = 0), so the
     # run's `failure` stays None: the metrics of path goals do not ask for the end
     assert metrics.success and metrics.failure is None
+
+
+@pytest.mark.parametrize("length", [0.0, 1e-12, 3e-9, 1e-8, 1e-6])
+def test_a_path_to_where_the_robot_already_is_is_timed(length: float) -> None:
+    """The plan at a path's end when the hand is there already: TOPP-RA found no timing of
+    a path shorter than about 1e-8 rad (so guidance failed with ``timing``)."""
+    start = np.array([1.0, 0.3, 0.0, -1.8, 0.0, 2.1, 0.8])
+    end = start + length / np.sqrt(7)
+    trajectory = time_path(np.array([start, end]), np.full(7, 2.0), np.full(7, 10.0))
+    assert np.linalg.norm(trajectory.end - end) <= SHORTEST_PATH + 1e-15
+    position, velocity, _ = trajectory.sample(np.array([0.0, trajectory.duration + 1.0]))
+    assert np.allclose(position[0], start, atol=SHORTEST_PATH) and np.all(velocity[-1] == 0.0)

@@ -16,7 +16,8 @@ The handover happens at ``T`` whether or not the hand is already within toleranc
 ``P_N`` (then the plan is a short straight segment): so ``guided: true`` in the metrics
 says that the end was guided, never depending on how closely the path was followed.
 
-Other paths are not guided (:func:`path_end_refusal`): a ``circle`` is periodic and a
+A path whose end comes when the run ends (or later) is not guided. Other paths are not
+guided either (:func:`path_end_refusal`): a ``circle`` is periodic and a
 ``linear`` or ``polynomial`` path never stops, so they have no end to plan to; an
 ``expression`` path may stop, but whether and where cannot be known from its text. A goal
 that moves has no fixed configuration to plan to: a plan to where it is now is out of date
