@@ -47,6 +47,11 @@ def _toppra() -> ModuleType:
     return toppra
 
 
+#: a path shorter than this [rad] (a goal where the robot already is) is timed as one of this
+#: length: TOPP-RA finds no timing of a path of 3e-9 rad (it did of 1e-8)
+SHORTEST_PATH = 1e-7
+
+
 class TimingError(RuntimeError):
     """TOPP-RA found no timing (it should not for limits > 0 and a path at rest at its ends)."""
 
@@ -170,8 +175,9 @@ def time_path(waypoints: NDArray[np.float64], velocity: NDArray[np.float64], acc
         TimingError: if TOPP-RA fails.
     """
     waypoints = np.atleast_2d(np.asarray(waypoints, dtype=float))
-    if len(waypoints) == 1 or np.linalg.norm(waypoints[-1] - waypoints[0]) + _length(waypoints) < 1e-9:
-        waypoints = np.vstack([waypoints[:1], waypoints[:1] + 1e-9])
+    if len(waypoints) == 1 or _length(waypoints) < SHORTEST_PATH:   # TOPP-RA fails below about 1e-8 rad
+        step = SHORTEST_PATH / np.sqrt(waypoints.shape[1])
+        waypoints = np.vstack([waypoints[:1], waypoints[:1] + step])
     spacing = settings.spacing
     for _ in range(settings.refinements + 1):
         samples = polyline_samples(waypoints, spacing)

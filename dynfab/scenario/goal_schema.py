@@ -12,7 +12,7 @@ from pydantic import model_validator
 from dynfab.geometry.orientation import unit_vector
 from dynfab.geometry.shapes import ShapeError, quaternion_from_rpy, unit_quaternion
 from dynfab.scenario.model_errors import tagged_union
-from dynfab.scenario.model_types import Choice, Items, Range, ScenarioModel, Text, fail
+from dynfab.scenario.model_types import Choice, Flag, Items, Range, ScenarioModel, Text, fail
 from dynfab.scenario.ranges import (
     MAX_JOINT_VALUE,
     MAX_LENGTH,
@@ -24,7 +24,7 @@ from dynfab.scenario.ranges import (
 )
 from dynfab.scenario.trajectory_schema import TrajectoryMapping, frozen_trajectory
 
-__all__ = ["DEFAULT_ANGLE_TOLERANCE", "GoalMapping", "GoalSpec", "GoalType", "goal_spec"]
+__all__ = ["DEFAULT_ANGLE_TOLERANCE", "ENDING_PATHS", "GoalMapping", "GoalSpec", "GoalType", "goal_spec"]
 
 GoalType = Literal["position", "joint", "path", "pose", "axis"]
 
@@ -65,6 +65,10 @@ class GoalSpec:
             t = 0; else None.
         angular_velocity: Axis goals: the direction turns at this angular velocity
             [rad/s] (world frame); None: at rest.
+        guided_end: Path goals: whether guidance plans to the path's end once its time is
+            over (scenario/path_end.py); None: wherever it can (a path of a type in
+            :data:`ENDING_PATHS`, guidance on); True: required (refused where it cannot);
+            False: the fabric alone ends the path.
     """
 
     type: GoalType
@@ -81,7 +85,12 @@ class GoalSpec:
     axis: tuple[float, float, float] | None = None
     direction: tuple[float, float, float] | None = None
     angular_velocity: tuple[float, float, float] | None = None
+    guided_end: bool | None = None
 
+
+#: The ``trajectory:`` types of a path goal that come to rest at a known time and point:
+#: the ends that guidance can plan to (scenario/path_end.py).
+ENDING_PATHS = ("spline", "rrt")
 
 
 Link = Annotated[str, Text()]
@@ -125,7 +134,8 @@ class JointGoalMapping(ScenarioModel):
 
 
 class PathGoalMapping(ScenarioModel):
-    """``{type: path, trajectory: {...}, link, parent_link, axes, tolerance [m], weight, offset [m]}``."""
+    """``{type: path, trajectory: {...}, link, parent_link, axes, tolerance [m], weight, offset [m],
+    guided_end}``."""
 
     type: Literal["path"]
     trajectory: TrajectoryMapping
@@ -135,6 +145,15 @@ class PathGoalMapping(ScenarioModel):
     tolerance: Tolerance = 0.05
     weight: Weight = 1.0
     offset: Offset = (0.0, 0.0, 0.0)
+    guided_end: Annotated[bool, Flag()] | None = None
+
+    @model_validator(mode="after")
+    def _an_end_to_guide(self) -> PathGoalMapping:
+        kind = self.trajectory.type  # type: ignore[attr-defined]
+        if self.guided_end and kind not in ENDING_PATHS:
+            raise fail(f"a {kind} path has no end at rest to plan to (only {' and '.join(ENDING_PATHS)} paths "
+                       "end); remove guided_end", "guided_end")
+        return self
 
 
 class PoseGoalMapping(ScenarioModel):
@@ -209,4 +228,4 @@ def goal_spec(goal: ScenarioModel) -> GoalSpec:
         type=goal.type, link=goal.link, position=goal.position if isinstance(goal, PositionGoalMapping) else None,
         tolerance=goal.tolerance, weight=goal.weight, parent_link=goal.parent_link, axes=goal.axes,
         trajectory=frozen_trajectory(goal.trajectory) if isinstance(goal, PathGoalMapping) else None,
-        offset=goal.offset)
+        offset=goal.offset, guided_end=goal.guided_end if isinstance(goal, PathGoalMapping) else None)

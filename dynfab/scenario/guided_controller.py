@@ -12,8 +12,12 @@ trigger a replan when they block the reference ahead
 on with the scenario's own fabric (``planner:``) and stall recovery, and the metrics say
 so (``guided: false``, ``failure``).
 
-Anything else (MPC, mobile bases, planar robots, path goals, moving goals) runs as before:
-:func:`make_scenario_controller` returns the plain controller with stall recovery.
+A path goal that comes to rest (a ``spline`` or ``rrt`` path) is followed by the
+scenario's own fabric until its time is over; then guidance plans to its end
+(:mod:`dynfab.scenario.path_end`). Anything else (MPC, mobile bases, planar robots, paths
+that never end, goals that move, a camera scenario with a path goal) runs as before:
+:func:`make_scenario_controller` returns the plain controller with stall recovery, and
+:func:`guidance_refusal` says why.
 """
 
 from __future__ import annotations
@@ -44,9 +48,11 @@ from dynfab.scenario.mesh_obstacles import surface_leaf
 from dynfab.scenario.exact_metrics import obstacle_shapes
 from dynfab.scenario.recovering_controller import with_recovery
 from dynfab.scenario.references import goal_axes
-from dynfab.scenario.schema import GoalSpec, Scenario
+from dynfab.scenario.path_end import PathEndController, path_end_refusal, path_end_time
+from dynfab.scenario.schema import GoalSpec, Scenario, ScenarioError
 
-__all__ = ["AllowanceSlot", "GuidedController", "guidance_refusal", "guided_planner_config", "make_scenario_controller"]
+__all__ = ["AllowanceSlot", "GuidedController", "check_guided_ends", "guidance_refusal", "guided_planner_config",
+           "make_scenario_controller"]
 
 #: The guided fabric's constants below were chosen on MBM problems 10-11 (gain, range) and 13-16
 #: (energy, buffer) of the shared set, object removed; results are reported on problems 17 on.
@@ -178,10 +184,31 @@ def guidance_refusal(scenario: Scenario, robot: Robot) -> str | None:
         return "the mpc planner"
     if robot.base is not None or robot.planar:
         return "a mobile or planar robot"
-    for goal in scenario.goals:
-        if goal.type == "path" or (goal.type == "axis" and goal.angular_velocity is not None):
-            return "a moving goal"
+    for i, goal in enumerate(scenario.goals):
+        if goal.type == "axis" and goal.angular_velocity is not None:
+            return f"goal[{i}]: an axis goal that turns moves: it has no configuration to plan to"
+        if goal.type == "path" and goal.guided_end is False:
+            return f"goal[{i}].guided_end: false"
+        if goal.type == "path" and path_end_refusal(goal, scenario.duration) is not None:
+            return f"goal[{i}].trajectory: {path_end_refusal(goal, scenario.duration)}"
+        if goal.type == "path" and scenario.perception == "camera":
+            return f"goal[{i}]: path ends are not guided under perception: camera"
+    if any(goal.type == "path" for goal in scenario.goals) and any(goal.type == "joint" for goal in scenario.goals):
+        return "a path goal with a joint goal: the end of the path and the joint goal are two configurations"
     return None
+
+
+def check_guided_ends(scenario: Scenario, robot: Robot) -> None:
+    """Refuse a path goal that asks for ``guided_end: true`` where its end cannot be guided.
+
+    Raises:
+        ScenarioError: naming the goal's ``guided_end`` and why.
+    """
+    refusal = guidance_refusal(scenario, robot)
+    for i, goal in enumerate(scenario.goals):
+        if goal.type == "path" and goal.guided_end and refusal is not None:
+            raise ScenarioError(f"goal[{i}].guided_end", f"the end of this path cannot be guided ({refusal}); "
+                                "remove guided_end to let the fabric alone end the path")
 
 
 def make_scenario_controller(scenario: Scenario, robot: Robot, references: References,
@@ -195,8 +222,20 @@ def make_scenario_controller(scenario: Scenario, robot: Robot, references: Refer
             return with_recovery(controller, scenario, robot, references)
         return controller
 
+    check_guided_ends(scenario, robot)
     if guidance_refusal(scenario, robot) is not None:
         return plain()
+    if any(goal.type == "path" for goal in scenario.goals):
+        path = plain()
+        guided = _guided_controller(scenario, robot, references, settings, lambda: path)
+        return PathEndController(path, guided, path_end_time(scenario, references))
+    return _guided_controller(scenario, robot, references, settings, plain)
+
+
+def _guided_controller(scenario: Scenario, robot: Robot, references: References, settings: GuidanceSettings,
+                       fallback: Callable[[], Controller]) -> GuidedController:
+    """The guided controller of ``scenario`` to its goals (a path goal: its end), with
+    ``fallback`` taking over if no plan can be made."""
     planning_robot = replace(robot, limits=scenario.planning_limits(robot.limits))
     fabric = FabricPlanner(planning_robot, scenario.fabric.configured(guided_planner_config(planning_robot, scenario)))
     slots = place_obstacles(scenario.obstacles, fabric.parameters)
@@ -214,8 +253,8 @@ def make_scenario_controller(scenario: Scenario, robot: Robot, references: Refer
             slot.write(fabric.parameters, -GUIDED_MOVING_MARGIN)
     static_slots = tuple(slot for obstacle, slot in zip(scenario.obstacles, allowance_slots)
                          if obstacle.trajectory is None)
-    return GuidedController(inner, guided, goal_targets(scenario, robot),
-                            lambda t: _placed(scenario, references, t, static=False), plain, static_slots)
+    return GuidedController(inner, guided, goal_targets(scenario, robot, references),
+                            lambda t: _placed(scenario, references, t, static=False), fallback, static_slots)
 
 
 def guided_planner_config(robot: Robot, scenario: Scenario) -> PlannerConfig:
@@ -238,23 +277,32 @@ def guided_planner_config(robot: Robot, scenario: Scenario) -> PlannerConfig:
                          control_period=scenario.dt, backend=scenario.backend)
 
 
-def goal_targets(scenario: Scenario, robot: Robot) -> GoalTargets:
+def goal_targets(scenario: Scenario, robot: Robot, references: References | None = None) -> GoalTargets:
     """What guidance plans to: a joint goal's configuration, or the task targets of every
-    static goal (a pose: its point and its three frame axes)."""
+    goal (a pose: its point and its three frame axes; a path that ends: its last point,
+    ``references.goals[i]`` at rest)."""
     joint = next((goal for goal in scenario.goals if goal.type == "joint"), None)
     if joint is not None:
         return JointTarget(tuple(joint.position))
     targets: list[PointTarget | AxisTarget] = []
-    for goal in scenario.goals:
-        targets.extend(_task_targets(goal, robot))
+    for i, goal in enumerate(scenario.goals):
+        position = goal.position
+        if goal.type == "path":
+            if references is None:
+                raise ValueError(f"goal[{i}] is a path goal: goal_targets needs the scenario's references")
+            end = references.goals[i]
+            position = tuple(float(v) for v in end.evaluate(path_end_time(scenario, references)).position)
+        targets.extend(_task_targets(goal, robot, position))
     return targets
 
 
-def _task_targets(goal: GoalSpec, robot: Robot) -> list[PointTarget | AxisTarget]:
+def _task_targets(goal: GoalSpec, robot: Robot, position: tuple[float, ...] | None) -> list[PointTarget | AxisTarget]:
+    """The targets of a static goal (``position``: where its point goes [m], None for an axis goal)."""
     link = goal.link or robot.goal_link
     if goal.type == "axis":
         return [AxisTarget(link, tuple(goal.axis), tuple(goal.direction))]
-    targets: list[PointTarget | AxisTarget] = [PointTarget(link, tuple(goal.position), tuple(goal.offset),
+    assert position is not None
+    targets: list[PointTarget | AxisTarget] = [PointTarget(link, tuple(position), tuple(goal.offset),
                                                            tuple(goal_axes(goal, robot)), goal.parent_link)]
     if goal.type == "pose":
         rotation = quaternion_matrix(goal.orientation)

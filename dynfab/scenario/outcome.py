@@ -7,7 +7,7 @@ Every controller a run can have fills these keys:
 
 | controller | `guided` | `plans` | `recovered` | `fallbacks` |
 |---|---|---|---|---|
-| guided fabric | true (false once guidance found no plan and the scenario's own fabric took over) | first plan, replans, recovery paths (a first plan that failed is not counted; its wall time is `plan_time_ms`) | replans (blocked, stalled), recovery paths | braking actions, plus 1 if the fabric took over |
+| guided fabric (a path goal: the fabric follows the path, guidance takes over at its end) | true (false once guidance found no plan and the scenario's own fabric took over) | first plan, replans, recovery paths (a first plan that failed is not counted; its wall time is `plan_time_ms`) | replans (blocked, stalled), recovery paths | braking actions, plus 1 if the fabric took over |
 | fabric, with or without stall recovery | false | recovery paths | recovery paths | braking actions |
 | MPC | false | 0 | 0 | failed solves (the last plan or braking executed) |
 
@@ -24,6 +24,7 @@ from dynfab.mpc import MpcController
 from dynfab.scenario.controllers import Controller
 from dynfab.scenario.camera_controller import CameraController
 from dynfab.scenario.guided_controller import GuidedController
+from dynfab.scenario.path_end import PathEndController
 from dynfab.scenario.metrics import Metrics
 
 __all__ = ["with_outcome"]
@@ -38,7 +39,7 @@ def with_outcome(metrics: Metrics, controller: Controller | None, goal_positions
     outcome: dict[str, object] = {"final_distance": final, "failure": _failure(metrics)}
     if isinstance(controller, CameraController):  # fed by a camera: the outcome is its controller's
         controller = controller.inner
-    if isinstance(controller, GuidedController):
+    if isinstance(controller, GuidedController | PathEndController):   # a path's end: guided after its time
         status = controller.status
         recoveries = len(controller.recovery_times)
         fell_back = controller.fallback is not None   # the first plan failed: it is in status.plans
