@@ -179,6 +179,22 @@ def test_path_goal_reports_summed_error_against_moving_reference() -> None:
     assert metrics.summed_error == pytest.approx((0.03 + 0.04 + 0.1) / 3)
 
 
+def test_a_path_that_ends_at_rest_is_reached_only_if_its_end_is() -> None:
+    t = np.arange(5) * 0.1
+    reference = np.stack([t, np.zeros(5), np.ones(5)], axis=1)
+    followed = reference + np.array([[0.5, 0, 0], [0.02, 0, 0], [0.03, 0, 0], [0.2, 0, 0], [0.0, 0.01, 0]])
+    left_behind = followed.copy()
+    left_behind[-1] += [0.0, 0.3, 0.0]   # within tolerance early, 0.3 m off the end at the last sample
+    common = (_record(5, dt=0.1),)
+    for positions, reached in ((followed, True), (left_behind, False)):
+        metrics = compute_metrics(*common, positions, reference, 0.05, positions[:, None, :], [0.05],
+                                  *_no_obstacles(5), path_goal=True, end_required=True)
+        assert metrics.goal_reached is reached and metrics.success is reached
+    loose = compute_metrics(*common, left_behind, reference, 0.05, left_behind[:, None, :], [0.05],
+                            *_no_obstacles(5), path_goal=True)
+    assert loose.goal_reached is True   # a path without an end at rest: reached once followed
+
+
 def test_to_dict_has_exactly_the_contract_keys() -> None:
     metrics = Metrics(
         success=True, goal_reached=True, collision=False, time_to_goal=4.31, clearance=0.12,

@@ -143,6 +143,7 @@ def compute_metrics(
     orientation_errors: ArrayLike | None = None,
     angle_tolerance: float | None = None,
     shape_clearance: ArrayLike | None = None,
+    end_required: bool = False,
 ) -> Metrics:
     """Compute the metrics of a run.
 
@@ -163,6 +164,9 @@ def compute_metrics(
             ``orientation_errors < angle_tolerance`` [rad] (a primary pose or axis goal).
         shape_clearance: Clearance to the other obstacle shapes at each sample, shape (T,)
             (:func:`shape_clearance_over_time`), counted with the spheres'.
+        end_required: The goal counts as reached only if it is also within tolerance at
+            the last sample (a path that ends at rest before the run does: following its
+            start is not reaching its end).
 
     Returns:
         The metrics.
@@ -186,7 +190,8 @@ def compute_metrics(
     if angle_tolerance is not None:
         within &= angles < angle_tolerance
     below = np.flatnonzero(within)
-    reached = int(below[0]) if below.size else None
+    first = int(below[0]) if below.size else None   # first time within tolerance
+    reached = first if within[-1] or not end_required else None
     clearances = clearance_over_time(
         sphere_centers, sphere_radii, obstacle_centers, obstacle_radii, planar=planar
     )
@@ -201,7 +206,7 @@ def compute_metrics(
         time_to_goal=None if reached is None else float(record.t[reached]),
         clearance=clearance,
         path_length=path_length(positions),
-        summed_error=_mean_from(errors, reached) if path_goal else None,
+        summed_error=_mean_from(errors, first) if path_goal else None,
         solver_time_ms=float(np.mean(record.solver_time)) * 1e3,
         steps=record.steps,
         orientation_error=None if angles is None else float(angles[-1]),

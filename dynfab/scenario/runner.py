@@ -18,6 +18,7 @@ from dynfab.scenario.camera_controller import make_camera_controller
 from dynfab.scenario.controllers import Controller
 from dynfab.scenario.guided_controller import make_scenario_controller
 from dynfab.scenario.outcome import with_outcome
+from dynfab.scenario.path_end import path_end_refusal
 from dynfab.scenario.exact_metrics import mesh_model_for, obstacle_shapes, with_mesh_metrics
 from dynfab.scenario.references import goal_axes, scenario_references
 from dynfab.scenario.metrics import (Metrics, clearance_over_time, compute_metrics, shape_clearance_over_time,
@@ -207,6 +208,7 @@ def measure_run(scenario: Scenario, robot: Robot, references: References, record
     metrics = compute_metrics(record, goal_positions, goal_reference, goal.tolerance,
                               centres, radii, sphere_centres, sphere_radii, planar=robot.planar,
                               path_goal=goal.type == "path", shape_clearance=shape_clearance,
+                              end_required=goal.type == "path" and path_end_refusal(goal, scenario.duration) is None,
                               orientation_errors=orientation_errors,
                               angle_tolerance=goal.angle_tolerance if goal.type in _ORIENTED else None)
     metrics = dataclasses.replace(metrics, max_velocity_ratio=robot.limits.velocity_ratio(record.qdot),
