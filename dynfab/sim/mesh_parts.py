@@ -46,7 +46,7 @@ def convex_parts(mesh: Mesh) -> tuple[NDArray[np.float64], ...]:
     merged = trimesh.Trimesh(np.array(mesh.vertices), np.array(mesh.faces), process=True)
     hulls: list[NDArray[np.float64]] = []
     others: list[NDArray[np.int64]] = []
-    for component in merged.split(only_watertight=False):
+    for component in merged.split(only_watertight=False, repair=False):
         if _closed_convex(component):
             hulls.append(np.array(component.vertices, dtype=float))
         else:

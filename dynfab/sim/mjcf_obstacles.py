@@ -11,7 +11,8 @@ robot geoms only (``contype`` 0, ``conaffinity`` the obstacle bit).
   ``obstacle<k>_part<i>`` in geom group :data:`COLLISION_GROUP` (hidden from renderers, as
   MuJoCo's default visual options hide groups 3 to 5), and one visual geom ``obstacle<k>``
   of the whole mesh that touches nothing (``contype`` = ``conaffinity`` = 0): a depth camera
-  sees the true surface, not the hulls. Mesh assets are written inline (vertices, faces),
+  sees the true surface, not the hulls, from either side (each triangle is written in both
+  windings, as MuJoCo's renderer culls back faces and an open surface has two sides). Mesh assets are written inline (vertices, faces),
   with shell inertia (an open or flat mesh has no volume; obstacles have no mass anyway).
 * A point cloud is no solid: its body has no geom. It is not in the physics nor in a
   camera's images; the planner knows it from the file and the metrics measure it.
@@ -76,7 +77,8 @@ def _mesh_geoms(body: ET.Element, asset: ET.Element, k: int, mesh: Mesh, touchin
     vertices = mesh.vertices
     if len(vertices) < 4:  # MuJoCo wants four vertices: a lone triangle gets its centroid, unused
         vertices = np.vstack([vertices, vertices.mean(axis=0)])
+    faces = np.concatenate([mesh.faces, mesh.faces[:, ::-1]])  # both windings: MuJoCo culls back faces
     ET.SubElement(asset, "mesh", name=f"obstacle{k}", vertex=mjcf_numbers(vertices.reshape(-1)),
-                  face=" ".join(str(int(i)) for i in mesh.faces.reshape(-1)), inertia="shell")
+                  face=" ".join(str(int(i)) for i in faces.reshape(-1)), inertia="shell")
     ET.SubElement(body, "geom", name=f"obstacle{k}", type="mesh", mesh=f"obstacle{k}", contype="0",
                   conaffinity="0", rgba=touching["rgba"])
