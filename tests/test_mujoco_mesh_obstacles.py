@@ -28,7 +28,7 @@ from dynfab.robots import load_robot
 from dynfab.scenario.runner import run_scenario
 from dynfab.scenario.schema import ScenarioError, scenario_from_dict
 from dynfab.sim.depth_render import MujocoDepthRenderer
-from dynfab.sim.mesh_parts import SHELL, convex_parts
+from dynfab.sim.mesh_parts import SHELL, TooManyPartsError, convex_parts
 from dynfab.sim.mjcf_obstacles import COLLISION_GROUP
 from dynfab.sim.mujoco_model import SceneObstacle, build_scene
 
@@ -191,7 +191,20 @@ def test_a_point_cloud_stays_out_of_the_physics(files: Path) -> None:
 ])
 def test_what_mujoco_cannot_take_is_refused_at_load(files: Path, monkeypatch: pytest.MonkeyPatch, entries: list,
                                                     extra: dict, field: str, problem: str) -> None:
-    monkeypatch.setattr("dynfab.scenario.mujoco_obstacles.MAX_PARTS", 2)
+    monkeypatch.setattr("dynfab.sim.mesh_parts.MAX_PARTS", 2)
     with pytest.raises(ScenarioError) as error:
         scenario_from_dict(_scenario(entries, **extra), files)
     assert error.value.field == field and problem in error.value.problem
+
+
+def test_a_large_open_mesh_is_refused_by_its_part_count() -> None:
+    """A 300 x 300 grid surface (180 000 triangles, open): one prism each would be too many."""
+    n = 301
+    x, y = np.meshgrid(np.linspace(0.0, 1.0, n), np.linspace(0.0, 1.0, n))
+    vertices = np.column_stack([x.ravel(), y.ravel(), np.zeros(n * n)])
+    corner = (np.arange(n - 1)[:, None] * n + np.arange(n - 1)[None, :]).ravel()
+    faces = np.concatenate([np.column_stack([corner, corner + 1, corner + n]),
+                            np.column_stack([corner + 1, corner + n + 1, corner + n])])
+    with pytest.raises(TooManyPartsError) as error:
+        convex_parts(Mesh(vertices, faces, source="grid.stl"))
+    assert error.value.parts == 180_000 and "mesh grid.stl becomes 180000 convex parts" in str(error.value)

@@ -18,7 +18,7 @@ from collections.abc import Sequence
 
 from dynfab.scenario.fields import ScenarioError
 from dynfab.scenario.obstacle_schema import ObstacleSpec
-from dynfab.sim.mesh_parts import MAX_PARTS, convex_parts
+from dynfab.sim.mesh_parts import TooManyPartsError, convex_parts
 
 __all__ = ["check_mujoco_obstacles"]
 
@@ -38,8 +38,7 @@ def check_mujoco_obstacles(entries: Sequence[Sequence[ObstacleSpec]], perception
                                     "remove it, give the surfaces as meshes, or use perception: truth")
             if spec.type == "mesh":
                 assert spec.mesh is not None
-                parts = len(convex_parts(spec.mesh))
-                if parts > MAX_PARTS:
-                    raise ScenarioError(f"obstacles[{k}].file", f"mesh {spec.mesh.source} becomes {parts} convex "
-                                        f"parts in MuJoCo (one per triangle of a part that is not closed and "
-                                        f"convex), more than {MAX_PARTS}; simplify it or split it into convex pieces")
+                try:
+                    convex_parts(spec.mesh)
+                except TooManyPartsError as error:
+                    raise ScenarioError(f"obstacles[{k}].file", str(error)) from None

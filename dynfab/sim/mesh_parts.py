@@ -15,8 +15,9 @@ several convex geoms whose union covers its surface:
 No convex decomposition library is needed (CoACD and V-HACD approximate the shape by hulls
 that may overstate it by their tolerance, and take seconds to minutes a mesh; a shelf or MBM's
 kitchen meshes are a few hundred triangles at most, one prism each). A mesh may have at most
-:data:`MAX_PARTS` parts: more geoms make every physics step slower, and the scenario loader
-refuses such a mesh under MuJoCo (:mod:`dynfab.scenario.mujoco_obstacles`).
+:data:`MAX_PARTS` parts: more geoms make every physics step slower (and the prisms of 10⁶
+triangles would take 144 MB); the scenario loader refuses such a mesh under MuJoCo
+(:mod:`dynfab.scenario.mujoco_obstacles`).
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from numpy.typing import NDArray
 
 from dynfab.geometry.mesh_shape import Mesh
 
-__all__ = ["MAX_PARTS", "SHELL", "convex_parts"]
+__all__ = ["MAX_PARTS", "SHELL", "TooManyPartsError", "convex_parts"]
 
 #: Thickness [m] of the prism made of a triangle (half of it on each side of the surface).
 SHELL = 0.001
@@ -39,19 +40,41 @@ MAX_PARTS = 5000
 _VOLUME_TOLERANCE = 1e-6
 
 
+class TooManyPartsError(ValueError):
+    """A mesh would become more than :data:`MAX_PARTS` convex parts.
+
+    Attributes:
+        parts: How many it would become.
+    """
+
+    def __init__(self, mesh: Mesh, parts: int) -> None:
+        super().__init__(f"mesh {mesh.source} becomes {parts} convex parts in MuJoCo (one per triangle of a "
+                         f"component that is not closed and convex), more than {MAX_PARTS}; simplify it or "
+                         "split it into convex pieces")
+        self.parts = parts
+
+
 @lru_cache(maxsize=64)
 def convex_parts(mesh: Mesh) -> tuple[NDArray[np.float64], ...]:
     """The vertices (k, 3) of each convex part of ``mesh`` in its frame [m] (module doc):
-    the closed convex components' first, then one prism (6, 3) per other triangle."""
+    the closed convex components' first, then one prism (6, 3) per other triangle.
+
+    Raises:
+        TooManyPartsError: More than :data:`MAX_PARTS` parts (counted before any prism is made).
+    """
     merged = trimesh.Trimesh(np.array(mesh.vertices), np.array(mesh.faces), process=True)
     hulls: list[NDArray[np.float64]] = []
-    others: list[NDArray[np.int64]] = []
+    others: list[trimesh.Trimesh] = []
     for component in merged.split(only_watertight=False, repair=False):
         if _closed_convex(component):
             hulls.append(np.array(component.vertices, dtype=float))
         else:
-            others.append(np.array(component.vertices, dtype=float)[component.faces])
-    prisms = _prisms(np.concatenate(others)) if others else []
+            others.append(component)
+    parts = len(hulls) + sum(len(component.faces) for component in others)
+    if parts > MAX_PARTS:
+        raise TooManyPartsError(mesh, parts)
+    corners = [np.array(component.vertices, dtype=float)[component.faces] for component in others]
+    prisms = _prisms(np.concatenate(corners)) if corners else []
     return tuple(hulls) + tuple(prisms)
 
 

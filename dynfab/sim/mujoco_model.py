@@ -97,6 +97,8 @@ def build_scene(robot: Robot, obstacles: Sequence[SceneObstacle] = (),
 
     Raises:
         MujocoModelError: A moving link without mass; a collision mesh that is missing.
+        TooManyPartsError: A mesh obstacle of more than :data:`~dynfab.sim.mesh_parts.MAX_PARTS`
+            convex parts (:func:`~dynfab.sim.mesh_parts.convex_parts`).
     """
     xml = _Builder(robot, link_meshes).xml(obstacles, self_collision_links, cameras)
     try:
