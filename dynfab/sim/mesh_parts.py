@@ -12,9 +12,10 @@ several convex geoms whose union covers its surface:
   ``SHELL / 2`` on each side: MuJoCo touches it at most ``SHELL / 2`` before the true surface
   (the metrics', :mod:`dynfab.scenario.exact_metrics`), never after.
 
-No convex decomposition library is needed (CoACD and V-HACD approximate the shape by hulls
-that may overstate it by their tolerance, and take seconds to minutes a mesh; a shelf or MBM's
-kitchen meshes are a few hundred triangles at most, one prism each). A mesh may have at most
+No convex decomposition library is used (CoACD, V-HACD: not dependencies here, not tried;
+their hulls approximate the shape within a tolerance, which may overstate it): a shelf's or
+MBM's kitchen meshes are closed convex pieces and a few hundred other triangles at most, one
+prism each. A mesh may have at most
 :data:`MAX_PARTS` parts: more geoms make every physics step slower (and the prisms of 10⁶
 triangles would take 144 MB); the scenario loader refuses such a mesh under MuJoCo
 (:mod:`dynfab.scenario.mujoco_obstacles`).
