@@ -12,8 +12,9 @@ robot geoms only (``contype`` 0, ``conaffinity`` the obstacle bit).
   MuJoCo's default visual options hide groups 3 to 5), and one visual geom ``obstacle<k>``
   of the whole mesh that touches nothing (``contype`` = ``conaffinity`` = 0): a depth camera
   sees the true surface, not the hulls, from either side (each triangle is written in both
-  windings, as MuJoCo's renderer culls back faces and an open surface has two sides). Mesh assets are written inline (vertices, faces),
-  with shell inertia (an open or flat mesh has no volume; obstacles have no mass anyway).
+  windings, as MuJoCo's renderer culls back faces and an open surface has two sides). Mesh
+  assets are written inline (vertices, faces), with shell inertia (an open or flat mesh has
+  no volume; obstacles have no mass anyway).
 * A point cloud is no solid: its body has no geom. It is not in the physics nor in a
   camera's images; the planner knows it from the file and the metrics measure it.
 """

@@ -17,9 +17,10 @@ whose description has none (the built-in ``panda`` and ``boxer-panda`` on Franka
 a robot without meshes (the other built-ins, or the Panda without example-robot-data) its
 collision spheres. Obstacles are static bodies or, when they move, mocap bodies whose pose the
 simulation sets every physics step (:mod:`dynfab.sim.mjcf_obstacles`: a mesh collides by
-convex parts and is seen by cameras whole, a point cloud is not in the physics). Contacts (bit masks, MuJoCo's ``contype`` /
-``conaffinity``): robot geoms touch obstacles; robot geoms touch each other only in the
-robot's self-collision pairs (explicit ``<pair>``\\ s); obstacles never touch each other.
+convex parts and is seen by cameras whole, a point cloud is not in the physics). Contacts
+(bit masks, MuJoCo's ``contype`` / ``conaffinity``): robot geoms touch obstacles; robot
+geoms touch each other only in the robot's self-collision pairs (explicit ``<pair>``\\ s);
+obstacles never touch each other.
 
 Cameras (``cameras``): fixed ``<camera>``\\ s in the world (:mod:`dynfab.sim.mjcf_cameras`).
 

@@ -12,8 +12,8 @@ When the view's time goes back (a reset), the camera's schedule starts again.
 
 MuJoCo is imported, and its OpenGL context made (``MUJOCO_GL=egl`` unless set), on the first
 frame, in the thread that draws the view. A scene MuJoCo cannot hold (a mesh of more than
-:data:`~dynfab.sim.mesh_parts.MAX_PARTS` convex parts) or a machine without offscreen OpenGL raises :class:`CameraViewError`, which the view reports
-once and then shows the frustum alone.
+:data:`~dynfab.sim.mesh_parts.MAX_PARTS` convex parts) or a machine without offscreen OpenGL
+raises :class:`CameraViewError`, which the view reports once and then shows the frustum alone.
 """
 
 from __future__ import annotations
