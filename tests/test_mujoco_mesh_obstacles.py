@@ -208,3 +208,20 @@ def test_a_large_open_mesh_is_refused_by_its_part_count() -> None:
     with pytest.raises(TooManyPartsError) as error:
         convex_parts(Mesh(vertices, faces, source="grid.stl"))
     assert error.value.parts == 180_000 and "mesh grid.stl becomes 180000 convex parts" in str(error.value)
+
+
+def test_a_moving_mesh_carries_its_parts_onto_the_hand() -> None:
+    """Its mocap body placed on the hand: contact; placed 0.5 m away: none."""
+    robot = load_robot("panda")
+    shelf = Mesh(_shelf().vertices, _shelf().faces)
+    scene = build_scene(robot, [SceneObstacle(shelf, (2.0, 0.0, 0.0), IDENTITY, True)])
+    data = mujoco.MjData(scene.model)
+    data.qpos[scene.joint_qpos] = robot.default_q
+    hand = np.asarray(robot.kinematics.position(robot.default_q, "panda_hand"), dtype=float).reshape(-1)
+    touching = []
+    for offset in (0.0, 0.5):
+        data.mocap_pos[scene.mocap[0]] = hand + (0.0, 0.0, offset)  # the lower board's centre at the hand
+        mujoco.mj_forward(scene.model, data)
+        touching.append(bool({int(g) for pair in data.contact.geom[:data.ncon] for g in pair}
+                             & set(scene.obstacle_of_geom)))
+    assert touching == [True, False]
