@@ -1,6 +1,6 @@
 """Mesh and URDF-scene obstacles in MuJoCo's physics: their convex parts cover the surface and
-overstate it by at most half a shell, the camera sees the true surface, MBM's kitchen loads and
-its collision-free start touches nothing, a guided Panda reaches into a mesh shelf without a
+overstate it by at most half a shell, the camera sees the true surface, MBM's kitchen loads,
+its collision-free start touches nothing and MuJoCo's contacts agree with coal's clearance, a guided Panda reaches into a mesh shelf without a
 contact, and what MuJoCo cannot take is refused at load naming ``obstacles[k]``."""
 
 from __future__ import annotations
@@ -19,12 +19,16 @@ from scipy.spatial import ConvexHull
 from dynfab.benchmarks.mbm.franka import franka
 from dynfab.benchmarks.mbm.scene_configs import data_root
 from dynfab.benchmarks.mbm.scenes import generate_scene_problem, prepare_scene_case
+from dynfab.benchmarks.mbm.validity import static_shapes
 from dynfab.geometry.mesh_distance import nearest_on_mesh
 from dynfab.geometry.mesh_files import read_mesh
 from dynfab.geometry.shapes import Mesh
 from dynfab.perception.camera_spec import CameraSpec
 from dynfab.perception.depth_camera import DepthCamera
 from dynfab.robots import load_robot
+from dynfab.robots.builtin_meshes import builtin_collision_meshes
+from dynfab.robots.mesh_sweep import sweep_meshes
+from dynfab.scenario.exact_metrics import mesh_model_for
 from dynfab.scenario.runner import run_scenario
 from dynfab.scenario.schema import ScenarioError, scenario_from_dict
 from dynfab.sim.depth_render import MujocoDepthRenderer
@@ -225,3 +229,27 @@ def test_a_moving_mesh_carries_its_parts_onto_the_hand() -> None:
         touching.append(bool({int(g) for pair in data.contact.geom[:data.ncon] for g in pair}
                              & set(scene.obstacle_of_geom)))
     assert touching == [True, False]
+
+
+def test_mujoco_contacts_agree_with_the_exact_mesh_metrics_in_the_kitchen() -> None:
+    """Along the straight joint-space line from a kitchen problem's start to its goal (through
+    the counter): MuJoCo finds a contact where coal's mesh clearance is negative, and none
+    where it is above half a shell (1 mm allowed for the two libraries' hulls)."""
+    robot = load_robot("panda")
+    problem = generate_scene_problem("kitchen", 1, 7, franka())
+    scenario = scenario_from_dict(prepare_scene_case(problem).mapping)
+    shapes = static_shapes(scenario)
+    obstacles = [SceneObstacle(o.shape, tuple(o.position), o.orientation, False) for o in scenario.obstacles]
+    scene = build_scene(robot, obstacles, (), builtin_collision_meshes(robot))
+    data = mujoco.MjData(scene.model)
+    model = mesh_model_for(robot)
+    clearances, contacts = [], []
+    for q in np.linspace(problem.start, problem.goal, 60):
+        data.qpos[scene.joint_qpos] = q
+        mujoco.mj_forward(scene.model, data)
+        contacts.append(bool({int(g) for pair in data.contact.geom[:data.ncon] for g in pair}
+                             & set(scene.obstacle_of_geom)))
+        clearances.append(sweep_meshes(model, q[None], shapes).clearance)
+    clearance, contact = np.array(clearances), np.array(contacts)
+    assert (clearance < -1e-3).sum() >= 10 and (clearance > SHELL / 2 + 1e-3).sum() >= 10
+    assert contact[clearance < -1e-3].all() and not contact[clearance > SHELL / 2 + 1e-3].any()
