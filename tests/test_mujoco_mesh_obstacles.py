@@ -1,7 +1,8 @@
 """Mesh and URDF-scene obstacles in MuJoCo's physics: their convex parts cover the surface and
 overstate it by at most half a shell, the camera sees the true surface, MBM's kitchen loads,
-its collision-free start touches nothing and MuJoCo's contacts agree with coal's clearance, a guided Panda reaches into a mesh shelf without a
-contact, and what MuJoCo cannot take is refused at load naming ``obstacles[k]``."""
+its collision-free start touches nothing and MuJoCo's contacts agree with coal's clearance,
+a guided Panda reaches into a mesh shelf without a contact, and what MuJoCo cannot take is
+refused at load naming ``obstacles[k]``."""
 
 from __future__ import annotations
 
