@@ -35,6 +35,7 @@ from dynfab.scenario.limits_schema import LimitsMapping, LimitsSpec
 from dynfab.scenario.model_errors import scenario_error
 from dynfab.scenario.model_types import Choice, Flag, Items, Range, ScenarioModel, fail
 from dynfab.scenario.obstacle_schema import OBSTACLE_TYPES, ObstacleMapping, ObstacleSpec, ObstacleType
+from dynfab.scenario.mujoco_obstacles import check_mujoco_obstacles
 from dynfab.scenario.scene_files import obstacle_specs
 from dynfab.scenario.ranges import (
     MAX_DT,
@@ -202,8 +203,12 @@ class ScenarioDocument(ScenarioModel):
         (:mod:`dynfab.scenario.scene_files`).
 
         Raises:
-            ScenarioError: The URDF file is not found, or a mesh or scene file is bad.
+            ScenarioError: The URDF file is not found, a mesh or scene file is bad, or MuJoCo
+                cannot simulate an obstacle (:mod:`dynfab.scenario.mujoco_obstacles`).
         """
+        entries = [obstacle_specs(obstacle, base_dir, f"obstacles[{k}]") for k, obstacle in enumerate(self.obstacles)]
+        if self.simulator == "mujoco":
+            check_mujoco_obstacles(entries, self.perception)
         return Scenario(
             robot=robot_spec(self.robot, "robot", base_dir),
             planner=self.planner,
@@ -211,8 +216,7 @@ class ScenarioDocument(ScenarioModel):
             duration=self.duration,
             initial_state=InitialState(self.initial_state.q, self.initial_state.qdot),
             goals=tuple(goal_spec(goal) for goal in self.goal),
-            obstacles=tuple(spec for k, obstacle in enumerate(self.obstacles)
-                            for spec in obstacle_specs(obstacle, base_dir, f"obstacles[{k}]")),
+            obstacles=tuple(spec for specs in entries for spec in specs),
             limits=self.limits.spec(),
             simulation=Simulation(self.simulator, self.control, self.delay, self.noise),
             recovery=self.recovery,

@@ -15,11 +15,12 @@ Collision geometry: a URDF robot's collision meshes (convex hulls, STL files fro
 whose description has none (the built-in ``panda`` and ``boxer-panda`` on Franka's meshes,
 :mod:`dynfab.robots.builtin_meshes`, as :mod:`dynfab.scenario.mujoco_runner` builds them);
 a robot without meshes (the other built-ins, or the Panda without example-robot-data) its
-collision spheres. Obstacles are static geoms or, when they move, mocap bodies whose pose the
-simulation sets every physics step; for a planar robot a sphere becomes a vertical
-cylinder (the disc the planner sees). Contacts (bit masks, MuJoCo's ``contype`` /
-``conaffinity``): robot geoms touch obstacles; robot geoms touch each other only in the
-robot's self-collision pairs (explicit ``<pair>``\\ s); obstacles never touch each other.
+collision spheres. Obstacles are static bodies or, when they move, mocap bodies whose pose the
+simulation sets every physics step (:mod:`dynfab.sim.mjcf_obstacles`: a mesh collides by
+convex parts and is seen by cameras whole, a point cloud is not in the physics). Contacts
+(bit masks, MuJoCo's ``contype`` / ``conaffinity``): robot geoms touch obstacles; robot
+geoms touch each other only in the robot's self-collision pairs (explicit ``<pair>``\\ s);
+obstacles never touch each other.
 
 Cameras (``cameras``): fixed ``<camera>``\\ s in the world (:mod:`dynfab.sim.mjcf_cameras`).
 
@@ -41,11 +42,11 @@ import mujoco
 import numpy as np
 import trimesh
 
-from dynfab.geometry.shapes import Box, Capsule, Cylinder, Plane, Sphere
 from dynfab.perception.camera_spec import CameraSpec
 from dynfab.robots.robot import BASE_JOINTS, Robot
 from dynfab.robots.urdf import Joint, UrdfModel
 from dynfab.sim.mjcf_cameras import add_camera, camera_name
+from dynfab.sim.mjcf_obstacles import add_obstacle
 from dynfab.sim.mjcf_values import joint_motion, mjcf_numbers, origin_matrix, pose_attributes
 from dynfab.sim.mujoco_meshes import link_mesh_file, mesh_file
 from dynfab.sim.mujoco_scene import MujocoModelError, MujocoScene, SceneObstacle
@@ -73,7 +74,6 @@ WHEEL_GAIN, WHEEL_TORQUE = 40.0, 40.0
 #: Mass of a drive wheel the URDF does not describe (no ``wheel_left_link``) [kg].
 _DEFAULT_WHEEL_MASS = 1.0
 _ROBOT_RGBA = "0.95 0.55 0.1 1"
-_OBSTACLE_RGBA = "0.2 0.4 0.9 0.8"
 
 route_warnings_to_stderr()
 
@@ -98,6 +98,8 @@ def build_scene(robot: Robot, obstacles: Sequence[SceneObstacle] = (),
 
     Raises:
         MujocoModelError: A moving link without mass; a collision mesh that is missing.
+        TooManyPartsError: A mesh obstacle of more than :data:`~dynfab.sim.mesh_parts.MAX_PARTS`
+            convex parts (:func:`~dynfab.sim.mesh_parts.convex_parts`).
     """
     xml = _Builder(robot, link_meshes).xml(obstacles, self_collision_links, cameras)
     try:
@@ -121,7 +123,9 @@ def _scene(model: mujoco.MjModel, robot: Robot, obstacles: Sequence[SceneObstacl
     mocap = tuple(int(model.body(f"obstacle{k}").mocapid[0]) if o.moving else None
                   for k, o in enumerate(obstacles))
     robot_bodies = frozenset(b for b in range(1, model.nbody) if not model.body(b).name.startswith("obstacle"))
-    geoms = {model.geom(f"obstacle{k}").id: k for k in range(len(obstacles))}
+    obstacle_of_body = {model.body(f"obstacle{k}").id: k for k in range(len(obstacles))}
+    geoms = {geom: obstacle_of_body[int(body)] for geom, body in enumerate(model.geom_bodyid)
+             if int(body) in obstacle_of_body}
     return MujocoScene(model=model, joint_qpos=np.array([int(j.qposadr[0]) for j in joints], dtype=int),
                        joint_dof=np.array([int(j.dofadr[0]) for j in joints], dtype=int),
                        joint_actuators=np.array([model.actuator(f"{n}_motor").id for n in names], dtype=int),
@@ -175,7 +179,7 @@ class _Builder:
         else:
             self._base()
         for k, obstacle in enumerate(obstacles):
-            self._obstacle(k, obstacle)
+            add_obstacle(self.world, self.asset, k, obstacle, self.robot.planar, _OBSTACLE)
         self._self_pairs(self_collision_links)
         for k, camera in enumerate(cameras):
             add_camera(self.world, self.buffer, k, camera)
@@ -311,32 +315,6 @@ class _Builder:
                               friction="0 0 0", condim="1", priority="1", contype=str(_GROUND),
                               conaffinity=str(_GROUND),
                               rgba="0.1 0.1 0.1 1")
-
-    # ---------------------------------------------------------------- obstacles
-    def _obstacle(self, k: int, obstacle: SceneObstacle) -> None:
-        shape = obstacle.shape
-        attributes = {"name": f"obstacle{k}", "contype": "0", "conaffinity": str(_OBSTACLE), "rgba": _OBSTACLE_RGBA}
-        if isinstance(shape, Sphere) and self.robot.planar:
-            attributes.update(type="cylinder", size=f"{shape.radius} 1")
-        elif isinstance(shape, Sphere):
-            attributes.update(type="sphere", size=repr(shape.radius))
-        elif isinstance(shape, Box):
-            attributes.update(type="box", size=mjcf_numbers(np.array(shape.size) / 2))
-        elif isinstance(shape, Cylinder):
-            attributes.update(type="cylinder", size=f"{shape.radius} {shape.length / 2}")
-        elif isinstance(shape, Capsule):
-            attributes.update(type="capsule", size=f"{shape.radius} {shape.length / 2}")
-        elif isinstance(shape, Plane):
-            attributes.update(type="box", size="5 5 5", pos="0 0 -5")  # the solid half-space, 10 m wide
-        else:
-            raise MujocoModelError(f"obstacle {k}: unsupported shape {type(shape).__name__}")
-        pose = {"pos": mjcf_numbers(obstacle.position), "quat": mjcf_numbers(obstacle.orientation)}
-        if obstacle.moving:
-            body = ET.SubElement(self.world, "body", name=f"obstacle{k}", mocap="true", **pose)
-            ET.SubElement(body, "geom", **attributes)
-            return
-        body = ET.SubElement(self.world, "body", name=f"obstacle{k}", **pose)
-        ET.SubElement(body, "geom", **attributes)
 
 
 def _subtree_mass(model: UrdfModel, link: str) -> float:

@@ -11,9 +11,9 @@ The points shown are the frame's, without its ``delay``; the view's planner is n
 When the view's time goes back (a reset), the camera's schedule starts again.
 
 MuJoCo is imported, and its OpenGL context made (``MUJOCO_GL=egl`` unless set), on the first
-frame, in the thread that draws the view. A scene MuJoCo cannot hold (mesh obstacles) or a
-machine without offscreen OpenGL raises :class:`CameraViewError`, which the view reports
-once and then shows the frustum alone.
+frame, in the thread that draws the view. A scene MuJoCo cannot hold (a mesh of more than
+:data:`~dynfab.sim.mesh_parts.MAX_PARTS` convex parts) or a machine without offscreen OpenGL
+raises :class:`CameraViewError`, which the view reports once and then shows the frustum alone.
 """
 
 from __future__ import annotations
