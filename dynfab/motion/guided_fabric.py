@@ -7,9 +7,11 @@ first goal is a joint-space goal on every joint (:func:`guided_goal_config`). On
 (:class:`~dynfab.motion.guidance.JointGuidance`) and returns at once: the plan is made off
 the control loop (:mod:`dynfab.motion.plan_requests`: on a worker thread, or in
 simulation at once and applied ``plan_latency`` seconds later), and until it arrives the
-reference is the goal configuration at rest (known at once for a joint goal, after
-inverse kinematics for the others; the current configuration before that), so the fabric
-heads for the goal alone, its obstacle, limit and self-collision leaves on. Every tick
+reference is the straight joint-space motion to the goal configuration at the plan's
+cruise limits (:class:`~dynfab.motion.straight_motion.StraightMotion`; the goal
+configuration is known at once for a joint goal, after inverse kinematics for the others,
+and the reference holds the robot's configuration before that), so the fabric heads for
+the goal alone, its obstacle, limit and self-collision leaves on. Every tick
 :meth:`GuidedFabric.update` writes ``q_r, q̇_r, q̈_r`` into that goal, where the dynamic
 pullback and energization of the fabric (paper section IV) track it, while the fabric's
 leaves keep acting on everything the user writes into its slots.
@@ -77,6 +79,7 @@ from dynfab.geometry.shapes import Sphere
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.guidance import GoalTargets, GuidanceSettings, JointGuidance, Plan
 from dynfab.motion.plan_requests import PendingPlan, PlanRequest, plan_maker
+from dynfab.motion.straight_motion import StraightMotion
 
 __all__ = ["GuidanceStatus", "GuidedFabric", "guided_goal_config"]
 
@@ -141,6 +144,7 @@ class GuidedFabric:
         self._settings = settings
         self._maker = plan_maker(self.guidance, plan_latency)
         self._pending: PendingPlan | None = None
+        self._interim: tuple[float, StraightMotion] | None = None   # since when, toward the goal
         self._joining = ConfigurationChecker(fabric.robot)   # the control thread's own: the worker has the guidance's
         self._static: tuple[PlacedObstacle, ...] = ()
         self._goal: GoalTargets | None = None
@@ -198,10 +202,11 @@ class GuidedFabric:
         self._seed = 0
         self._plan = None
         self._approaching = False
+        self._interim = None
         self._request(t, q, moving, after=None)
         self._receive(t, q, moving)   # a plan without latency arrives at once
         if self._plan is None and self._pending is not None:
-            self._head_for_goal(q)
+            self._head_for_goal(t, q)
 
     def update(self, t: float, q: NDArray[np.float64], moving: Sequence[PlacedObstacle] = ()) -> None:
         """Apply a plan that arrived; advance the reference to time ``t`` [s] for the robot
@@ -210,7 +215,7 @@ class GuidedFabric:
         self._receive(t, q, moving)
         if self._plan is None:
             if self._pending is not None:
-                self._head_for_goal(q)
+                self._head_for_goal(t, q)
             return
         settings = self._settings
         params = self.fabric.parameters
@@ -339,12 +344,27 @@ class GuidedFabric:
                 return float(times[k])
         return float(times[order[0]])
 
-    def _head_for_goal(self, q: NDArray[np.float64]) -> None:
-        """While the first plan is made: the goal configuration at rest once known (the
-        fabric, its leaves on, heads for it alone), else ``q`` at rest."""
+    def _head_for_goal(self, t: float, q: NDArray[np.float64]) -> None:
+        """While the first plan is made: once the goal configuration is known, the straight
+        motion to it from where the robot then is, at the plan's cruise limits
+        (:class:`StraightMotion`; the fabric, its leaves on, heads for the goal alone);
+        before that ``q`` at rest."""
         assert self._pending is not None
         target = self._pending.goal_configuration   # published by the maker after IK
-        self._hold(q if target is None else target)
+        if target is None:
+            self._hold(q)
+            return
+        if self._interim is None or self._interim[1].goal is not target:
+            limits, settings = self.fabric.robot.limits, self._settings
+            motion = StraightMotion(np.array(q, dtype=float), target, settings.speed * limits.velocity,
+                                    settings.acceleration * limits.acceleration)
+            self._interim = (t, motion)
+        began, motion = self._interim
+        point = motion.evaluate(t - began)
+        params = self.fabric.parameters
+        params.goal_position[0][:] = point.position
+        params.goal_velocity[0][:] = point.velocity
+        params.goal_acceleration[0][:] = point.acceleration
 
     def _write(self, tau: float, rate: float) -> None:
         """Write the reference at its time ``tau`` [s], its clock running at ``rate`` [-],
