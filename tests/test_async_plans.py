@@ -110,3 +110,23 @@ def test_a_guided_run_with_a_plan_latency_reaches_its_goal_and_reproduces(panda)
     np.testing.assert_array_equal(first.record.q, second.record.q)   # plans made at once, applied on a tick
     assert SIMULATED_PLAN_LATENCY > DT   # the robot moved before the plan came: not the old synchronous path
     assert np.linalg.norm(first.record.q[int(round(SIMULATED_PLAN_LATENCY / DT))] - START) > 0.0
+
+
+def test_while_a_replan_is_made_the_old_reference_stands_still(panda) -> None:
+    latency = 0.2
+    guided = _controller(panda, plan_latency=latency).guided
+    guided.set_goal(JointTarget(tuple(GOAL)), 0.0, START)
+    params = guided.fabric.parameters
+    asked_at, held = None, None
+    for step in range(1, 600):   # the robot never moves: it stalls behind the reference, a replan is asked for
+        t = step * DT
+        guided.update(t, START)
+        if asked_at is None and guided.status.replans_stalled:
+            asked_at, held = t, params.goal_position[0].copy()
+        elif asked_at is not None and guided.planning:
+            np.testing.assert_array_equal(params.goal_position[0], held)
+            np.testing.assert_array_equal(params.goal_velocity[0], 0.0)
+        elif asked_at is not None:
+            break
+    assert asked_at is not None and guided.status.plans == 2
+    assert t == pytest.approx(asked_at + latency)   # the replan arrived after the latency, not before
