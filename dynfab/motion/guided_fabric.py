@@ -3,11 +3,24 @@ reaching goals in cluttered scenes (issue 19).
 
 ``GuidedFabric(fabric)`` takes a dynamic :class:`~dynfab.fabric.planner.FabricPlanner` whose
 first goal is a joint-space goal on every joint (:func:`guided_goal_config`). On
-:meth:`GuidedFabric.set_goal` it plans a free, timed joint-space reference
-(:class:`~dynfab.motion.guidance.JointGuidance`); every tick :meth:`GuidedFabric.update`
-writes ``q_r, q̇_r, q̈_r`` into that goal, where the dynamic pullback and energization of
-the fabric (paper section IV) track it, while the fabric's obstacle, limit and
-self-collision leaves keep acting on everything the user writes into its slots.
+:meth:`GuidedFabric.set_goal` it asks for a free, timed joint-space reference
+(:class:`~dynfab.motion.guidance.JointGuidance`) and returns at once: the plan is made off
+the control loop (:mod:`dynfab.motion.plan_requests`: on a worker thread, or in
+simulation at once and applied ``plan_latency`` seconds later), and until it arrives the
+reference is the straight joint-space motion to the goal configuration at the plan's
+cruise limits (:class:`~dynfab.motion.straight_motion.StraightMotion`; the goal
+configuration is known at once for a joint goal, after inverse kinematics for the others,
+and the reference holds the robot's configuration before that), so the fabric heads for
+the goal alone, its obstacle, limit and self-collision leaves on. Every tick
+:meth:`GuidedFabric.update` writes ``q_r, q̇_r, q̈_r`` into that goal, where the dynamic
+pullback and energization of the fabric (paper section IV) track it, while the fabric's
+leaves keep acting on everything the user writes into its slots.
+
+A plan arrives after the robot has moved: its clock starts at the reference's point
+nearest the robot (sampled every :data:`JOIN_SAMPLE_PERIOD`, before any approach) whose
+straight segment from the robot touches no obstacle (of the :data:`JOIN_CANDIDATES`
+nearest; the nearest if none), so the reference does not jump back to where the plan
+began; the lag rule below slows its clock until the robot is on it.
 
 The reference runs on its own clock ``τ``, which slows while the robot lags behind it
 (a moving obstacle in the way; during a grasp's approach, below, ``approach_lag_slow`` and
@@ -16,7 +29,14 @@ The reference runs on its own clock ``τ``, which slows while the robot lags beh
     ρ = clip((e_stop − e) / (e_stop − e_slow), 0, 1),   e = ‖q − q_r(τ)‖,
     τ ← τ + ρ Δt,   q̇_r ← ρ q̇_r(τ),   q̈_r ← ρ² q̈_r(τ).
 
-It replans from where the robot is (at most ``replans`` times) when
+It asks for a replan from where the robot is (at most ``replans`` times; until the new
+one arrives the old reference's clock stands still outside a grasp's approach, so the
+fabric brakes at its point and keeps avoiding rather than following it into what blocked
+it, while in the approach the clock keeps its lag rule. Chosen on held-out problems, which
+therefore do not test it: with a 50 ms plan latency and the clock running on,
+moving-sphere bookshelf_thin/0017 and 0019 stalled after 7-8 plans; with it stopped
+everywhere, as-posed table_under_pick/0019 stalled in its approach; as here, all three
+reached their goals) when
 
 - the reference within ``check_horizon`` ahead meets an obstacle given as moving
   (checked every ``check_period``, and not within ``blocked_interval`` of a replan for a
@@ -53,7 +73,6 @@ brakes and keeps avoiding), and :attr:`GuidedFabric.status` says why.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
@@ -63,10 +82,17 @@ from numpy.typing import NDArray
 from dynfab.fabric.leaves.goal import GoalAttractor
 from dynfab.fabric.planner import FabricPlanner, GoalConfig
 from dynfab.geometry.shapes import Sphere
-from dynfab.motion.configuration_checker import PlacedObstacle
-from dynfab.motion.guidance import GoalTargets, GuidanceError, GuidanceSettings, JointGuidance, Plan
+from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
+from dynfab.motion.guidance import GoalTargets, GuidanceSettings, JointGuidance, Plan
+from dynfab.motion.plan_requests import PendingPlan, PlanRequest, plan_maker
+from dynfab.motion.straight_motion import StraightMotion
 
 __all__ = ["GuidanceStatus", "GuidedFabric", "guided_goal_config"]
+
+#: how finely a plan arriving late is searched for the point where the robot joins it [s]
+JOIN_SAMPLE_PERIOD = 0.02
+#: nearest points of a plan whose straight segment from the robot is checked when it joins [-]
+JOIN_CANDIDATES = 8
 
 
 def guided_goal_config(attractor: GoalAttractor = GoalAttractor()) -> GoalConfig:
@@ -108,7 +134,10 @@ class GuidedFabric:
         failure_message: the message of the last failed plan, or None.
     """
 
-    def __init__(self, fabric: FabricPlanner, settings: GuidanceSettings = GuidanceSettings()) -> None:
+    def __init__(self, fabric: FabricPlanner, settings: GuidanceSettings = GuidanceSettings(),
+                 plan_latency: float | None = None) -> None:
+        """``plan_latency``: None makes plans on a worker thread (real time); seconds of the
+        caller's clock make them at once and apply them that much later (simulation)."""
         goal = fabric.config.goals[0]
         if not fabric.config.dynamic or not isinstance(goal, GoalConfig) or goal.link is not None or (
                 goal.joints is not None and tuple(goal.joints) != tuple(range(fabric.robot.dof))):
@@ -119,6 +148,10 @@ class GuidedFabric:
         self.status = GuidanceStatus()
         self.failure_message: str | None = None
         self._settings = settings
+        self._maker = plan_maker(self.guidance, plan_latency)
+        self._pending: PendingPlan | None = None
+        self._interim: tuple[float, StraightMotion] | None = None   # since when, toward the goal
+        self._joining = ConfigurationChecker(fabric.robot)   # the control thread's own: the worker has the guidance's
         self._static: tuple[PlacedObstacle, ...] = ()
         self._goal: GoalTargets | None = None
         self._plan: Plan | None = None
@@ -139,6 +172,16 @@ class GuidedFabric:
         """The reference being followed."""
         return self._plan
 
+    @property
+    def planning(self) -> bool:
+        """Whether a plan is being made (asked for and not yet applied)."""
+        return self._pending is not None
+
+    def close(self) -> None:
+        """Stop taking plans (a worker thread ends once the plan it makes is done)."""
+        self._pending = None
+        self._maker.close()
+
     def set_obstacles(self, obstacles: Sequence[PlacedObstacle]) -> None:
         """The obstacles plans avoid (those that do not move; moving ones go to :meth:`update`)."""
         self._static = tuple(obstacles)
@@ -158,42 +201,48 @@ class GuidedFabric:
 
     def set_goal(self, goal: GoalTargets, t: float, q: NDArray[np.float64],
                  moving: Sequence[PlacedObstacle] = ()) -> None:
-        """Plan to ``goal`` from ``q`` at time ``t`` [s] now; on failure hold ``q`` (see :attr:`status`)."""
+        """Ask for a plan to ``goal`` from ``q`` at time ``t`` [s] and return (module
+        docstring): until it arrives the fabric heads for the goal configuration alone; a
+        plan that cannot be made holds the configuration the robot then has (see :attr:`status`)."""
         self._goal = goal
         self._seed = 0
-        self._replan(t, q, moving, first=True)
-        self._progress_needed = self._settings.stall_floor
-        if self._plan is not None:
-            distance = float(np.linalg.norm(np.asarray(q) - self._plan.goal))
-            self._progress_needed = max(self._settings.stall_floor, self._settings.stall_progress * distance)
+        self._plan = None
+        self._approaching = False
+        self._interim = None
+        self._request(t, q, moving, after=None)
+        self._receive(t, q, moving)   # a plan without latency arrives at once
+        if self._plan is None and self._pending is not None:
+            self._head_for_goal(t, q)
 
     def update(self, t: float, q: NDArray[np.float64], moving: Sequence[PlacedObstacle] = ()) -> None:
-        """Advance the reference to time ``t`` [s] for the robot at ``q`` and write it into
-        the fabric's first goal; replan if it is blocked ahead or progress stalled."""
+        """Apply a plan that arrived; advance the reference to time ``t`` [s] for the robot
+        at ``q`` and write it into the fabric's first goal; ask for a replan if it is
+        blocked ahead or progress stalled (the old reference's clock stands still until it
+        arrives, outside an approach)."""
+        self._receive(t, q, moving)
         if self._plan is None:
+            if self._pending is not None:
+                self._head_for_goal(t, q)
             return
         settings = self._settings
         params = self.fabric.parameters
         lag = float(np.linalg.norm(q - params.goal_position[0]))   # the reference at τ, written last tick
-        if self.status.plans <= settings.replans:
+        if self._pending is None and self.status.plans <= settings.replans:
             reason = self._replan_reason(t, q, lag, moving)
             if reason is not None:
-                self._replan(t, q, moving, first=False, after=reason)
-                if self._plan is None:
-                    return
-                lag = float(np.linalg.norm(q - params.goal_position[0]))
+                self._request(t, q, moving, after=reason)
+                if self._receive(t, q, moving):
+                    lag = float(np.linalg.norm(q - params.goal_position[0]))
         dt = 0.0 if self._last_t is None else max(0.0, t - self._last_t)
         self._last_t = t
         in_approach = self._in_approach()
         slow, stop = ((settings.approach_lag_slow, settings.approach_lag_stop) if in_approach
                       else (settings.lag_slow, settings.lag_stop))
         self._approaching = self._approaching or (in_approach and lag <= settings.approach_lag_stop)
-        rate = float(np.clip((stop - lag) / (stop - slow), 0.0, 1.0))
+        waiting = self._pending is not None and not in_approach
+        rate = 0.0 if waiting else float(np.clip((stop - lag) / (stop - slow), 0.0, 1.0))
         self._tau += rate * dt
-        point = self._plan.trajectory.evaluate(self._tau)
-        params.goal_position[0][:] = point.position
-        params.goal_velocity[0][:] = rate * point.velocity
-        params.goal_acceleration[0][:] = rate**2 * point.acceleration
+        self._write(self._tau, rate)
 
     def compute(self, t: float, q: NDArray[np.float64], qdot: NDArray[np.float64],
                 moving: Sequence[PlacedObstacle] = ()) -> NDArray[np.float64]:
@@ -241,44 +290,99 @@ class GuidedFabric:
                 return "blocked"
         return None
 
-    def _replan(self, t: float, q: NDArray[np.float64], moving: Sequence[PlacedObstacle], first: bool,
-                after: str | None = None) -> None:
-        """Plan from ``q`` at time ``t`` [s]; ``after``: why (:meth:`_replan_reason`), None at first."""
+    def _request(self, t: float, q: NDArray[np.float64], moving: Sequence[PlacedObstacle],
+                 after: str | None) -> None:
+        """Ask for a plan from ``q`` at time ``t`` [s]; ``after``: why (:meth:`_replan_reason`), None at first."""
         assert self._goal is not None
-        q = np.asarray(q, dtype=float)
-        if self._plan is not None:  # what moves and touches the goal configuration is passing it
-            margin = self._settings.path.margin
-            moving = tuple(o for o in moving if self.guidance.obstacle_clearance(self._plan.goal, o) >= margin)
-        obstacles = self._static if first else self._static + tuple(moving)
-        began = time.perf_counter()
-        try:
-            plan = self.guidance.plan(q, self._goal, obstacles, seed=self._seed, wide=after == "held")
-            failure, message = None, None
-        except GuidanceError as error:
-            plan, failure, message = None, error.reason, str(error)
-        elapsed_ms = 1e3 * (time.perf_counter() - began)
+        request = PlanRequest(t, np.array(q, dtype=float), self._goal, self._static, tuple(moving),
+                              None if after is None or self._plan is None else self._plan.goal.copy(),
+                              self._seed, after == "held", tuple(self._buffers()), after)
         self._seed += self._settings.attempts
+        self._pending = self._maker.submit(request)
+
+    def _receive(self, t: float, q: NDArray[np.float64], moving: Sequence[PlacedObstacle]) -> bool:
+        """Apply the plan asked for if it has arrived at time ``t`` [s], joined where the
+        robot is now (``q``: :meth:`_join_time`); whether one arrived (made or failed)."""
+        pending = self._pending
+        if pending is None or not pending.ready(t):
+            return False
+        self._pending = None
+        outcome, request = pending.outcome(), pending.request
+        first = request.previous_goal is None
         status = self.status
-        self.status = replace(status, guided=plan is not None or (status.guided and not first),
+        self.status = replace(status, guided=outcome.plan is not None or (status.guided and not first),
                               plans=status.plans + 1,
-                              plan_time_ms=elapsed_ms if status.plan_time_ms is None else status.plan_time_ms,
-                              plan_times_ms=status.plan_times_ms + (elapsed_ms,), failure=failure)
-        self.failure_message = message
+                              plan_time_ms=outcome.elapsed_ms if status.plan_time_ms is None else status.plan_time_ms,
+                              plan_times_ms=status.plan_times_ms + (outcome.elapsed_ms,), failure=outcome.failure)
+        self.failure_message = outcome.message
         self._best, self._best_time, self._ended_seen = np.inf, t, False
-        self._next_check = t + (self._settings.blocked_interval if after == "blocked" else 0.0)
+        self._next_check = t + (self._settings.blocked_interval if request.after == "blocked" else 0.0)
         self._lagging_since = None
+        plan = outcome.plan
         if plan is None:
             if first:
                 self._plan = None
                 self._hold(q)
-            return  # a failed replan keeps following the old reference
+            return True  # a failed replan keeps following the old reference
+        if first:
+            distance = float(np.linalg.norm(request.q - plan.goal))
+            self._progress_needed = max(self._settings.stall_floor, self._settings.stall_progress * distance)
         self._plan = plan
         self._approaching = False
-        self._allowances = (self.guidance.allowances(plan.goal, self._static, self._buffers()) if plan.approach > 0
-                            else np.zeros(len(self._static)))
-        self._tau = 0.0
+        self._allowances = outcome.allowances
+        self._tau = self._join_time(plan, np.asarray(q, dtype=float), request.static + tuple(moving))
         self._last_t = t
-        self._hold(plan.trajectory.evaluate(0.0).position)   # the new reference's start, at rest
+        self._write(self._tau, 1.0)
+        return True
+
+    def _join_time(self, plan: Plan, q: NDArray[np.float64], obstacles: tuple[PlacedObstacle, ...]) -> float:
+        """Where on ``plan``'s clock [s] the robot at ``q`` joins it (it moved while the plan
+        was made): of the reference's points before any approach, sampled every
+        :data:`JOIN_SAMPLE_PERIOD`, the nearest to ``q`` whose straight segment from ``q``
+        touches none of ``obstacles`` (the nearest of all if none is free; the fabric's
+        leaves then keep the robot clear and the clock waits for it)."""
+        end = min(plan.approach_start, plan.trajectory.duration)
+        times = np.linspace(0.0, end, max(2, int(np.ceil(end / JOIN_SAMPLE_PERIOD)) + 1))
+        positions = plan.trajectory.sample(times)[0]
+        order = np.argsort(np.linalg.norm(positions - q, axis=1), kind="stable")
+        self._joining.set_obstacles(obstacles)
+        resolution = self._settings.path.resolution
+        for k in order[:JOIN_CANDIDATES]:
+            if self._joining.motion_free(q, positions[k], resolution, 0.0, -np.inf)[0]:
+                return float(times[k])
+        return float(times[order[0]])
+
+    def _head_for_goal(self, t: float, q: NDArray[np.float64]) -> None:
+        """While the first plan is made: once the goal configuration is known, the straight
+        motion to it from where the robot then is, at the plan's cruise limits
+        (:class:`StraightMotion`; the fabric, its leaves on, heads for the goal alone);
+        before that ``q`` at rest."""
+        assert self._pending is not None
+        target = self._pending.goal_configuration   # published by the maker after IK
+        if target is None:
+            self._hold(q)
+            return
+        if self._interim is None or self._interim[1].goal is not target:
+            limits, settings = self.fabric.robot.limits, self._settings
+            motion = StraightMotion(np.array(q, dtype=float), target, settings.speed * limits.velocity,
+                                    settings.acceleration * limits.acceleration)
+            self._interim = (t, motion)
+        began, motion = self._interim
+        point = motion.evaluate(t - began)
+        params = self.fabric.parameters
+        params.goal_position[0][:] = point.position
+        params.goal_velocity[0][:] = point.velocity
+        params.goal_acceleration[0][:] = point.acceleration
+
+    def _write(self, tau: float, rate: float) -> None:
+        """Write the reference at its time ``tau`` [s], its clock running at ``rate`` [-],
+        into the fabric's first goal: ``q_r(τ), ρ q̇_r(τ), ρ² q̈_r(τ)``."""
+        assert self._plan is not None
+        point = self._plan.trajectory.evaluate(tau)
+        params = self.fabric.parameters
+        params.goal_position[0][:] = point.position
+        params.goal_velocity[0][:] = rate * point.velocity
+        params.goal_acceleration[0][:] = rate**2 * point.acceleration
 
     def _buffers(self) -> list[float]:
         """Per static obstacle, the clearance its fabric leaves keep (their barrier's offset) [m]."""

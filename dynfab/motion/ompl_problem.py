@@ -6,6 +6,11 @@ checking resolution, a planner, solve, simplify. Used by the task-space paths of
 
 States are allocated with ``space.allocState()`` and written and read by index
 (``copyFromReals`` / ``copyToReals`` are broken in the 2.0 bindings).
+
+The planner stops at a time limit checked in its own loop: ``solve(seconds)`` would, for
+limits of 1 s or more, start a thread that checks the limit every hundredth of it and
+join it at the end, up to 10 ms (40 ms for 4 s) after the path was found (measured: a
+free straight problem took 6.5 ms median through it, 0.1 ms with the in-loop check).
 """
 
 from __future__ import annotations
@@ -57,7 +62,7 @@ def solve_in_box(validity: Callable[[ob.State], bool], start: NDArray[np.float64
         information.setMotionValidator(_MotionValidator(information, motion))
     setup.setStartAndGoalStates(_state(space, start), _state(space, goal))
     setup.setPlanner(planner(information))
-    status = setup.solve(time_limit)
+    status = setup.solve(ob.timedPlannerTerminationCondition(time_limit))
     if not setup.haveExactSolutionPath():
         return None, status.asString()
     if simplify_time is None:

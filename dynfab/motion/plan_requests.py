@@ -1,0 +1,215 @@
+"""Plans made off the control loop: a guided fabric asks for a plan and keeps commanding
+the robot while it is made (issue 19: the robot never waits for a plan).
+
+A :class:`PlanRequest` holds everything a plan needs, captured when it is asked for (the
+robot's configuration, the goal, the obstacles, the seed), so the plan does not depend on
+when it is made. :func:`make_plan` turns it into a :class:`PlanOutcome`: the goal
+configuration (inverse kinematics for task goals), published on the
+:class:`PendingPlan` as soon as it is known (the fabric can head for it while the path is
+planned), then the path and its timing (:meth:`JointGuidance.plan`), and the static
+obstacles' allowances of a goal closer to them than the planner's margin.
+
+Two ways to make it:
+
+- :class:`BackgroundPlans` (real time, the library's default): one worker thread; a plan
+  arrives as soon as it is made. OMPL's ``solve`` lets the control thread run between its
+  calls of the Python validity check (measured: ``docs/guides/guidance.md``), so a control
+  tick waits at most Python's switch interval (``sys.getswitchinterval()``, 5 ms by
+  default) for the interpreter.
+- :class:`DelayedPlans` (simulation): the plan is made at once in the caller's thread and
+  handed over ``latency`` seconds of the caller's clock later, so a simulated run is
+  reproducible whatever the machine's load.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from dynfab.motion.configuration_checker import PlacedObstacle
+from dynfab.motion.guidance import GoalTargets, GuidanceError, JointGuidance, JointTarget, Plan
+
+__all__ = ["BackgroundPlans", "DelayedPlans", "PendingPlan", "PlanMaker", "PlanOutcome", "PlanRequest", "make_plan",
+           "plan_maker"]
+
+
+@dataclass(frozen=True)
+class PlanRequest:
+    """What a plan is made from, captured when it is asked for.
+
+    Attributes:
+        t: the caller's time of the request [s].
+        q: the robot's configuration then (n,) [rad].
+        goal: the goal (a joint goal or task targets).
+        static: the obstacles that do not move.
+        moving: the moving ones where they were at ``t`` (left out of a first plan).
+        previous_goal: the goal configuration of the plan being followed (n,) [rad], or
+            None (a first plan): moving obstacles that touch it are passing the goal and
+            are left out.
+        seed: the first planning seed [-].
+        wide: keep the stall margin first (a replan after a stall on the way).
+        buffers: per static obstacle, the clearance its fabric leaves keep [m].
+        after: why the plan is asked for (``held``, ``stalled``, ``blocked``), None at first.
+    """
+
+    t: float
+    q: NDArray[np.float64]
+    goal: GoalTargets
+    static: tuple[PlacedObstacle, ...]
+    moving: tuple[PlacedObstacle, ...]
+    previous_goal: NDArray[np.float64] | None
+    seed: int
+    wide: bool
+    buffers: tuple[float, ...]
+    after: str | None = None
+
+
+@dataclass(frozen=True)
+class PlanOutcome:
+    """A finished request.
+
+    Attributes:
+        plan: the timed reference, or None if no plan could be made.
+        failure: why not (:class:`GuidanceError` reasons), or None.
+        message: the error's message, or None.
+        elapsed_ms: wall time of making it (IK, path, timing, allowances) [ms].
+        allowances: per static obstacle, how far [m] the fabric's spheres may enter it near
+            the goal (zeros unless the plan has an approach).
+    """
+
+    plan: Plan | None
+    failure: str | None
+    message: str | None
+    elapsed_ms: float
+    allowances: NDArray[np.float64]
+
+
+class PendingPlan:
+    """A plan being made: its request, the goal configuration once known, the outcome once
+    done (a future of a worker thread's, or an outcome made already with the time it may
+    be taken at).
+
+    Attributes:
+        request: what the plan is made from.
+        goal_configuration: the plan's goal configuration (n,) [rad] once known, else None.
+    """
+
+    def __init__(self, request: PlanRequest) -> None:
+        self.request = request
+        self.goal_configuration: NDArray[np.float64] | None = None
+        self._ready_at = np.inf
+        self._outcome: PlanOutcome | None = None
+        self._future: Future[PlanOutcome] | None = None
+
+    def publish(self, q: NDArray[np.float64]) -> None:
+        """Record the goal configuration ``q`` (by the maker, once)."""
+        self.goal_configuration = q
+
+    def run_on(self, executor: ThreadPoolExecutor, guidance: JointGuidance) -> None:
+        """Make the plan on ``executor``'s thread."""
+        self._future = executor.submit(make_plan, guidance, self.request, self.publish)
+
+    def run_now(self, guidance: JointGuidance, ready_at: float) -> None:
+        """Make the plan now; it may be taken from the caller's time ``ready_at`` [s] on."""
+        self._outcome = make_plan(guidance, self.request, self.publish)
+        self._ready_at = ready_at
+
+    def ready(self, t: float) -> bool:
+        """Whether the outcome may be taken at the caller's time ``t`` [s]."""
+        if self._future is not None:
+            return self._future.done()
+        return self._outcome is not None and t >= self._ready_at
+
+    def outcome(self) -> PlanOutcome:
+        """The outcome (call once :meth:`ready`)."""
+        if self._future is not None:
+            return self._future.result()
+        assert self._outcome is not None
+        return self._outcome
+
+
+def make_plan(guidance: JointGuidance, request: PlanRequest,
+              publish: Callable[[NDArray[np.float64]], None] = lambda q: None) -> PlanOutcome:
+    """Plan for ``request`` with ``guidance`` (module docstring); ``publish`` gets the goal
+    configuration as soon as it is known. Never raises for a plan that cannot be made."""
+    began = time.perf_counter()
+    moving = request.moving
+    if request.previous_goal is not None:   # what moves and touches the goal configuration is passing it
+        margin = guidance.settings.path.margin
+        moving = tuple(o for o in moving if guidance.obstacle_clearance(request.previous_goal, o) >= margin)
+    obstacles = request.static + moving if request.previous_goal is not None else request.static
+    allowances = np.zeros(len(request.static))
+    try:
+        guidance.checker.set_obstacles(obstacles)
+        target = guidance.goal_configuration(request.goal, request.q, request.seed)
+        publish(target)
+        plan = guidance.plan(request.q, JointTarget(tuple(target)), obstacles, seed=request.seed, wide=request.wide)
+    except GuidanceError as error:
+        return PlanOutcome(None, error.reason, str(error), _ms_since(began), allowances)
+    if plan.approach > 0:
+        allowances = guidance.allowances(plan.goal, request.static, request.buffers)
+    return PlanOutcome(plan, None, None, _ms_since(began), allowances)
+
+
+def _ms_since(began: float) -> float:
+    return 1e3 * (time.perf_counter() - began)
+
+
+class BackgroundPlans:
+    """Makes plans on one worker thread, in the order asked (module docstring)."""
+
+    def __init__(self, guidance: JointGuidance) -> None:
+        self._guidance = guidance
+        self._executor: ThreadPoolExecutor | None = None
+
+    def submit(self, request: PlanRequest) -> PendingPlan:
+        """Start making a plan for ``request``; returns at once."""
+        if self._executor is None:
+            self._executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="dynfab-plan")
+        pending = PendingPlan(request)
+        pending.run_on(self._executor, self._guidance)
+        return pending
+
+    def close(self) -> None:
+        """Let the worker thread end once the plan it makes is done."""
+        if self._executor is not None:
+            self._executor.shutdown(wait=False)
+            self._executor = None
+
+
+class DelayedPlans:
+    """Makes each plan at once and hands it over ``latency`` seconds of the caller's clock
+    later (module docstring).
+
+    Attributes:
+        latency: time between a request and its plan's arrival [s] (≥ 0).
+    """
+
+    def __init__(self, guidance: JointGuidance, latency: float) -> None:
+        if not np.isfinite(latency) or latency < 0.0:
+            raise ValueError(f"plan_latency must be a finite number >= 0 s, got {latency}")
+        self._guidance = guidance
+        self.latency = float(latency)
+
+    def submit(self, request: PlanRequest) -> PendingPlan:
+        """Make the plan for ``request`` now; it is ready ``latency`` after ``request.t``."""
+        pending = PendingPlan(request)
+        pending.run_now(self._guidance, request.t + self.latency - 1e-9)   # whole ticks land on a tick
+        return pending
+
+    def close(self) -> None:
+        """Nothing runs in the background."""
+
+
+PlanMaker = BackgroundPlans | DelayedPlans
+
+
+def plan_maker(guidance: JointGuidance, latency: float | None) -> PlanMaker:
+    """:class:`BackgroundPlans` for ``latency`` None (real time), else :class:`DelayedPlans`."""
+    return BackgroundPlans(guidance) if latency is None else DelayedPlans(guidance, latency)
+
