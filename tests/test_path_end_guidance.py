@@ -11,7 +11,8 @@ from dynfab.motion.inverse_kinematics import AxisTarget, PointTarget
 from dynfab.motion.joint_trajectory import SHORTEST_PATH, time_path
 from dynfab.robots import load_robot
 from dynfab.scenario.controllers import FabricController
-from dynfab.scenario.guided_controller import goal_targets, guidance_refusal, make_scenario_controller
+from dynfab.scenario.guided_controller import (SIMULATED_PLAN_LATENCY, goal_targets, guidance_refusal,
+                                               make_scenario_controller)
 from dynfab.scenario.path_end import PathEndController
 from dynfab.scenario.references import scenario_references
 from dynfab.scenario.runner import run_scenario
@@ -67,7 +68,9 @@ def test_the_path_is_followed_by_the_fabric_until_its_time_is_over_then_guidance
         controller(t, START, qdot)
         assert not controller.ended and controller.planner is follower and controller.status.plans == 0
     controller(PATH_TIME, START, qdot)
-    assert controller.ended and controller.planner is not follower and controller.status.plans == 1
+    assert controller.ended and controller.planner is not follower   # guided from the handover on
+    controller(PATH_TIME + SIMULATED_PLAN_LATENCY, START, qdot)       # the plan applied after its latency
+    assert controller.status.plans == 1
     assert controller.status.guided and controller.fallback is None
     hand_at_goal = np.asarray(panda.kinematics.position(controller.guided.guided.plan.goal, "panda_hand")).ravel()
     assert np.linalg.norm(hand_at_goal - BEHIND_THE_WALL) < 1e-3   # the plan's goal: IK of the path's end

@@ -238,15 +238,16 @@ def make_scenario_controller(scenario: Scenario, robot: Robot, references: Refer
         return plain()
     if any(goal.type == "path" for goal in scenario.goals):
         path = plain()
-        guided = _guided_controller(scenario, robot, references, settings, lambda: path)
+        guided = _guided_controller(scenario, robot, references, settings, lambda: path, plan_latency)
         return PathEndController(path, guided, path_end_time(scenario, references))
-    return _guided_controller(scenario, robot, references, settings, plain)
+    return _guided_controller(scenario, robot, references, settings, plain, plan_latency)
 
 
 def _guided_controller(scenario: Scenario, robot: Robot, references: References, settings: GuidanceSettings,
-                       fallback: Callable[[], Controller]) -> GuidedController:
+                       fallback: Callable[[], Controller], plan_latency: float | None) -> GuidedController:
     """The guided controller of ``scenario`` to its goals (a path goal: its end), with
-    ``fallback`` taking over if no plan can be made."""
+    ``fallback`` taking over if no plan can be made (``plan_latency``: as for
+    :func:`make_scenario_controller`)."""
     planning_robot = replace(robot, limits=scenario.planning_limits(robot.limits))
     fabric = FabricPlanner(planning_robot, scenario.fabric.configured(guided_planner_config(planning_robot, scenario)))
     slots = place_obstacles(scenario.obstacles, fabric.parameters)
