@@ -11,7 +11,8 @@ start to the goal through free configurations, checking straight motions every
 Endpoints that are not free (a start pressed against an object, a grasp goal a few
 millimetres from it, where the spheres already overlap what the meshes clear) are
 handled as manipulation planners handle grasps: the nearest free configuration within
-``escape_radius`` (random samples of growing radius) from which the straight segment to
+``escape_radius`` (random samples of growing radius; if none qualifies, as many again out to
+``escape_far_radius``) from which the straight segment to
 the real endpoint goes no deeper into obstacles (and into the robot itself) than the
 endpoint does, ``escape_slack`` aside, becomes the planned endpoint; the segment is
 appended, and the fabric tracks it.
@@ -66,7 +67,11 @@ class JointPlannerSettings:
         self_margin: clearance kept between the spheres of self-collision pairs [m].
         simplify_time: time given to OMPL's path simplifier [s].
         escape_radius: farthest a free endpoint is looked for around a blocked one [rad].
-        escape_samples: samples tried per endpoint [-].
+        escape_far_radius: farthest it is looked for when nothing within ``escape_radius``
+            qualifies [rad] (``escape_samples`` more, from ``escape_radius`` out; no farther
+            search if not above it). 0.8: training mesh problem table_bars/0004 (seed 0),
+            a goal under a shelf free on the meshes, found none within 0.4 rad.
+        escape_samples: samples tried per endpoint and radius [-].
         escape_slack: how much deeper [m] than the blocked endpoint itself the straight
             segment from the free configuration to it may reach into obstacles (or into
             the robot, for self-collision pairs).
@@ -87,6 +92,7 @@ class JointPlannerSettings:
     self_margin: float = 0.0
     simplify_time: float = 0.05
     escape_radius: float = 0.4
+    escape_far_radius: float = 0.8
     escape_samples: int = 400
     escape_slack: float = 0.002
     step: float = 0.7
@@ -213,7 +219,8 @@ def polyline_samples(waypoints: NDArray[np.float64], step: float) -> NDArray[np.
 def _free_near(q: NDArray[np.float64], validity: _Validity, checker: ConfigurationChecker,
                lower: NDArray[np.float64], upper: NDArray[np.float64], settings: JointPlannerSettings,
                rng: np.random.Generator, name: str) -> NDArray[np.float64]:
-    """``q`` itself if free, else the free sample nearest it within ``escape_radius`` whose
+    """``q`` itself if free, else the free sample nearest it within ``escape_radius`` (else
+    ``escape_far_radius``) whose
     straight segment to ``q`` goes no deeper than ``q`` (module docstring)."""
     if validity.free(q):
         return q
@@ -221,16 +228,19 @@ def _free_near(q: NDArray[np.float64], validity: _Validity, checker: Configurati
     deep = min(settings.margin, obstacle) - settings.escape_slack
     deep_self = min(settings.self_margin, itself) - settings.escape_slack
     count = settings.escape_samples
-    radii = settings.escape_radius * (np.arange(1, count + 1) / count)
-    directions = rng.normal(size=(count, q.size))
-    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
-    candidates = np.clip(q + radii[:, None] * directions, lower, upper)
-    for candidate in candidates:  # nearest first: radii grow
-        if validity.free(candidate) and checker.motion_free(candidate, q, settings.resolution, deep, deep_self)[0]:
-            return candidate
+    near, far = settings.escape_radius, max(settings.escape_radius, settings.escape_far_radius)
+    rounds = [near * (np.arange(1, count + 1) / count)]
+    if far > near:
+        rounds.append(near + (far - near) * (np.arange(1, count + 1) / count))
+    for radii in rounds:  # nearest first: radii grow
+        directions = rng.normal(size=(count, q.size))
+        directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+        for candidate in np.clip(q + radii[:, None] * directions, lower, upper):
+            if validity.free(candidate) and checker.motion_free(candidate, q, settings.resolution, deep, deep_self)[0]:
+                return candidate
     reason = f"{name}_in_collision"
     raise NoPathError(reason, f"the {name} is in collision on the collision spheres and no free configuration "
-                              f"lies within {settings.escape_radius} rad of it")
+                              f"lies within {far} rad of it")
 
 
 def _planner(name: PlannerName, step: float, information: ob.SpaceInformation) -> ob.Planner:
