@@ -85,3 +85,13 @@ def test_guidance_keeps_an_ik_solution_the_spheres_refuse_if_the_meshes_are_free
     with pytest.raises(GuidanceError) as failure:
         strict.goal_configuration(_hand_pose_targets(panda), Q)
     assert failure.value.reason == "no_ik_solution"
+
+
+def test_a_segment_whose_middle_meets_a_box_is_not_free_though_its_ends_are(panda, check) -> None:
+    a, b = Q.copy(), Q.copy()
+    a[0], b[0] = 0.5, 1.5   # the arm swings about its base; the hand passes Q's place halfway
+    in_the_way = PlacedObstacle(Box((0.05, 0.05, 0.05)), Placement(tuple(panda.link_position(Q, "panda_hand"))))
+    check.set_obstacles((in_the_way,))
+    assert check.free(a) and check.free(b)
+    assert not check.segment_free(a, b, 0.015)
+    assert check.segment_free(a, a, 0.015)

@@ -19,7 +19,7 @@ and to avoid what was not in the plan. A plan that fails is retried with the nex
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -247,6 +247,7 @@ class JointGuidance:
         self.checker.set_obstacles(obstacles)
         start = np.clip(np.asarray(q, dtype=float), self._lower, self._upper)
         target = self.goal_configuration(goal, start, seed)
+        approach = self._mesh_approach(goal, target)
         error: GuidanceError | None = None
         checks = 0
         path_settings = self.settings.path
@@ -257,7 +258,8 @@ class JointGuidance:
                                      time_limit=self.settings.stall_margin_time), seed))
         for settings, attempt_seed in tries:
             try:
-                path = plan_joint_path(self.checker, start, target, self._lower, self._upper, settings, attempt_seed)
+                path = plan_joint_path(self.checker, start, target, self._lower, self._upper, settings, attempt_seed,
+                                       approach)
             except NoPathError as failure:
                 error = GuidanceError(failure.reason, str(failure))
                 if failure.reason != "no_path" and settings.margin == path_settings.margin:
@@ -319,6 +321,19 @@ class JointGuidance:
         approach = time_path(path.waypoints[-2:], settings.approach_speed * limits.velocity,
                              settings.approach_speed * limits.acceleration, settings.timing)
         return PhasedTrajectory((way, approach))
+
+    def _mesh_approach(self, goal: GoalTargets, target: NDArray[np.float64]
+                       ) -> Callable[[NDArray[np.float64], NDArray[np.float64]], bool] | None:
+        """For a task goal whose solution ``target`` only the meshes found free (the spheres
+        overlap the scene there), the check of its approach on the meshes
+        (:meth:`MeshGoalCheck.segment_free`, every half ``path.resolution``); else None."""
+        if isinstance(goal, JointTarget) or self.checker.free(target, 0.0, self.settings.path.self_margin):
+            return None
+        meshes = self._meshes()
+        if meshes is None:
+            return None
+        step = self.settings.path.resolution / 2
+        return lambda free, end: meshes.segment_free(free, end, step)
 
     def _meshes(self) -> MeshGoalCheck | None:
         """The mesh check of goal solutions against the checker's obstacles, made on first

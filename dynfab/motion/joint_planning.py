@@ -15,7 +15,9 @@ handled as manipulation planners handle grasps: the nearest free configuration w
 ``escape_far_radius``) from which the straight segment to
 the real endpoint goes no deeper into obstacles (and into the robot itself) than the
 endpoint does, ``escape_slack`` aside, becomes the planned endpoint; the segment is
-appended, and the fabric tracks it.
+appended, and the fabric tracks it. A caller may ask more of the goal's segment
+(``goal_approach``: guidance checks it on the robot's meshes for a goal it found free only
+there, :mod:`dynfab.motion.mesh_goal_check`).
 
 An endpoint whose own self-collision spheres overlap (``c_self < self_margin`` at it: the
 spheres of a folded wrist overlap where the meshes are apart) lowers ``self_margin`` for
@@ -31,6 +33,7 @@ joints) and the goal cannot be escaped.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from functools import partial
 from typing import Literal
@@ -161,7 +164,9 @@ class _Validity:
 
 def plan_joint_path(checker: ConfigurationChecker, start: NDArray[np.float64], goal: NDArray[np.float64],
                     lower: NDArray[np.float64], upper: NDArray[np.float64],
-                    settings: JointPlannerSettings = JointPlannerSettings(), seed: int = 0) -> JointPath:
+                    settings: JointPlannerSettings = JointPlannerSettings(), seed: int = 0,
+                    goal_approach: Callable[[NDArray[np.float64], NDArray[np.float64]], bool] | None = None
+                    ) -> JointPath:
     """A free polyline from ``start`` to ``goal`` (module docstring).
 
     Args:
@@ -172,6 +177,8 @@ def plan_joint_path(checker: ConfigurationChecker, start: NDArray[np.float64], g
         upper: upper joint bounds (n,) [rad].
         settings: planner, time limit, resolution, margins.
         seed: random seed (OMPL's sampler and the endpoint escape).
+        goal_approach: ``(free, goal) ↦`` whether a blocked goal's escape ``free`` may be
+            approached from; None: any the spheres allow.
 
     Raises:
         NoPathError: an endpoint is blocked with no free configuration near it, or no
@@ -183,7 +190,7 @@ def plan_joint_path(checker: ConfigurationChecker, start: NDArray[np.float64], g
     validity = _Validity(checker, settings, n)
     rng = np.random.default_rng(seed)
     planned_start = _free_near(start, validity, checker, lower, upper, settings, rng, "start")
-    planned_goal = _free_near(goal, validity, checker, lower, upper, settings, rng, "goal")
+    planned_goal = _free_near(goal, validity, checker, lower, upper, settings, rng, "goal", goal_approach)
     if np.linalg.norm(planned_goal - planned_start) < 1e-9:
         middle = np.array([planned_start])
     else:
@@ -218,10 +225,12 @@ def polyline_samples(waypoints: NDArray[np.float64], step: float) -> NDArray[np.
 
 def _free_near(q: NDArray[np.float64], validity: _Validity, checker: ConfigurationChecker,
                lower: NDArray[np.float64], upper: NDArray[np.float64], settings: JointPlannerSettings,
-               rng: np.random.Generator, name: str) -> NDArray[np.float64]:
+               rng: np.random.Generator, name: str,
+               approach: Callable[[NDArray[np.float64], NDArray[np.float64]], bool] | None = None
+               ) -> NDArray[np.float64]:
     """``q`` itself if free, else the free sample nearest it within ``escape_radius`` (else
-    ``escape_far_radius``) whose
-    straight segment to ``q`` goes no deeper than ``q`` (module docstring)."""
+    ``escape_far_radius``) whose straight segment to ``q`` goes no deeper than ``q`` (and that
+    ``approach`` accepts, if given; module docstring)."""
     if validity.free(q):
         return q
     obstacle, itself = checker.clearances(q)
@@ -236,7 +245,8 @@ def _free_near(q: NDArray[np.float64], validity: _Validity, checker: Configurati
         directions = rng.normal(size=(count, q.size))
         directions /= np.linalg.norm(directions, axis=1, keepdims=True)
         for candidate in np.clip(q + radii[:, None] * directions, lower, upper):
-            if validity.free(candidate) and checker.motion_free(candidate, q, settings.resolution, deep, deep_self)[0]:
+            if (validity.free(candidate) and checker.motion_free(candidate, q, settings.resolution, deep, deep_self)[0]
+                    and (approach is None or approach(candidate, q))):
                 return candidate
     reason = f"{name}_in_collision"
     raise NoPathError(reason, f"the {name} is in collision on the collision spheres and no free configuration "

@@ -13,7 +13,10 @@ against the exact obstacles with coal (:func:`~dynfab.robots.mesh_sweep.sweep_me
 with ``δ`` the largest voxel half-diagonal of the point clouds among the obstacles (a cloud's
 kept points stand for raw points within ``δ`` of them; 0 without clouds) [m]. A goal it
 accepts and the spheres refuse is then planned as a blocked joint goal: escaped to a free
-configuration nearby and approached slowly (:mod:`dynfab.motion.joint_planning`).
+configuration nearby and approached slowly (:mod:`dynfab.motion.joint_planning`), along a
+straight segment that :meth:`MeshGoalCheck.segment_free` finds free on the meshes by the same
+margin: the spheres alone, let into the scene as deep as at the goal, leave the fingers'
+meshes free to touch (training table_bars/0004, seed 0, before this check).
 """
 
 from __future__ import annotations
@@ -55,13 +58,20 @@ class MeshGoalCheck:
     def clearance(self, q: NDArray[np.float64]) -> tuple[float, float]:
         """``(c_obs, c_self)`` on the meshes at ``q`` [m]: the least obstacle distance less
         ``δ``, and the least distance of the checked link pairs (``inf`` where nothing is
-        checked)."""
-        sweep = sweep_meshes(self.model, np.asarray(q, dtype=float)[None], self._shapes)
+        checked); of a stack of configurations (k, n), the least over them."""
+        sweep = sweep_meshes(self.model, np.atleast_2d(np.asarray(q, dtype=float)), self._shapes)
         obstacle = np.inf if sweep.clearance is None else sweep.clearance - self._lowering
         itself = np.inf if sweep.min_self_distance is None else sweep.min_self_distance
         return float(obstacle), float(itself)
 
     def free(self, q: NDArray[np.float64]) -> bool:
-        """Whether ``q`` is free on the meshes (module docstring)."""
+        """Whether ``q`` (or every row of a stack) is free on the meshes (module docstring)."""
         obstacle, itself = self.clearance(q)
         return obstacle >= self.margin and itself > 0.0
+
+    def segment_free(self, a: NDArray[np.float64], b: NDArray[np.float64], step: float) -> bool:
+        """Whether the straight segment from ``a`` to ``b`` is free on the meshes (module
+        docstring), checked at configurations at most ``step`` apart [rad], both ends included."""
+        count = max(1, int(np.ceil(np.linalg.norm(b - a) / step)))
+        fractions = np.linspace(0.0, 1.0, count + 1)[:, None]
+        return self.free(a + fractions * (b - a))  # type: ignore[arg-type]
