@@ -46,7 +46,8 @@ from dynfab.scenario.recovering_controller import with_recovery
 from dynfab.scenario.references import goal_axes
 from dynfab.scenario.schema import GoalSpec, Scenario
 
-__all__ = ["AllowanceSlot", "GuidedController", "SurfaceAllowance", "guidance_refusal", "guided_planner_config", "make_scenario_controller"]
+__all__ = ["AllowanceSlot", "GuidedController", "SurfaceAllowance", "guidance_refusal", "guided_planner_config",
+           "make_scenario_controller"]
 
 #: The guided fabric's constants below were chosen on MBM problems 10-11 (gain, range) and 13-16
 #: (energy, buffer) of the shared set, object removed; results are reported on problems 17 on.
