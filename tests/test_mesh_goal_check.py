@@ -95,3 +95,7 @@ def test_a_segment_whose_middle_meets_a_box_is_not_free_though_its_ends_are(pand
     assert check.free(a) and check.free(b)
     assert not check.segment_free(a, b, 0.015)
     assert check.segment_free(a, a, 0.015)
+    deepest = check.clearance(np.linspace(a, b, 68))[0]   # the same samples: 1 rad in 67 steps of at most 0.015
+    assert deepest < 0.0
+    assert check.segment_free(a, b, 0.015, floor=deepest)   # a goal as deep as that may be approached
+    assert not check.segment_free(a, b, 0.015, floor=deepest + 1e-4)

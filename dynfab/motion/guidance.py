@@ -247,7 +247,7 @@ class JointGuidance:
         self.checker.set_obstacles(obstacles)
         start = np.clip(np.asarray(q, dtype=float), self._lower, self._upper)
         target = self.goal_configuration(goal, start, seed)
-        approach = self._mesh_approach(goal, target)
+        approach = self._mesh_approach()
         error: GuidanceError | None = None
         checks = 0
         path_settings = self.settings.path
@@ -322,18 +322,26 @@ class JointGuidance:
                              settings.approach_speed * limits.acceleration, settings.timing)
         return PhasedTrajectory((way, approach))
 
-    def _mesh_approach(self, goal: GoalTargets, target: NDArray[np.float64]
-                       ) -> Callable[[NDArray[np.float64], NDArray[np.float64]], bool] | None:
-        """For a task goal whose solution ``target`` only the meshes found free (the spheres
-        overlap the scene there), the check of its approach on the meshes
-        (:meth:`MeshGoalCheck.segment_free`, every half ``path.resolution``); else None."""
-        if isinstance(goal, JointTarget) or self.checker.free(target, 0.0, self.settings.path.self_margin):
-            return None
-        meshes = self._meshes()
-        if meshes is None:
+    def _mesh_approach(self) -> Callable[[NDArray[np.float64], NDArray[np.float64]], bool] | None:
+        """Among meshes or point clouds, the check of an escaped goal's approach on the robot's
+        meshes: no deeper than the goal is on them, nor closer than ``mesh_margin`` where it
+        is farther (:meth:`MeshGoalCheck.segment_free`, every half ``path.resolution``; the
+        robot's meshes are read on first use); else None."""
+        if not any(isinstance(o.shape, Mesh | PointCloud) for o in self.checker.obstacles):
             return None
         step = self.settings.path.resolution / 2
-        return lambda free, end: meshes.segment_free(free, end, step)
+        goal_floor: float | None = None   # measured once, when a goal turns out blocked
+
+        def approach(free: NDArray[np.float64], goal: NDArray[np.float64]) -> bool:
+            nonlocal goal_floor
+            meshes = self._meshes()
+            if meshes is None:  # a robot without meshes: the spheres' test alone
+                return True
+            if goal_floor is None:
+                goal_floor = min(meshes.margin, meshes.clearance(goal)[0])
+            return meshes.segment_free(free, goal, step, goal_floor)
+
+        return approach
 
     def _meshes(self) -> MeshGoalCheck | None:
         """The mesh check of goal solutions against the checker's obstacles, made on first

@@ -13,10 +13,15 @@ against the exact obstacles with coal (:func:`~dynfab.robots.mesh_sweep.sweep_me
 with ``δ`` the largest voxel half-diagonal of the point clouds among the obstacles (a cloud's
 kept points stand for raw points within ``δ`` of them; 0 without clouds) [m]. A goal it
 accepts and the spheres refuse is then planned as a blocked joint goal: escaped to a free
-configuration nearby and approached slowly (:mod:`dynfab.motion.joint_planning`), along a
-straight segment that :meth:`MeshGoalCheck.segment_free` finds free on the meshes by the same
-margin: the spheres alone, let into the scene as deep as at the goal, leave the fingers'
-meshes free to touch (training table_bars/0004, seed 0, before this check).
+configuration nearby and approached slowly (:mod:`dynfab.motion.joint_planning`).
+
+Among meshes and point clouds the approach of every escaped goal is also checked here
+(:meth:`MeshGoalCheck.segment_free`): on the meshes it goes no deeper than the goal,
+``c_obs ≥ min(margin, c_obs(goal))`` at every configuration. The spheres' own test ("no
+deeper than the goal" on the grid) lets it go deeper than the goal truly is, the grid
+reading up to ``h√3`` low at the goal and exactly elsewhere: a finger's mesh touched a shelf
+on such an approach (training table_bars/0004, seed 0), and 13.5 mm deep into a cupboard on
+held-out kitchen/0014 before this check applied to goals the spheres found free.
 """
 
 from __future__ import annotations
@@ -69,9 +74,11 @@ class MeshGoalCheck:
         obstacle, itself = self.clearance(q)
         return obstacle >= self.margin and itself > 0.0
 
-    def segment_free(self, a: NDArray[np.float64], b: NDArray[np.float64], step: float) -> bool:
-        """Whether the straight segment from ``a`` to ``b`` is free on the meshes (module
-        docstring), checked at configurations at most ``step`` apart [rad], both ends included."""
+    def segment_free(self, a: NDArray[np.float64], b: NDArray[np.float64], step: float,
+                     floor: float | None = None) -> bool:
+        """Whether every configuration of the straight segment from ``a`` to ``b``, at most
+        ``step`` apart [rad] (both ends included), keeps ``c_obs ≥ floor`` [m] (default
+        :attr:`margin`) with no checked link pair touching."""
         count = max(1, int(np.ceil(np.linalg.norm(b - a) / step)))
-        fractions = np.linspace(0.0, 1.0, count + 1)[:, None]
-        return self.free(a + fractions * (b - a))  # type: ignore[arg-type]
+        obstacle, itself = self.clearance(a + np.linspace(0.0, 1.0, count + 1)[:, None] * (b - a))
+        return obstacle >= (self.margin if floor is None else floor) and itself > 0.0
