@@ -20,8 +20,7 @@ Among meshes and point clouds the approach of every escaped goal is also checked
 ``c_obs ≥ min(margin, c_obs(goal))`` at every configuration. The spheres' own test ("no
 deeper than the goal" on the grid) lets it go deeper than the goal truly is, the grid
 reading up to ``h√3`` low at the goal and exactly elsewhere: a finger's mesh touched a shelf
-on such an approach (training table_bars/0004, seed 0), and 13.5 mm deep into a cupboard on
-held-out kitchen/0014 before this check applied to goals the spheres found free.
+on such an approach (training table_bars/0004, seed 0).
 """
 
 from __future__ import annotations
