@@ -56,7 +56,21 @@ def test_the_tolerated_overlap_is_bounded(panda, grasp) -> None:
     kin = panda.kinematics
     start, goal, checker = grasp
     overlap = checker.clearances(goal)[1]
-    bounded = replace(JointPlannerSettings(), self_tolerance=-overlap / 2)   # half the goal's overlap
+    # half the goal's overlap; looked for within 0.4 rad only (the overlap changes slowly: 0.8 rad away it is gone)
+    bounded = replace(JointPlannerSettings(), self_tolerance=-overlap / 2, escape_far_radius=0.4)
     with pytest.raises(NoPathError) as failure:
         plan_joint_path(checker, start, goal, kin.lower, kin.upper, bounded)
     assert failure.value.reason == "goal_in_collision"
+
+
+def test_a_goal_with_no_escape_within_the_radius_is_escaped_farther_out(panda, grasp) -> None:
+    kin = panda.kinematics
+    start, goal, checker = grasp
+    overlap = checker.clearances(goal)[1]
+    settings = replace(JointPlannerSettings(), self_tolerance=-overlap / 2)   # none within 0.4 rad (above)
+    path = plan_joint_path(checker, start, goal, kin.lower, kin.upper, settings)
+    assert path.escaped_goal
+    reach = float(np.linalg.norm(path.waypoints[-2] - goal))
+    assert settings.escape_radius < reach <= settings.escape_far_radius
+    approach = checker.batch(polyline_samples(path.waypoints[-2:], settings.resolution / 2))
+    assert approach[:, 1].min() >= overlap - settings.escape_slack - 1e-9   # never deeper than the goal's own

@@ -16,7 +16,8 @@ from dynfab.fabric.leaves.surface_points import NearestSurfaceAvoidance, moving_
 from dynfab.geometry.distance import box_distance
 from dynfab.geometry.mesh_shape import Mesh
 from dynfab.geometry.shapes import Placement
-from dynfab.perception.surfaces import PlacedMesh, SurfaceFeed
+from dynfab.geometry.point_cloud import PointCloud
+from dynfab.perception.surfaces import PlacedMesh, SurfaceFeed, surface_clearance
 from dynfab.robots.robot import CollisionSphere
 
 ARM = Path(__file__).resolve().parents[1] / "examples" / "custom_urdf" / "arm.urdf"
@@ -95,3 +96,56 @@ def test_feed_writes_the_exact_nearest_points_of_a_placed_mesh(arm: dynfab.Robot
     np.testing.assert_allclose(np.linalg.norm(centres - points, axis=1)[active], exact[active], atol=1e-9)
     np.testing.assert_allclose(views["velocities"].reshape(-1, 3)[active], [[0.1, 0.0, 0.0]] * int(active.sum()))
     assert (exact[~active] > feed.reach[~active]).all()
+
+
+def _feed_beside_a_box(arm: dynfab.Robot) -> tuple[SurfaceFeed, dict, Mesh, Placement, np.ndarray]:
+    box = trimesh.creation.box(extents=(0.2, 0.4, 0.3))
+    mesh = Mesh(box.vertices, box.faces, "box")
+    leaf = NearestSurfaceAvoidance(spheres=(0, 1, 2))
+    planner = dynfab.FabricPlanner(arm, dynfab.PlannerConfig(goals=(dynfab.GoalConfig(link="tool"),), leaves=(leaf,),
+                                                             backend="vm"))
+    views = planner.parameters.leaves["surfaces"]
+    feed = SurfaceFeed(arm, leaf, views)
+    q = np.array([0.2, 0.3, -0.2])
+    centres = np.asarray(arm.sphere_centers(q))
+    placement = Placement((float(centres[2, 0]) + 0.15, float(centres[2, 1]), 0.0))
+    return feed, views, mesh, placement, q
+
+
+def test_an_allowance_writes_the_nearest_point_that_much_deeper_along_its_normal(arm: dynfab.Robot) -> None:
+    feed, views, mesh, placement, q = _feed_beside_a_box(arm)
+    centres = np.asarray(arm.sphere_centers(q))
+    feed.write(q, [PlacedMesh(mesh, placement)])
+    before_points, before_normals = views["points"].reshape(-1, 3).copy(), views["normals"].reshape(-1, 3).copy()
+    active = views["active"].astype(bool).copy()
+    assert active[2]
+    feed.write(q, [PlacedMesh(mesh, placement, allowance=0.02)])
+    points, normals = views["points"].reshape(-1, 3), views["normals"].reshape(-1, 3)
+    np.testing.assert_allclose(normals[active], before_normals[active])
+    np.testing.assert_allclose(points[active], before_points[active] - 0.02 * before_normals[active], atol=1e-12)
+    seen = np.einsum("ij,ij->i", normals, centres - points)  # the leaf's clearance plus the radius
+    exact = box_distance(placement.to_local(centres), (0.2, 0.4, 0.3))
+    np.testing.assert_allclose(seen[active], exact[active] + 0.02, atol=1e-9)
+
+
+def test_surfaces_compete_by_their_clearance_less_the_allowance(arm: dynfab.Robot) -> None:
+    feed, views, mesh, placement, q = _feed_beside_a_box(arm)
+    farther = Placement((placement.position[0] + 0.03, placement.position[1], placement.position[2]))
+    feed.write(q, [PlacedMesh(mesh, placement, allowance=0.05), PlacedMesh(mesh, farther)])
+    centres = np.asarray(arm.sphere_centers(q))
+    exact_far = box_distance(farther.to_local(centres), (0.2, 0.4, 0.3))
+    points, normals = views["points"].reshape(-1, 3), views["normals"].reshape(-1, 3)
+    # the nearer box, entered by 5 cm, counts 2 cm farther than the other, which is written
+    assert np.dot(normals[2], centres[2] - points[2]) == pytest.approx(exact_far[2], abs=1e-9)
+
+
+def test_surface_clearance_is_the_least_sphere_clearance_from_a_mesh_or_a_cloud(arm: dynfab.Robot) -> None:
+    _, _, mesh, placement, q = _feed_beside_a_box(arm)
+    centres = np.asarray(arm.sphere_centers(q))
+    radii = arm.sphere_radii
+    exact = box_distance(placement.to_local(centres), (0.2, 0.4, 0.3)) - radii
+    assert surface_clearance(centres, radii, mesh, placement) == pytest.approx(float(exact.min()), abs=1e-9)
+    points = np.asarray(placement.position) + np.array([[-0.1, 0.0, 0.0], [-0.1, 0.05, 0.02]])
+    cloud = PointCloud.from_points(points, voxel=0.01)
+    expected = np.linalg.norm(centres[:, None] - cloud.points[None], axis=2).min(axis=1) - cloud.lowering - radii
+    assert surface_clearance(centres, radii, cloud, Placement((0.0, 0.0, 0.0))) == pytest.approx(float(expected.min()))

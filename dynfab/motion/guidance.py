@@ -5,7 +5,9 @@ experiment 2b, applied in joint space).
 A goal is a configuration (:class:`JointTarget`) or task targets
 (:class:`~dynfab.motion.inverse_kinematics.PointTarget`,
 :class:`~dynfab.motion.inverse_kinematics.AxisTarget`), which collision-free inverse
-kinematics turns into the configuration nearest the current one. The path is planned
+kinematics turns into the configuration nearest the current one (free on the spheres, else,
+for goals millimetres from the scene, free on the robot's meshes:
+:mod:`dynfab.motion.mesh_goal_check`). The path is planned
 with OMPL among the obstacles given (:mod:`dynfab.motion.joint_planning`), against the
 same spheres, shapes and self-collision pairs the fabric avoids, and timed within
 ``speed`` times the robot's velocity and acceleration limits
@@ -17,14 +19,21 @@ and to avoid what was not in the plan. A plan that fails is retried with the nex
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
+from dynfab.fabric.leaves.surface_points import moving_spheres
+from dynfab.geometry.shapes import Mesh, PointCloud
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.inverse_kinematics import AxisTarget, IkSettings, PointTarget, solve_ik
+from dynfab.motion.mesh_goal_check import MeshGoalCheck
+from dynfab.perception.surfaces import surface_clearance
+from dynfab.robots.builtin_meshes import builtin_collision_meshes
+from dynfab.robots.link_meshes import LinkMeshError
+from dynfab.robots.mesh_collision import mesh_collision_model
 from dynfab.motion.joint_planning import JointPath, JointPlannerSettings, NoPathError, plan_joint_path
 from dynfab.motion.joint_trajectory import JointTrajectory, TimingError, TimingSettings, time_path
 from dynfab.motion.phased_trajectory import PhasedTrajectory
@@ -57,7 +66,11 @@ class GuidanceSettings:
             clear of obstacles by the planner's margin: with these settings (more seeds:
             a 6-joint arm has few discrete solutions, most blocked near a grasp) and
             margin 0, the spheres merely clear (a grasp pose closer than the margin; the
-            planner then escapes it and approaches it as a blocked joint goal).
+            planner then escapes it and approaches it as a blocked joint goal); for a robot
+            with collision meshes a solution the spheres refuse is also kept if it is free
+            on the meshes by ``mesh_margin`` (:mod:`dynfab.motion.mesh_goal_check`).
+        mesh_margin: clearance [m] a goal solution checked on the robot's meshes keeps
+            from the exact obstacles.
         timing: how the path is timed.
         speed: fraction of the velocity limits the reference uses [-].
         acceleration: fraction of the acceleration limits the reference uses [-]: the
@@ -105,6 +118,7 @@ class GuidanceSettings:
     path: JointPlannerSettings = field(default_factory=JointPlannerSettings)
     ik: IkSettings = field(default_factory=IkSettings)
     ik_retry: IkSettings = field(default_factory=lambda: IkSettings(seeds=240, time_limit=2.0))
+    mesh_margin: float = 0.003
     timing: TimingSettings = field(default_factory=TimingSettings)
     speed: float = 0.5
     acceleration: float = 0.25
@@ -179,6 +193,9 @@ class JointGuidance:
         self.checker = ConfigurationChecker(robot)
         self._single = ConfigurationChecker(robot)  # one obstacle at a time (allowances)
         self._ahead = ConfigurationChecker(robot)   # what moves (blocked_ahead)
+        self._mesh_check: MeshGoalCheck | None | bool = False  # made on first use; None: no meshes
+        self._leaf_spheres = list(moving_spheres(robot))  # those a nearest-point leaf acts on
+        self._leaf_radii = np.asarray(robot.sphere_radii, dtype=float)[self._leaf_spheres]
         kin = robot.kinematics
         self._lower = np.where(np.isfinite(kin.lower), kin.lower, -np.pi)
         self._upper = np.where(np.isfinite(kin.upper), kin.upper, np.pi)
@@ -186,7 +203,8 @@ class JointGuidance:
     def goal_configuration(self, goal: GoalTargets, q: NDArray[np.float64], seed: int = 0) -> NDArray[np.float64]:
         """The configuration to plan to: a joint goal (clipped into the limits when within
         :data:`LIMIT_SLACK`), or the collision-free IK solution nearest ``q`` (clear by the
-        planner's margin, else by ``ik_retry`` merely free).
+        planner's margin, else by ``ik_retry`` merely free on the spheres or free on the
+        meshes).
 
         Raises:
             GuidanceError: ``goal_outside_limits`` or ``no_ik_solution``.
@@ -204,8 +222,13 @@ class JointGuidance:
         result = solve_ik(self.robot, list(goal), q, lambda x: self.checker.free(x, margin, self_margin),
                           self._ik_settings(seed), self._lower, self._upper)
         if result.q is None:
-            result = solve_ik(self.robot, list(goal), q, lambda x: self.checker.free(x, 0.0, self_margin),
-                              replace(self.settings.ik_retry, seed=seed), self._lower, self._upper)
+            meshes = self._meshes()
+
+            def free(x: NDArray[np.float64]) -> bool:
+                return self.checker.free(x, 0.0, self_margin) or (meshes is not None and meshes.free(x))
+
+            result = solve_ik(self.robot, list(goal), q, free, replace(self.settings.ik_retry, seed=seed),
+                              self._lower, self._upper)
         if result.q is None:
             found = (f"{result.converged} solutions within the limits, all in collision" if result.converged
                      else "no solution within the joint limits")
@@ -224,6 +247,7 @@ class JointGuidance:
         self.checker.set_obstacles(obstacles)
         start = np.clip(np.asarray(q, dtype=float), self._lower, self._upper)
         target = self.goal_configuration(goal, start, seed)
+        approach = self._mesh_approach()
         error: GuidanceError | None = None
         checks = 0
         path_settings = self.settings.path
@@ -234,7 +258,8 @@ class JointGuidance:
                                      time_limit=self.settings.stall_margin_time), seed))
         for settings, attempt_seed in tries:
             try:
-                path = plan_joint_path(self.checker, start, target, self._lower, self._upper, settings, attempt_seed)
+                path = plan_joint_path(self.checker, start, target, self._lower, self._upper, settings, attempt_seed,
+                                       approach)
             except NoPathError as failure:
                 error = GuidanceError(failure.reason, str(failure))
                 if failure.reason != "no_path" and settings.margin == path_settings.margin:
@@ -265,7 +290,13 @@ class JointGuidance:
         return np.maximum(0.0, np.asarray(buffers, dtype=float) + self.settings.goal_clearance - clearances)
 
     def obstacle_clearance(self, q: NDArray[np.float64], obstacle: PlacedObstacle) -> float:
-        """Clearance [m] of the robot's spheres at ``q`` from ``obstacle`` alone."""
+        """Clearance [m] of the robot's spheres at ``q`` from ``obstacle`` alone: the
+        checker's, or for a mesh or a point cloud what the fabric's nearest-point leaf sees
+        (:func:`~dynfab.perception.surfaces.surface_clearance` of the spheres a joint moves:
+        exact for a mesh, where the checker's grid reads up to ``h√3`` less)."""
+        if isinstance(obstacle.shape, Mesh | PointCloud):
+            centres = np.asarray(self.robot.sphere_centers(q))[self._leaf_spheres]
+            return surface_clearance(centres, self._leaf_radii, obstacle.shape, obstacle.placement)
         self._single.set_obstacles((obstacle,))
         return self._single.clearances(q)[0]
 
@@ -290,6 +321,42 @@ class JointGuidance:
         approach = time_path(path.waypoints[-2:], settings.approach_speed * limits.velocity,
                              settings.approach_speed * limits.acceleration, settings.timing)
         return PhasedTrajectory((way, approach))
+
+    def _mesh_approach(self) -> Callable[[NDArray[np.float64], NDArray[np.float64]], bool] | None:
+        """Among meshes or point clouds, the check of an escaped goal's approach on the robot's
+        meshes: no deeper than the goal is on them, nor closer than ``mesh_margin`` where it
+        is farther (:meth:`MeshGoalCheck.segment_free`, every half ``path.resolution``; the
+        robot's meshes are read on first use); else None."""
+        if not any(isinstance(o.shape, Mesh | PointCloud) for o in self.checker.obstacles):
+            return None
+        step = self.settings.path.resolution / 2
+        goal_floor: float | None = None   # measured once, when a goal turns out blocked
+
+        def approach(free: NDArray[np.float64], goal: NDArray[np.float64]) -> bool:
+            nonlocal goal_floor
+            meshes = self._meshes()
+            if meshes is None:  # a robot without meshes: the spheres' test alone
+                return True
+            if goal_floor is None:
+                goal_floor = min(meshes.margin, meshes.clearance(goal)[0])
+            return meshes.segment_free(free, goal, step, goal_floor)
+
+        return approach
+
+    def _meshes(self) -> MeshGoalCheck | None:
+        """The mesh check of goal solutions against the checker's obstacles, made on first
+        use; None for a robot without collision meshes (or whose meshes cannot be read)."""
+        if self._mesh_check is False:
+            robot = self.robot
+            try:
+                model = mesh_collision_model(robot.kinematics, robot.default_q, builtin_collision_meshes(robot))
+            except LinkMeshError:
+                model = None
+            self._mesh_check = None if model is None else MeshGoalCheck(model, self.settings.mesh_margin)
+        if isinstance(self._mesh_check, MeshGoalCheck):
+            self._mesh_check.set_obstacles(self.checker.obstacles)
+            return self._mesh_check
+        return None
 
     def _ik_settings(self, seed: int) -> IkSettings:
         return replace(self.settings.ik, seed=seed)

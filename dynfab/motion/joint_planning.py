@@ -11,10 +11,13 @@ start to the goal through free configurations, checking straight motions every
 Endpoints that are not free (a start pressed against an object, a grasp goal a few
 millimetres from it, where the spheres already overlap what the meshes clear) are
 handled as manipulation planners handle grasps: the nearest free configuration within
-``escape_radius`` (random samples of growing radius) from which the straight segment to
+``escape_radius`` (random samples of growing radius; if none qualifies, as many again out to
+``escape_far_radius``) from which the straight segment to
 the real endpoint goes no deeper into obstacles (and into the robot itself) than the
 endpoint does, ``escape_slack`` aside, becomes the planned endpoint; the segment is
-appended, and the fabric tracks it.
+appended, and the fabric tracks it. A caller may ask more of the goal's segment
+(``goal_approach``: guidance checks it on the robot's meshes for a goal it found free only
+there, :mod:`dynfab.motion.mesh_goal_check`).
 
 An endpoint whose own self-collision spheres overlap (``c_self < self_margin`` at it: the
 spheres of a folded wrist overlap where the meshes are apart) lowers ``self_margin`` for
@@ -30,6 +33,7 @@ joints) and the goal cannot be escaped.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from functools import partial
 from typing import Literal
@@ -66,7 +70,11 @@ class JointPlannerSettings:
         self_margin: clearance kept between the spheres of self-collision pairs [m].
         simplify_time: time given to OMPL's path simplifier [s].
         escape_radius: farthest a free endpoint is looked for around a blocked one [rad].
-        escape_samples: samples tried per endpoint [-].
+        escape_far_radius: farthest it is looked for when nothing within ``escape_radius``
+            qualifies [rad] (``escape_samples`` more, from ``escape_radius`` out; no farther
+            search if not above it). 0.8: training mesh problem table_bars/0004 (seed 0),
+            a goal under a shelf free on the meshes, found none within 0.4 rad.
+        escape_samples: samples tried per endpoint and radius [-].
         escape_slack: how much deeper [m] than the blocked endpoint itself the straight
             segment from the free configuration to it may reach into obstacles (or into
             the robot, for self-collision pairs).
@@ -87,6 +95,7 @@ class JointPlannerSettings:
     self_margin: float = 0.0
     simplify_time: float = 0.05
     escape_radius: float = 0.4
+    escape_far_radius: float = 0.8
     escape_samples: int = 400
     escape_slack: float = 0.002
     step: float = 0.7
@@ -155,7 +164,9 @@ class _Validity:
 
 def plan_joint_path(checker: ConfigurationChecker, start: NDArray[np.float64], goal: NDArray[np.float64],
                     lower: NDArray[np.float64], upper: NDArray[np.float64],
-                    settings: JointPlannerSettings = JointPlannerSettings(), seed: int = 0) -> JointPath:
+                    settings: JointPlannerSettings = JointPlannerSettings(), seed: int = 0,
+                    goal_approach: Callable[[NDArray[np.float64], NDArray[np.float64]], bool] | None = None
+                    ) -> JointPath:
     """A free polyline from ``start`` to ``goal`` (module docstring).
 
     Args:
@@ -166,6 +177,8 @@ def plan_joint_path(checker: ConfigurationChecker, start: NDArray[np.float64], g
         upper: upper joint bounds (n,) [rad].
         settings: planner, time limit, resolution, margins.
         seed: random seed (OMPL's sampler and the endpoint escape).
+        goal_approach: ``(free, goal) ↦`` whether a blocked goal's escape ``free`` may be
+            approached from; None: any the spheres allow.
 
     Raises:
         NoPathError: an endpoint is blocked with no free configuration near it, or no
@@ -177,7 +190,7 @@ def plan_joint_path(checker: ConfigurationChecker, start: NDArray[np.float64], g
     validity = _Validity(checker, settings, n)
     rng = np.random.default_rng(seed)
     planned_start = _free_near(start, validity, checker, lower, upper, settings, rng, "start")
-    planned_goal = _free_near(goal, validity, checker, lower, upper, settings, rng, "goal")
+    planned_goal = _free_near(goal, validity, checker, lower, upper, settings, rng, "goal", goal_approach)
     if np.linalg.norm(planned_goal - planned_start) < 1e-9:
         middle = np.array([planned_start])
     else:
@@ -212,25 +225,32 @@ def polyline_samples(waypoints: NDArray[np.float64], step: float) -> NDArray[np.
 
 def _free_near(q: NDArray[np.float64], validity: _Validity, checker: ConfigurationChecker,
                lower: NDArray[np.float64], upper: NDArray[np.float64], settings: JointPlannerSettings,
-               rng: np.random.Generator, name: str) -> NDArray[np.float64]:
-    """``q`` itself if free, else the free sample nearest it within ``escape_radius`` whose
-    straight segment to ``q`` goes no deeper than ``q`` (module docstring)."""
+               rng: np.random.Generator, name: str,
+               approach: Callable[[NDArray[np.float64], NDArray[np.float64]], bool] | None = None
+               ) -> NDArray[np.float64]:
+    """``q`` itself if free, else the free sample nearest it within ``escape_radius`` (else
+    ``escape_far_radius``) whose straight segment to ``q`` goes no deeper than ``q`` (and that
+    ``approach`` accepts, if given; module docstring)."""
     if validity.free(q):
         return q
     obstacle, itself = checker.clearances(q)
     deep = min(settings.margin, obstacle) - settings.escape_slack
     deep_self = min(settings.self_margin, itself) - settings.escape_slack
     count = settings.escape_samples
-    radii = settings.escape_radius * (np.arange(1, count + 1) / count)
-    directions = rng.normal(size=(count, q.size))
-    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
-    candidates = np.clip(q + radii[:, None] * directions, lower, upper)
-    for candidate in candidates:  # nearest first: radii grow
-        if validity.free(candidate) and checker.motion_free(candidate, q, settings.resolution, deep, deep_self)[0]:
-            return candidate
+    near, far = settings.escape_radius, max(settings.escape_radius, settings.escape_far_radius)
+    rounds = [near * (np.arange(1, count + 1) / count)]
+    if far > near:
+        rounds.append(near + (far - near) * (np.arange(1, count + 1) / count))
+    for radii in rounds:  # nearest first: radii grow
+        directions = rng.normal(size=(count, q.size))
+        directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+        for candidate in np.clip(q + radii[:, None] * directions, lower, upper):
+            if (validity.free(candidate) and checker.motion_free(candidate, q, settings.resolution, deep, deep_self)[0]
+                    and (approach is None or approach(candidate, q))):
+                return candidate
     reason = f"{name}_in_collision"
     raise NoPathError(reason, f"the {name} is in collision on the collision spheres and no free configuration "
-                              f"lies within {settings.escape_radius} rad of it")
+                              f"lies within {far} rad of it")
 
 
 def _planner(name: PlannerName, step: float, information: ob.SpaceInformation) -> ob.Planner:

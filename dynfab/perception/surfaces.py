@@ -14,6 +14,13 @@ without turning, as shapes do) are written into the leaf
 where a point was found. A sphere with nothing in reach is left inactive: beyond its range the
 barrier is zero anyway.
 
+A surface may carry an *allowance* ``a ≥ 0`` [m] (guidance gives one near a grasp goal the
+robot's spheres overlap, :mod:`dynfab.motion.guided_fabric`): its nearest point is written
+``a`` farther along the inward normal, ``c' = c − a n``, so the leaf sees the clearance
+``nᵀ(p − c') − r = d − r + a`` and lets the sphere enter the surface by ``a``; surfaces are
+compared and reached by that clearance (``d + a``, within ``reach``). With ``a = 0``
+nothing changes.
+
 Cost: one coal query per (sphere, mesh) in reach, 2-30 µs each for meshes of 10-10⁴
 triangles, plus the forward kinematics.
 """
@@ -35,7 +42,7 @@ from dynfab.geometry.point_cloud import PointCloud
 from dynfab.geometry.shapes import Placement
 from dynfab.robots.robot import Robot
 
-__all__ = ["PlacedMesh", "SurfaceFeed"]
+__all__ = ["PlacedMesh", "SurfaceFeed", "surface_clearance"]
 
 
 @dataclass(frozen=True)
@@ -46,11 +53,13 @@ class PlacedMesh:
         mesh: The mesh, in its own frame.
         placement: Where its frame is.
         velocity: Its frame's translation velocity (3,) [m/s].
+        allowance: How far [m] the leaf lets spheres enter it (module docstring).
     """
 
     mesh: Mesh
     placement: Placement
     velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    allowance: float = 0.0
 
 
 class SurfaceFeed:
@@ -71,32 +80,39 @@ class SurfaceFeed:
         centres = robot.sphere_centers(q)[list(leaf.spheres), :] if leaf.spheres else ca.SX(0, 3)
         self._centres = ca.Function("sphere_centres", [q], [centres])
 
-    def write(self, q: NDArray[np.float64], meshes: Sequence[PlacedMesh], clouds: Sequence[PointCloud] = ()) -> None:
+    def write(self, q: NDArray[np.float64], meshes: Sequence[PlacedMesh], clouds: Sequence[PointCloud] = (),
+              cloud_allowances: Sequence[float] = ()) -> None:
         """Find and write the nearest surface point of every sphere at configuration ``q``
-        among ``meshes`` and ``clouds``."""
+        among ``meshes`` and ``clouds`` (``cloud_allowances``: one per cloud [m], zeros if
+        empty; module docstring)."""
         if not self.leaf.spheres:
             return
         centres = np.asarray(self._centres(q), dtype=float).reshape(-1, 3)
         count = len(centres)
-        best = np.full(count, np.inf)
+        best = np.full(count, np.inf)   # d + a of the surface written so far [m]
         points, normals, velocities = np.zeros((count, 3)), np.zeros((count, 3)), np.zeros((count, 3))
         for placed in meshes:
             rotation = placed.placement.rotation
             local = placed.placement.to_local(centres)
-            found = nearest_on_mesh(placed.mesh, local, max_distance=float(self.reach.max()),
+            allowance = placed.allowance
+            found = nearest_on_mesh(placed.mesh, local, max_distance=float(self.reach.max()) - allowance,
                                     signed_within=float(self._radii.max()))
-            closer = found.found & (found.distances < best) & (found.distances <= self.reach)
+            seen = found.distances + allowance
+            closer = found.found & (seen < best) & (seen <= self.reach)
             if not closer.any():
                 continue
-            best[closer] = found.distances[closer]
-            points[closer] = found.points[closer] @ rotation.T + np.asarray(placed.placement.position)
+            best[closer] = seen[closer]
             normals[closer] = found.normals[closer] @ rotation.T
+            points[closer] = (found.points[closer] @ rotation.T + np.asarray(placed.placement.position)
+                              - allowance * normals[closer])
             velocities[closer] = placed.velocity
-        for cloud in clouds:
-            found = cloud.nearest(centres, max_distance=float(self.reach.max()))
-            closer = found.found & (found.distances < best) & (found.distances <= self.reach)
-            best[closer] = found.distances[closer]
-            points[closer] = found.points[closer]
+        allowances = list(cloud_allowances) or [0.0] * len(clouds)
+        for cloud, allowance in zip(clouds, allowances, strict=True):
+            found = cloud.nearest(centres, max_distance=float(self.reach.max()) - allowance)
+            seen = found.distances + allowance
+            closer = found.found & (seen < best) & (seen <= self.reach)
+            best[closer] = seen[closer]
+            points[closer] = found.points[closer] - allowance * found.normals[closer]
             normals[closer] = found.normals[closer]
             velocities[closer] = 0.0
         active = np.isfinite(best)
@@ -105,3 +121,18 @@ class SurfaceFeed:
         self._views["normals"] = normals
         self._views["velocities"] = velocities
         self._views["active"] = active.astype(float)
+
+
+def surface_clearance(centres: NDArray[np.float64], radii: NDArray[np.float64], surface: Mesh | PointCloud,
+                      placement: Placement) -> float:
+    """The least clearance ``d_i − r_i`` [m] the nearest-point leaf sees between spheres
+    (centres (K, 3), world frame, radii (K,)) and one surface without allowance: the signed
+    mesh distance (``surface`` placed at ``placement``), or a cloud's lowered one (world
+    frame, ``placement`` unused); ``inf`` without spheres."""
+    if not len(centres):
+        return float("inf")
+    if isinstance(surface, PointCloud):
+        found = surface.nearest(centres)
+    else:
+        found = nearest_on_mesh(surface, placement.to_local(centres), signed_within=float(np.max(radii)))
+    return float(np.min(np.where(found.found, found.distances - radii, np.inf)))

@@ -182,11 +182,13 @@ def mesh_obstacles(planner: FabricPlanner, robot: Robot, obstacles: tuple[Obstac
     clouds; None without them (a camera's leaf is written by its feed)."""
     leaf = next((leaf for leaf in planner.config.leaves if isinstance(leaf, NearestSurfaceAvoidance)), None)
     indices = tuple(k for k, obstacle in enumerate(obstacles) if obstacle.type == "mesh")
-    clouds = tuple(obstacle.cloud for obstacle in obstacles if obstacle.cloud is not None)
+    cloud_indices = tuple(k for k, obstacle in enumerate(obstacles) if obstacle.cloud is not None)
+    clouds = tuple(obstacles[k].cloud for k in cloud_indices)
     if leaf is None or not (indices or clouds):
         return None
     feed = SurfaceFeed(robot, leaf, planner.parameters.leaves[leaf.name])
-    return MeshObstacles(indices, tuple(obstacles[k] for k in indices), feed, planner.config.dynamic, clouds)
+    return MeshObstacles(indices, tuple(obstacles[k] for k in indices), feed, planner.config.dynamic, clouds,
+                         cloud_indices)  # type: ignore[arg-type]
 
 
 def shape_slots_of(obstacles: tuple[ObstacleSpec, ...]) -> ShapeSlots:

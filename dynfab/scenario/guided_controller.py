@@ -47,14 +47,15 @@ from dynfab.motion.trajectories import StaticPoint
 from dynfab.robots.robot import Robot
 from dynfab.scenario.controllers import (Controller, FabricController, make_controller, mesh_obstacles,
                                          place_obstacles, shape_slots_of)
-from dynfab.scenario.mesh_obstacles import surface_leaf
+from dynfab.scenario.mesh_obstacles import MeshObstacles, surface_leaf
 from dynfab.scenario.exact_metrics import obstacle_shapes
 from dynfab.scenario.recovering_controller import with_recovery
 from dynfab.scenario.references import goal_axes
 from dynfab.scenario.path_end import PathEndController, path_end_refusal, path_end_time
 from dynfab.scenario.schema import GoalSpec, Scenario, ScenarioError
 
-__all__ = ["AllowanceSlot", "GuidedController", "check_guided_ends", "guidance_refusal", "guided_planner_config",
+__all__ = ["AllowanceSlot", "GuidedController", "SurfaceAllowance", "check_guided_ends", "guidance_refusal",
+           "guided_planner_config",
            "make_scenario_controller"]
 
 #: The guided fabric's constants below were chosen on MBM problems 10-11 (gain, range) and 13-16
@@ -102,7 +103,7 @@ class GuidedController:
 
     def __init__(self, inner: FabricController, guided: GuidedFabric, goal: GoalTargets,
                  moving: Callable[[float], tuple[PlacedObstacle, ...]], fallback: Callable[[], Controller],
-                 static_slots: tuple[AllowanceSlot | None, ...] = ()) -> None:
+                 static_slots: tuple[AllowanceSlot | SurfaceAllowance | None, ...] = ()) -> None:
         self.inner = inner
         self.guided = guided
         self._static_slots = static_slots
@@ -150,7 +151,7 @@ class GuidedController:
         allowances = self.guided.allowances()
         if not np.array_equal(allowances, self._written):  # they change once per plan: not every tick
             for slot, allowance in zip(self._static_slots, allowances):
-                if slot is not None:  # a mesh or a point cloud has no slot to take an allowance
+                if slot is not None:  # a camera's cloud takes none
                     slot.write(self.inner.planner.parameters, float(allowance))
             self._written = allowances
         return self.inner(t, q, qdot)
@@ -182,6 +183,26 @@ class AllowanceSlot:
 
 #: smallest radius a sphere obstacle's slot is given under an allowance (0 would free the slot) [m]
 SMALLEST_RADIUS = 1e-3
+
+
+@dataclass(frozen=True)
+class SurfaceAllowance:
+    """Where a mesh's or a point cloud's allowance goes: its entry of the nearest-point
+    feed's allowances (its nearest points are written that much deeper,
+    :mod:`dynfab.perception.surfaces`).
+
+    Attributes:
+        surfaces: the scenario's meshes and clouds, which feed the leaf each tick.
+        index: the obstacle's entry in ``surfaces.allowances``.
+    """
+
+    surfaces: MeshObstacles
+    index: int
+
+    def write(self, params: RuntimeParameters, allowance: float) -> None:
+        """Let the fabric's spheres enter the surface by ``allowance`` [m] from the next tick
+        (``params`` unused: the feed writes the leaf)."""
+        self.surfaces.allowances[self.index] = allowance
 
 
 def guidance_refusal(scenario: Scenario, robot: Robot) -> str | None:
@@ -252,16 +273,18 @@ def _guided_controller(scenario: Scenario, robot: Robot, references: References,
     fabric = FabricPlanner(planning_robot, scenario.fabric.configured(guided_planner_config(planning_robot, scenario)))
     slots = place_obstacles(scenario.obstacles, fabric.parameters)
     moving_indices = tuple(k for k, obstacle in enumerate(scenario.obstacles) if obstacle.trajectory is not None)
+    surfaces = mesh_obstacles(fabric, planning_robot, scenario.obstacles)
     inner = FabricController(fabric, References((StaticPoint(tuple(scenario.initial_state.q)),), references.obstacles),
-                             (), moving_indices, slots, mesh_obstacles(fabric, planning_robot, scenario.obstacles))
+                             (), moving_indices, slots, surfaces)
     guided = GuidedFabric(fabric, settings, plan_latency)
     guided.set_obstacles(_placed(scenario, references, 0.0, static=True))
-    # one per obstacle, None for a mesh or a point cloud: no slot (its nearest-point leaf keeps its full range)
-    allowance_slots = [None if slot is None else
+    # one per obstacle: a slot's, or a mesh's or a point cloud's entry of the nearest-point feed
+    allowance_slots = [SurfaceAllowance(surfaces, surfaces.surface_of(k)) if slot is None and surfaces is not None
+                       else None if slot is None else
                        AllowanceSlot(obstacle.type, slot.row, obstacle.radius if obstacle.type == "sphere" else 0.0)
-                       for obstacle, slot in zip(scenario.obstacles, slots)]
+                       for k, (obstacle, slot) in enumerate(zip(scenario.obstacles, slots))]
     for obstacle, slot in zip(scenario.obstacles, allowance_slots):
-        if obstacle.trajectory is not None and slot is not None:
+        if obstacle.trajectory is not None and isinstance(slot, AllowanceSlot):  # a moving surface: none
             slot.write(fabric.parameters, -GUIDED_MOVING_MARGIN)
     static_slots = tuple(slot for obstacle, slot in zip(scenario.obstacles, allowance_slots)
                          if obstacle.trajectory is None)

@@ -4,9 +4,10 @@ need and where they are at each tick (:mod:`dynfab.perception.surfaces` finds th
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import NDArray
 
 from dynfab.fabric.leaves.barrier import Barrier
 from dynfab.fabric.leaves.surface_points import NearestSurfaceAvoidance, moving_spheres
@@ -31,6 +32,11 @@ class MeshObstacles:
         with_velocity: Pass the meshes' velocities (dynamic fabrics); a static fabric sees
             positions only, as the paper's static-fabric baseline does.
         clouds: The scenario's point clouds (static).
+        cloud_indices: Their indices among the scenario's obstacles (empty: not known, as
+            for a camera's cloud).
+        allowances: How far [m] the leaf lets spheres enter each mesh (in ``indices``
+            order), then each cloud: guidance near a grasp goal writes them in place
+            (:class:`SurfaceAllowance`); zeros at first.
     """
 
     indices: tuple[int, ...]
@@ -38,6 +44,12 @@ class MeshObstacles:
     feed: SurfaceFeed
     with_velocity: bool
     clouds: tuple[PointCloud, ...] = ()
+    cloud_indices: tuple[int, ...] = ()
+    allowances: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0), compare=False)
+
+    def __post_init__(self) -> None:
+        if len(self.allowances) != len(self.indices) + len(self.clouds):
+            object.__setattr__(self, "allowances", np.zeros(len(self.indices) + len(self.clouds)))
 
     def write(self, t: float, q: np.ndarray, references: References) -> None:
         """Write the nearest surface point of each robot sphere at time ``t`` [s]."""
@@ -47,8 +59,21 @@ class MeshObstacles:
             velocity = tuple(float(v) for v in point.velocity) if self.with_velocity else (0.0, 0.0, 0.0)
             assert obstacle.mesh is not None
             placed.append(PlacedMesh(obstacle.mesh, Placement(tuple(point.position), obstacle.orientation),
-                                     velocity))  # type: ignore[arg-type]
-        self.feed.write(q, placed, self.clouds)
+                                     velocity, float(self.allowances[len(placed)])))  # type: ignore[arg-type]
+        self.feed.write(q, placed, self.clouds, self.allowances[len(placed):])
+
+    def surface_of(self, obstacle_index: int) -> int:
+        """Where the scenario's obstacle ``obstacle_index`` (a mesh or a point cloud) is in
+        :attr:`allowances`.
+
+        Raises:
+            ValueError: It is neither.
+        """
+        if obstacle_index in self.indices:
+            return self.indices.index(obstacle_index)
+        if obstacle_index in self.cloud_indices:
+            return len(self.indices) + self.cloud_indices.index(obstacle_index)
+        raise ValueError(f"obstacles[{obstacle_index}] is neither a mesh nor a point cloud of this feed")
 
 
 def surface_leaf(robot: Robot, obstacles: Sequence[ObstacleSpec], barrier: Barrier,

@@ -1,0 +1,101 @@
+"""Goals free on the robot's meshes but refused by its spheres (issue 20: MotionBenchMaker's
+mesh-scene goals are millimetres from the meshes): the mesh check and guidance's inverse
+kinematics falling back on it."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from dynfab.geometry.point_cloud import PointCloud
+from dynfab.geometry.shapes import Box, Placement
+from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
+from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance
+from dynfab.motion.inverse_kinematics import AxisTarget, IkSettings, PointTarget
+from dynfab.motion.mesh_goal_check import MeshGoalCheck
+from dynfab.robots import load_robot
+from dynfab.robots.builtin_meshes import builtin_collision_meshes
+from dynfab.robots.mesh_collision import mesh_collision_model
+from dynfab.robots.mesh_sweep import PlacedShape, sweep_meshes
+
+Q = np.array([1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0])
+#: a 2 cm cube that touches panda_link2's sphere at Q (2.6 mm deep) and clears its mesh by 1.7 cm
+BESIDE_LINK2 = PlacedObstacle(Box((0.02, 0.02, 0.02)), Placement((-0.01947183, -0.08098174, 0.47577751)))
+
+
+@pytest.fixture(scope="module")
+def panda():
+    return load_robot("panda")
+
+
+@pytest.fixture(scope="module")
+def check(panda) -> MeshGoalCheck:
+    model = mesh_collision_model(panda.kinematics, panda.default_q, builtin_collision_meshes(panda))
+    assert model is not None
+    return MeshGoalCheck(model, 0.003)
+
+
+def test_a_box_the_spheres_touch_and_the_meshes_clear_is_free_on_the_meshes(panda, check) -> None:
+    assert ConfigurationChecker(panda, (BESIDE_LINK2,)).clearances(Q)[0] < 0.0
+    check.set_obstacles((BESIDE_LINK2,))
+    obstacle, itself = check.clearance(Q)
+    assert 0.01 < obstacle < 0.03 and itself > 0.0
+    assert check.free(Q)
+    stricter = MeshGoalCheck(check.model, obstacle + 0.001)
+    stricter.set_obstacles((BESIDE_LINK2,))
+    assert not stricter.free(Q)   # the margin is kept
+
+
+def test_a_cloud_is_measured_less_its_voxel_half_diagonal(check) -> None:
+    box = BESIDE_LINK2.placement.position
+    corners = np.array(box) + 0.01 * np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+    cloud = PointCloud.from_points(corners, voxel=0.01)
+    at_origin = Placement((0.0, 0.0, 0.0))
+    check.set_obstacles((PlacedObstacle(cloud, at_origin),))
+    kept = sweep_meshes(check.model, Q[None], [PlacedShape("cloud", cloud, (at_origin,))]).clearance
+    assert check.clearance(Q)[0] == pytest.approx(kept - cloud.lowering)
+    check.set_obstacles(())
+    assert check.clearance(Q)[0] == np.inf
+
+
+def test_a_bad_margin_is_refused_by_name(check) -> None:
+    with pytest.raises(ValueError, match="margin"):
+        MeshGoalCheck(check.model, -0.001)
+
+
+def _hand_pose_targets(panda) -> list[PointTarget | AxisTarget]:
+    link = "panda_hand"
+    rotation = np.asarray(panda.kinematics.transform(Q, link))[:3, :3]
+    targets: list[PointTarget | AxisTarget] = [PointTarget(link, tuple(panda.link_position(Q, link)))]
+    for axis in range(3):
+        targets.append(AxisTarget(link, tuple(np.eye(3)[axis]), tuple(rotation[:, axis])))
+    return targets
+
+
+def test_guidance_keeps_an_ik_solution_the_spheres_refuse_if_the_meshes_are_free(panda) -> None:
+    only_here = IkSettings(seeds=1)   # the current configuration alone: Q, which reaches the pose
+    settings = GuidanceSettings(ik=only_here, ik_retry=only_here)
+    guidance = JointGuidance(panda, settings)
+    guidance.checker.set_obstacles((BESIDE_LINK2,))
+    np.testing.assert_allclose(guidance.goal_configuration(_hand_pose_targets(panda), Q), Q, atol=1e-9)
+    strict = JointGuidance(panda, replace(settings, mesh_margin=0.05))
+    strict.checker.set_obstacles((BESIDE_LINK2,))
+    with pytest.raises(GuidanceError) as failure:
+        strict.goal_configuration(_hand_pose_targets(panda), Q)
+    assert failure.value.reason == "no_ik_solution"
+
+
+def test_a_segment_whose_middle_meets_a_box_is_not_free_though_its_ends_are(panda, check) -> None:
+    a, b = Q.copy(), Q.copy()
+    a[0], b[0] = 0.5, 1.5   # the arm swings about its base; the hand passes Q's place halfway
+    in_the_way = PlacedObstacle(Box((0.05, 0.05, 0.05)), Placement(tuple(panda.link_position(Q, "panda_hand"))))
+    check.set_obstacles((in_the_way,))
+    assert check.free(a) and check.free(b)
+    assert not check.segment_free(a, b, 0.015)
+    assert check.segment_free(a, a, 0.015)
+    deepest = check.clearance(np.linspace(a, b, 68))[0]   # the same samples: 1 rad in 67 steps of at most 0.015
+    assert deepest < 0.0
+    assert check.segment_free(a, b, 0.015, floor=deepest)   # a goal as deep as that may be approached
+    assert not check.segment_free(a, b, 0.015, floor=deepest + 1e-4)
