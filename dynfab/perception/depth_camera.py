@@ -147,7 +147,7 @@ class DepthCamera:
         robot = robot_pixels(depth, returns, self.projector, centres, self._radii, self._groups)
         kept = returns & ~robot
         points = self.projector.points(depth, kept)
-        arrived = np.compress(kept.reshape(-1), self._changes.arrived(depth, kept, robot).reshape(-1))
+        arrived = np.compress(kept.reshape(-1), self._changes.arrived(depth, returns, kept).reshape(-1))
         for array in (points, configuration, arrived):
             array.setflags(write=False)
         return CameraFrame(float(t), points, int(robot.sum()), configuration, arrived)

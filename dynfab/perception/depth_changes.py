@@ -7,9 +7,9 @@ A pixel *arrived* when something is now nearer than what it showed in the previo
 with ``d_{t−1} = +inf`` where the previous frame had no return (or one outside the
 workspace crop), so anything appearing there arrived. ``σ`` is the camera's depth noise: the
 difference of two noisy depths of a static pixel has standard deviation ``√2 σ``, and
-``6 √2 σ`` is exceeded by about one pixel in 10⁹. Pixels that are the robot's in either frame
-never arrive (``d_{t−1} = −inf`` where the robot was): the arm moving uncovers or covers
-background that does not move.
+``6 √2 σ`` is exceeded by about one pixel in 10⁹. The robot's pixels of this frame never
+arrive; those of the previous frame compare with the robot's depth there: a ball passing in
+front of the arm arrives, the background the arm uncovers (farther) does not.
 
 Only arrivals count, not departures: where a thing leaves, the pixel shows the static
 background behind it. A thing that moves has arrivals at its leading edge (and on its whole
@@ -48,12 +48,12 @@ class DepthChanges:
         self.threshold = max(min_change, 6.0 * math.sqrt(2.0) * noise)
         self._last: NDArray[np.float32] | None = None
 
-    def arrived(self, depth: NDArray[np.floating], kept: NDArray[np.bool_],
-                robot: NDArray[np.bool_]) -> NDArray[np.bool_]:
-        """The pixels of ``kept`` (H, W) whose depth ``depth`` (H, W) [m] arrived since the
-        previous call; ``robot`` (H, W): the robot's pixels of this frame. Remembers this frame."""
-        last = np.where(kept, depth, np.float32(np.inf)).astype(np.float32, copy=False)
-        last[robot] = -np.inf
+    def arrived(self, depth: NDArray[np.floating], returns: NDArray[np.bool_],
+                kept: NDArray[np.bool_]) -> NDArray[np.bool_]:
+        """The pixels of ``kept`` (H, W) (those with a return, not the robot's) whose depth
+        ``depth`` (H, W) [m] arrived since the previous call; ``returns`` (H, W): every pixel
+        with a return, the robot's included. Remembers this frame."""
+        last = np.where(returns, depth, np.float32(np.inf)).astype(np.float32, copy=False)
         previous, self._last = self._last, last
         if previous is None or previous.shape != depth.shape:
             return np.zeros(depth.shape, dtype=bool)
