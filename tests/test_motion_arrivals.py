@@ -83,7 +83,7 @@ def test_arrival_clusters_keep_what_holds_arrivals_and_is_not_cut() -> None:
     assert arrival_clusters(points, few, 0.03, 0.3, 5)[2] == 0
     with pytest.raises(ValueError, match=r"arrived: expected one flag per point \(1000,\)"):
         arrival_clusters(points[:1000], arrived, 0.03, 0.3, 5)
-    with pytest.raises(ValueError, match="reach >= 0 and min_seeds >= 1"):
+    with pytest.raises(ValueError, match="reach >= 0, min_seeds >= 1 and hold_speed >= 0"):
         ClusterTracker(min_seeds=0)
 
 
@@ -91,7 +91,8 @@ def test_a_ball_moving_above_a_floor_is_tracked_from_its_arrivals_alone() -> Non
     """MuJoCo renders an 8 cm ball moving at 0.5 m/s above a 6 m floor (320 x 240, 2 mm noise,
     30 Hz). The tracker given the frames' arrivals measures the ball within 5 cm/s after its
     window fills, every floor point reads 0, and ``velocity_at`` gives the ball's points its
-    velocity; once the ball stops, nothing arrives and nothing is tracked."""
+    velocity; once the ball stops nothing arrives, and once its velocity reads 0 over the
+    window it is no longer followed."""
     robot = load_robot("panda")
     spec = CameraSpec(position=(1.6, -1.4, 1.3), look_at=(0.2, -0.2, 0.35), width=320, height=240, fov=60,
                       noise=0.002)
@@ -104,7 +105,7 @@ def test_a_ball_moving_above_a_floor_is_tracked_from_its_arrivals_alone() -> Non
     camera, tracker = DepthCamera(spec, robot), ClusterTracker()
     velocity = np.array([0.0, 0.5, 0.0])
     centre = np.array([0.5, -0.6, 0.6])
-    for k in range(14):
+    for k in range(16):
         t = k / 30.0
         if k < 10:
             centre = np.array([0.5, -0.6, 0.6]) + velocity * t
@@ -121,5 +122,7 @@ def test_a_ball_moving_above_a_floor_is_tracked_from_its_arrivals_alone() -> Non
             assert np.linalg.norm(near.mean(axis=0) - velocity) <= 0.05
             assert np.all(tracker.velocity_at(np.array([[0.0, 0.0, 0.0]])) == 0.0)
         if k >= 11:  # stopped at frame 10: no arrival from frame 11 on
-            assert not frame.arrived.any() and tracker.tracks == []
+            assert not frame.arrived.any()
+        if k >= 11 + tracker.window:  # its velocity read 0 over the window: no longer followed
+            assert tracker.tracks == []
     renderer.close()

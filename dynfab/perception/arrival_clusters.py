@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 
 from dynfab.perception.clusters import voxel_clusters
 
-__all__ = ["MAX_REGIONS", "arrival_clusters"]
+__all__ = ["MAX_REGIONS", "arrival_clusters", "rows_in_box"]
 
 #: Most regions searched per frame (the largest groups of arrived points).
 MAX_REGIONS = 4
@@ -66,9 +66,9 @@ def arrival_clusters(points: NDArray[np.float64], arrived: NDArray[np.bool_], ed
     for group in groups:
         members = points[seeds[seed_labels == group]]
         low, high = members.min(axis=0) - reach, members.max(axis=0) + reach
-        rows = _in_box(points, low, high)
+        rows = rows_in_box(points, low, high)
         in_regions.append(rows)
-        in_inner.append(rows[_in_box(points[rows], low + edge, high - edge)])
+        in_inner.append(rows[rows_in_box(points[rows], low + edge, high - edge)])
     rows = np.unique(np.concatenate(in_regions)) if len(groups) > 1 else in_regions[0]
     inner = np.isin(rows, np.concatenate(in_inner))
     labels, count = voxel_clusters(points[rows], edge)
@@ -80,7 +80,7 @@ def arrival_clusters(points: NDArray[np.float64], arrived: NDArray[np.bool_], ed
     return rows[chosen], renumber[labels[chosen]], int(kept.sum())
 
 
-def _in_box(points: NDArray[np.float64], low: NDArray[np.float64], high: NDArray[np.float64]) -> NDArray[np.int64]:
+def rows_in_box(points: NDArray[np.float64], low: NDArray[np.float64], high: NDArray[np.float64]) -> NDArray[np.int64]:
     """The rows of ``points`` in the box ``[low, high]``: x tested on every point, y on those
     that pass, then z (column by column: numpy's ``all`` along a row of three is slow)."""
     xs = points[:, 0]

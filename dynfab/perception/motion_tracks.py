@@ -23,8 +23,10 @@ Given which points *arrived* (a depth camera's frame: their pixels came nearer s
 previous frame, :attr:`~dynfab.perception.depth_camera.CameraFrame.arrived`), only the
 clusters holding arrived points are formed and tracked
 (:func:`~dynfab.perception.arrival_clusters.arrival_clusters`: within ``reach`` of them,
-not cut by that bound); every other point is static and reads 0. Without them, every
-cluster of the frame is.
+not cut by that bound); every other point is static and reads 0. A track faster than
+``hold_speed`` is followed on without arrivals (a thing moving along the camera's rays
+shows few): the points in its latest extent box, grown by the gate, count as arrived. Without
+arrivals given, every cluster of the frame is tracked.
 """
 
 from __future__ import annotations
@@ -35,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from dynfab.perception.arrival_clusters import arrival_clusters
+from dynfab.perception.arrival_clusters import arrival_clusters, rows_in_box
 from dynfab.perception.clusters import voxel_clusters
 
 __all__ = ["SUMMARY_POINTS", "ClusterSummary", "ClusterTracker", "MovingCluster"]
@@ -117,18 +119,21 @@ class ClusterTracker:
         seed: Seed of the samples of large clusters.
         reach: With arrived points, how far from them a moving cluster may extend [m].
         min_seeds: With arrived points, fewest a cluster of them needs to be followed.
+        hold_speed: With arrived points, a track faster than this [m/s] is followed without.
         tracks: The live tracks (those matched or started at the latest frame).
     """
 
     def __init__(self, edge: float = 0.03, min_points: int = 20, max_speed: float = 3.0, window: int = 3,
-                 quantile: float = 0.05, seed: int = 0, reach: float = 0.3, min_seeds: int = 5) -> None:
+                 quantile: float = 0.05, seed: int = 0, reach: float = 0.3, min_seeds: int = 5,
+                 hold_speed: float = 0.05) -> None:
         if not edge > 0.0 or min_points < 1 or not max_speed > 0.0 or window < 1 or not 0.0 <= quantile < 0.5:
             raise ValueError("ClusterTracker needs edge > 0, min_points >= 1, max_speed > 0, window >= 1 and "
                              f"0 <= quantile < 0.5; got {edge}, {min_points}, {max_speed}, {window}, {quantile}")
-        if not reach >= 0.0 or min_seeds < 1:
-            raise ValueError(f"ClusterTracker needs reach >= 0 and min_seeds >= 1; got {reach}, {min_seeds}")
+        if not reach >= 0.0 or min_seeds < 1 or not hold_speed >= 0.0:
+            raise ValueError("ClusterTracker needs reach >= 0, min_seeds >= 1 and hold_speed >= 0; got "
+                             f"{reach}, {min_seeds}, {hold_speed}")
         self.edge, self.min_points, self.max_speed = edge, min_points, max_speed
-        self.reach, self.min_seeds = reach, min_seeds
+        self.reach, self.min_seeds, self.hold_speed = reach, min_seeds, hold_speed
         self.window, self.quantile = window, quantile
         self.tracks: list[_Track] = []
         self._time: float | None = None
@@ -145,7 +150,8 @@ class ClusterTracker:
             rows = None
             labels, count = voxel_clusters(points, self.edge)
         else:
-            rows, labels, count = arrival_clusters(points, arrived, self.edge, self.reach, self.min_seeds)
+            rows, labels, count = arrival_clusters(points, self._held(time, points, arrived), self.edge, self.reach,
+                                                   self.min_seeds)
         small = labels.astype(np.uint16) if count <= np.iinfo(np.uint16).max else labels
         order = np.argsort(small, kind="stable")  # a radix sort for 16-bit labels
         starts = np.searchsorted(labels[order], np.arange(count + 1))
@@ -160,6 +166,18 @@ class ClusterTracker:
         self.tracks = list(tracks.values())
         self._time = time
         return velocities
+
+    def _held(self, time: float, points: NDArray[np.float64], arrived: NDArray[np.bool_]) -> NDArray[np.bool_]:
+        """``arrived``, plus the points in the latest box of each track faster than
+        ``hold_speed``, grown by the gate ``max_speed · Δt + h``."""
+        held = [track.latest for track in self.tracks if np.linalg.norm(track.velocity()) > self.hold_speed]
+        if not held or self._time is None:
+            return arrived
+        seeds = np.array(arrived, dtype=bool)
+        gate = self.max_speed * (time - self._time) + self.edge
+        for latest in held:
+            seeds[rows_in_box(points, latest.lo - gate, latest.hi + gate)] = True
+        return seeds
 
     def velocity_at(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
         """The velocity estimate (k, 3) [m/s] of points (k, 3) [m] of the latest frame: that of
