@@ -215,10 +215,12 @@ def main() -> None:
           f"MUJOCO_GL={result['mujoco_gl']}; medians of {args.frames} frames")
     print(f"primitives' update (4 spheres + goal written, FabricController.retarget): {1e3 * primitives:.1f} µs")
     print(f"{'image':>8} {'floor':>5} {'points':>7} {'arrived':>7} {'render ms':>13} {'frame ms':>13} "
-          f"{'to planner ms':>13} {'velocities ms':>13} {'every point ms':>14} ball velocity")
+          f"{'to planner ms':>13} {'velocities ms':>13} {'every point ms':>14}  (CPU ms: frame, to planner, "
+          f"velocities, every point) ball velocity")
     for row in rows:
-        cells = " ".join(f"{row[key][0]:6.2f} ({row[key][1]:5.2f})" for key in
-                         ("render_ms", "frame_ms", "to_planner_ms", "velocities_ms", "velocities_all_points_ms"))
+        keys = ("frame_ms", "to_planner_ms", "velocities_ms", "velocities_all_points_ms")
+        cells = " ".join(f"{row[key][0]:6.2f} ({row[key][1]:5.2f})" for key in ("render_ms",) + keys)
+        cells += "  (" + ", ".join(f"{row[key][2]:.2f}" for key in keys) + ")"
         print(f"{row['resolution']:>8} {'yes' if row['floor'] else 'no':>5} {row['points']:>7} {row['arrived']:>7} "
               f"{cells} {row['ball_velocity']}")
     print()
@@ -234,7 +236,7 @@ def main() -> None:
                 print(f"{row['resolution']:>8} {'yes' if row['floor'] else 'no':>5} {'yes' if crop else 'no':>5} "
                       f"{row['points' + suffix]:>7} {row['kept' + suffix]:>7} {span:>14} {wall:6.2f} ({low:5.2f}) "
                       f"{cpu:7.2f} {row['target_ms']:>7.0f} {verdicts[0]:>5} {verdicts[1]:>5} {wall / primitives:>6.0f}x")
-    print("median (minimum) per frame. render: MuJoCo offscreen depth; frame: noise + robot filter + back-projection "
+    print("wall median (minimum) per frame, CPU median in brackets. render: MuJoCo offscreen depth; frame: noise + robot filter + back-projection "
           "+ arrivals (render excluded); to planner: PointCloudFeed.update_points of the frame's points and its "
           "KD-tree; velocities: ClusterTracker.update from the frame's arrivals (the camera feed's); every point: "
           "the same tracker clustering every point of the cloud (no arrivals); ball velocity: the tracker's moving "
