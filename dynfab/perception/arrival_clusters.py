@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 
 from dynfab.perception.clusters import voxel_clusters
 
-__all__ = ["MAX_REGIONS", "arrival_clusters", "rows_in_box"]
+__all__ = ["MAX_REGIONS", "arrival_clusters", "in_box", "rows_in_box"]
 
 #: Most regions searched per frame (the largest groups of arrived points).
 MAX_REGIONS = 4
@@ -62,16 +62,17 @@ def arrival_clusters(points: NDArray[np.float64], arrived: NDArray[np.bool_], ed
     groups = [group for group in np.argsort(-sizes, kind="stable")[:MAX_REGIONS] if sizes[group] >= min_seeds]
     if not groups:
         return none
-    in_regions, in_inner = [], []
+    boxes = []
     for group in groups:
         members = points[seeds[seed_labels == group]]
-        low, high = members.min(axis=0) - reach, members.max(axis=0) + reach
-        rows = rows_in_box(points, low, high)
-        in_regions.append(rows)
-        in_inner.append(rows[rows_in_box(points[rows], low + edge, high - edge)])
-    rows = np.unique(np.concatenate(in_regions)) if len(groups) > 1 else in_regions[0]
-    inner = np.isin(rows, np.concatenate(in_inner))
-    labels, count = voxel_clusters(points[rows], edge)
+        boxes.append((members.min(axis=0) - reach, members.max(axis=0) + reach))
+    found = [rows_in_box(points, low, high) for low, high in boxes]
+    rows = np.unique(np.concatenate(found)) if len(found) > 1 else found[0]
+    region = points[rows]
+    inner = np.zeros(len(rows), dtype=bool)
+    for low, high in boxes:
+        inner |= in_box(region, low + edge, high - edge)
+    labels, count = voxel_clusters(region, edge)
     seeded = np.bincount(labels, weights=arrived[rows], minlength=count) > 0
     cut = np.bincount(labels, weights=~inner, minlength=count) > 0
     kept = seeded & ~cut
@@ -80,9 +81,18 @@ def arrival_clusters(points: NDArray[np.float64], arrived: NDArray[np.bool_], ed
     return rows[chosen], renumber[labels[chosen]], int(kept.sum())
 
 
+def in_box(points: NDArray[np.float64], low: NDArray[np.float64], high: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Whether each of ``points`` (N, 3) lies in the box ``[low, high]`` (N,), column by column
+    (numpy's ``all`` along a row of three is slow)."""
+    inside = (points[:, 0] >= low[0]) & (points[:, 0] <= high[0])
+    for axis in (1, 2):
+        inside &= (points[:, axis] >= low[axis]) & (points[:, axis] <= high[axis])
+    return inside
+
+
 def rows_in_box(points: NDArray[np.float64], low: NDArray[np.float64], high: NDArray[np.float64]) -> NDArray[np.int64]:
     """The rows of ``points`` in the box ``[low, high]``: x tested on every point, y on those
-    that pass, then z (column by column: numpy's ``all`` along a row of three is slow)."""
+    that pass, then z."""
     xs = points[:, 0]
     rows = np.flatnonzero((xs >= low[0]) & (xs <= high[0]))
     for axis in (1, 2):
