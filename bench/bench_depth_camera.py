@@ -176,7 +176,8 @@ def camera_rows(floor: bool, frames: int) -> list[dict]:
             "returns": int(np.isfinite(depths[-1]).sum()), "points": len(seen[-1].points),
             "robot_pixels": seen[-1].robot_points, "arrived": int(statistics.median(f.arrived.sum() for f in seen)),
             "render_ms": render, "frame_ms": frame_ms,
-            "to_planner_ms": timed_frames(lambda k: (feed.update_points(seen[k].points, None), feed.cloud.tree), frames),
+            "to_planner_ms": timed_frames(lambda k: (feed.update_points(seen[k].points, None), feed.cloud.tree),
+                                          frames),
             "kept": len(feed.cloud.points),
             "velocities_ms": timed_frames(lambda k: tracker.update(times[k], seen[k].points, seen[k].arrived), frames),
             "ball_velocity": [[round(float(v), 3) for v in ball.velocity] for ball in tracker.moving(0.1)],
@@ -235,10 +236,11 @@ def main() -> None:
                 verdicts = ["ok" if value <= row["target_ms"] else "MISS" for value in (wall, cpu)]
                 print(f"{row['resolution']:>8} {'yes' if row['floor'] else 'no':>5} {'yes' if crop else 'no':>5} "
                       f"{row['points' + suffix]:>7} {row['kept' + suffix]:>7} {span:>14} {wall:6.2f} ({low:5.2f}) "
-                      f"{cpu:7.2f} {row['target_ms']:>7.0f} {verdicts[0]:>5} {verdicts[1]:>5} {wall / primitives:>6.0f}x")
-    print("wall median (minimum) per frame, CPU median in brackets. render: MuJoCo offscreen depth; frame: noise + robot filter + back-projection "
-          "+ arrivals (render excluded); to planner: PointCloudFeed.update_points of the frame's points and its "
-          "KD-tree; velocities: ClusterTracker.update from the frame's arrivals (the camera feed's); every point: "
+                      f"{cpu:7.2f} {row['target_ms']:>7.0f} {verdicts[0]:>5} {verdicts[1]:>5} "
+                      f"{wall / primitives:>6.0f}x")
+    print("wall median (minimum) per frame, CPU median in brackets. render: MuJoCo offscreen depth; frame: noise "
+          "+ robot filter + back-projection + arrivals (render excluded); to planner: PointCloudFeed.update_points "
+          "of the frame's points and its KD-tree; velocities: ClusterTracker.update from the frame's arrivals (the camera feed's); every point: "
           "the same tracker clustering every point of the cloud (no arrivals); ball velocity: the tracker's moving "
           "clusters at the last frame (truth [0, 0.5, 0])")
 

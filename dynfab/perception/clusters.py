@@ -50,6 +50,6 @@ def voxel_clusters(points: NDArray[np.float64], edge: float) -> tuple[NDArray[np
     found = np.minimum(np.searchsorted(voxels, targets), len(voxels) - 1)
     rows, offsets = np.nonzero(voxels[found] == targets)
     columns = found[rows, offsets]
-    graph = csr_matrix((np.ones(len(rows), dtype=np.int8), (rows, columns)), shape=(len(voxels),) * 2)  # csr: coo costs 0.3 ms more
+    graph = csr_matrix((np.ones(len(rows), dtype=np.int8), (rows, columns)), shape=(len(voxels),) * 2)
     count, of_voxel = connected_components(graph, directed=False)
     return of_voxel[of_point.reshape(-1)].astype(np.int64), int(count)

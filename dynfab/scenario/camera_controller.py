@@ -146,4 +146,5 @@ def make_camera_controller(scenario: Scenario, robot: Robot, seed: int = 0) -> C
     inner = make_scenario_controller(blind, robot, scenario_references(blind, robot))
     margin = scenario.camera_workspace_margin
     workspace = None if margin is None else robot_workspace(robot, margin)
-    return CameraController(inner, CameraFeed(robot, DepthCamera(scenario.camera, robot, seed=seed, workspace=workspace)))
+    camera = DepthCamera(scenario.camera, robot, seed=seed, workspace=workspace)
+    return CameraController(inner, CameraFeed(robot, camera))
