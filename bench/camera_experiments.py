@@ -3,6 +3,7 @@ stdout, a summary on stderr):
 
     .venv/bin/python bench/camera_experiments.py exp1 --seeds 0-19 [--perception camera|truth]
     .venv/bin/python bench/camera_experiments.py thrown --seeds 0-19 [--perception camera|truth]
+    (either with [--guidance off] [--workspace-margin 0.3]: the camera cropped to the reach)
 
 - ``exp1``: the paper's Experiment 1 scenes (dynfab.experiments.exp1, static-fabric with the
   default guidance) under MuJoCo, the planner knowing the scene only through one camera
@@ -70,12 +71,14 @@ def thrown_scenario(seed: int) -> dict[str, Any]:
                           {"type": "position", "position": rounded(goal), "tolerance": 0.05}, [ball])
 
 
-def run(kind: str, seed: int, perception: str, guidance: bool) -> dict[str, Any]:
+def run(kind: str, seed: int, perception: str, guidance: bool, margin: float | None = None) -> dict[str, Any]:
     document = exp1.scenario(seed) if kind == "exp1" else thrown_scenario(seed)
-    document.update(simulator="mujoco", camera=CAMERA, perception=perception, guidance=guidance)
+    camera = CAMERA if margin is None else {**CAMERA, "workspace_margin": margin}
+    document.update(simulator="mujoco", camera=camera, perception=perception, guidance=guidance)
     start = time.perf_counter()
     metrics = run_scenario(scenario_from_dict(document)).metrics
-    return {"kind": kind, "seed": seed, "perception": perception, "guidance": guidance, "success": bool(metrics.success),
+    return {"kind": kind, "seed": seed, "perception": perception, "guidance": guidance, "workspace_margin": margin,
+            "success": bool(metrics.success),
             "goal_reached": bool(metrics.goal_reached), "collision": bool(metrics.collision),
             "clearance": round(float(metrics.clearance), 4), "time_to_goal": metrics.time_to_goal,
             "obstacles": len(document["obstacles"]), "wall_s": round(time.perf_counter() - start, 1)}
@@ -92,10 +95,12 @@ def main() -> None:
     parser.add_argument("--seeds", type=seeds, default=seeds("0-19"))
     parser.add_argument("--perception", choices=("camera", "truth"), default="camera")
     parser.add_argument("--guidance", choices=("on", "off"), default="on")
+    parser.add_argument("--workspace-margin", type=float, default=None,
+                        help="crop the camera to the robot's reach plus this margin [m] (camera.workspace_margin)")
     args = parser.parse_args()
     rows = []
     for seed in args.seeds:
-        row = run(args.kind, seed, args.perception, args.guidance == "on")
+        row = run(args.kind, seed, args.perception, args.guidance == "on", args.workspace_margin)
         rows.append(row)
         print(json.dumps(row), flush=True)
     reached = sum(row["goal_reached"] for row in rows)

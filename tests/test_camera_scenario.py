@@ -4,6 +4,7 @@ sphere in the way, a ball thrown at the hand)."""
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 from pathlib import Path
 
@@ -11,10 +12,12 @@ import numpy as np
 import pytest
 
 from dynfab.perception.motion_tracks import ClusterTracker
+from dynfab.perception.workspace import robot_workspace
+from dynfab.robots import load_robot
 from dynfab.scenario.camera_controller import CameraController
 from dynfab.scenario.fields import ScenarioError
 from dynfab.scenario.runner import run_scenario
-from dynfab.scenario.schema import scenario_from_dict
+from dynfab.scenario.schema import scenario_from_dict, validate_for_robot
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
 from camera_experiments import CAMERA, thrown_scenario  # noqa: E402
@@ -50,6 +53,8 @@ def test_the_camera_block_becomes_a_camera_spec() -> None:
     ({"camera": {**CAMERA, "look_at": CAMERA["position"]}}, "camera.look_at: must differ from position"),
     ({"camera": {**CAMERA, "zoom": 2}}, r"camera.zoom: unknown key"),
     ({"camera": {"look_at": [0, 0, 0]}}, "camera.position: missing required key"),
+    ({"camera": {**CAMERA, "workspace_margin": -0.1}}, "camera.workspace_margin: must be >= 0 m"),
+    ({"camera": {**CAMERA, "workspace_margin": "reach"}}, "camera.workspace_margin: expected a number"),
 ])
 def test_bad_camera_scenarios_are_refused_naming_the_field(changes: dict, message: str) -> None:
     document = with_camera(**changes)
@@ -57,6 +62,25 @@ def test_bad_camera_scenarios_are_refused_naming_the_field(changes: dict, messag
         del document["camera"]
     with pytest.raises(ScenarioError, match=message):
         scenario_from_dict(document)
+
+
+def test_the_workspace_margin_crops_the_camera_to_the_robots_reach() -> None:
+    """``camera.workspace_margin`` crops every frame to the Panda's reach plus the margin (the
+    sphere in the way still avoided); a robot on a mobile base has no fixed reach: refused,
+    naming the field."""
+    scenario = scenario_from_dict(with_camera(camera={**CAMERA, "workspace_margin": 0.3}))
+    assert scenario.camera_workspace_margin == 0.3 and scenario_from_dict(with_camera()).camera_workspace_margin is None
+    result = run_scenario(dataclasses.replace(scenario, duration=3.0))
+    assert result.metrics.goal_reached and not result.metrics.collision
+    ball = robot_workspace(load_robot("panda"), 0.3)
+    points = result.controller.feed.latest.points
+    assert len(points) > 100  # the sphere in the way
+    assert np.linalg.norm(points - ball.centre, axis=1).max() <= ball.radius + 0.01  # depth noise
+    robot = load_robot("boxer-panda")
+    document = with_camera(robot="boxer-panda", camera={**CAMERA, "workspace_margin": 0.3},
+                           initial_state={"q": [float(value) for value in robot.default_q]})
+    with pytest.raises(ScenarioError, match="camera.workspace_margin: robot 'boxer-panda' is on a mobile base"):
+        validate_for_robot(scenario_from_dict(document), robot)
 
 
 def test_moving_clusters_are_balls_that_hold_what_was_seen() -> None:

@@ -3,9 +3,12 @@
 Each control tick, the frames that the camera (:class:`~dynfab.perception.depth_camera.DepthCamera`)
 has released by then (``delay`` after they were taken) replace the cloud of a
 :class:`~dynfab.perception.point_clouds.PointCloudFeed`: voxel-downsampled, the robot
-already filtered out at the frame's configuration. Its kept points go through the
-:class:`~dynfab.perception.motion_tracks.ClusterTracker`, which gives each one a velocity
-estimate. Then, as every tick, the feed writes the leaf's nearest points for the robot's
+already filtered out at the frame's configuration. The frame's points and which of them
+arrived (came nearer since the previous frame) go through the
+:class:`~dynfab.perception.motion_tracks.ClusterTracker`, which follows only the clusters
+holding arrived points (nothing where nothing moves); a kept point inside a tracked cluster's
+ball (:meth:`~dynfab.perception.motion_tracks.ClusterTracker.velocity_at`) has its velocity
+estimate, any other 0. Then, as every tick, the feed writes the leaf's nearest points for the robot's
 configuration ``q``, each moved to where its velocity estimate ``v`` puts it now: a frame
 taken at ``t_f`` is at least ``delay`` old, so the point written is
 
@@ -51,7 +54,6 @@ class CameraFeed:
         self._feed: PointCloudFeed | None = None
         self._leaf: NearestSurfaceAvoidance | None = None
         self._views: LeafViews | None = None
-        self._velocities = np.zeros((0, 3))
 
     @property
     def cloud(self) -> PointCloud | None:
@@ -84,7 +86,7 @@ class CameraFeed:
         frames = self.camera.release(t)
         for frame in frames:
             self._feed.update_points(frame.points, None)  # the camera filtered the robot already
-            self._velocities = self.tracker.update(frame.time, np.asarray(self._feed.cloud.points))
+            self.tracker.update(frame.time, frame.points, frame.arrived)
             self.latest = frame
         self.frames += len(frames)
         self._feed.write(q)
@@ -93,7 +95,7 @@ class CameraFeed:
         active = np.asarray(self._views["active"], dtype=float) > 0.5
         velocities = np.zeros((len(active), 3))
         if active.any():
-            velocities[active] = self._velocities[self._feed.nearest.index[active]]
+            velocities[active] = self.tracker.velocity_at(self._feed.cloud.points[self._feed.nearest.index[active]])
             points = np.asarray(self._views["points"]).reshape(-1, 3).copy()
             points[active] += velocities[active] * (t - self.latest.time)
             self._views["points"] = points

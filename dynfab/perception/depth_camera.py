@@ -17,7 +17,9 @@ rate is ``rate`` whenever the ticks are faster). A frame is
 2. back-projected (:class:`~dynfab.perception.depth_image.DepthProjector`);
 3. without the robot's pixels: those within ``r_i + margin`` of a collision sphere at the
    configuration ``q`` of the frame's time (:func:`~dynfab.perception.self_filter.robot_pixels`);
-4. buffered as ``(time, points)`` and released by :meth:`DepthCamera.release` once
+4. each point marked if its pixel *arrived* since the previous frame (something came nearer:
+   :class:`~dynfab.perception.depth_changes.DepthChanges`, the velocity tracker's seeds);
+5. buffered as ``(time, points)`` and released by :meth:`DepthCamera.release` once
    ``t >= time + delay``.
 
 The renderer is any ``() -> depth image`` (H, W) [m] with ``inf`` where nothing was hit:
@@ -35,6 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dynfab.perception.camera_spec import CameraSpec
+from dynfab.perception.depth_changes import DepthChanges
 from dynfab.perception.depth_image import DepthProjector
 from dynfab.perception.self_filter import robot_pixels
 from dynfab.perception.workspace import Workspace
@@ -60,12 +63,14 @@ class CameraFrame:
         points: (N, 3) world points [m] without the robot's, read-only.
         robot_points: Pixels removed as the robot's.
         configuration: The robot's configuration at ``time`` (read-only).
+        arrived: Per point, whether its pixel arrived since the previous frame (N,) (read-only).
     """
 
     time: float
     points: NDArray[np.float64]
     robot_points: int
     configuration: NDArray[np.float64]
+    arrived: NDArray[np.bool_]
 
 
 class DepthCamera:
@@ -94,6 +99,7 @@ class DepthCamera:
         self._groups = [np.flatnonzero([link == name for link in links]) for name in dict.fromkeys(links)]
         self._depth_range = None if workspace is None else self.projector.ball_depths(
             np.array(workspace.centre), workspace.radius)
+        self._changes = DepthChanges(spec.noise)
         self._next = 0.0
         self._buffer: deque[CameraFrame] = deque()
 
@@ -120,7 +126,7 @@ class DepthCamera:
         return released
 
     def frame(self, t: float, depth: NDArray[np.floating], q: ArrayLike) -> CameraFrame:
-        """Steps 1-3 of the module docstring on one depth image (H, W) [m] taken at ``t``
+        """Steps 1-4 of the module docstring on one depth image (H, W) [m] taken at ``t``
         with the robot at ``q``.
 
         Raises:
@@ -139,7 +145,9 @@ class DepthCamera:
         configuration = np.array(q, dtype=float).reshape(-1)
         centres = np.asarray(self._centres(configuration), dtype=float).reshape(-1, 3)
         robot = robot_pixels(depth, returns, self.projector, centres, self._radii, self._groups)
-        points = self.projector.points(depth, returns & ~robot)
-        points.setflags(write=False)
-        configuration.setflags(write=False)
-        return CameraFrame(float(t), points, int(robot.sum()), configuration)
+        kept = returns & ~robot
+        points = self.projector.points(depth, kept)
+        arrived = np.compress(kept.reshape(-1), self._changes.arrived(depth, returns, kept).reshape(-1))
+        for array in (points, configuration, arrived):
+            array.setflags(write=False)
+        return CameraFrame(float(t), points, int(robot.sum()), configuration, arrived)

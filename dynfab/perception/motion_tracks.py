@@ -18,6 +18,15 @@ most ``q s`` (5 % of it), and that is what it reads; a static cluster reads abou
 the mean of the per-frame velocities, a moving-average low-pass. A new track reads 0 until
 its second frame. Two things that touch (closer than ``h``) are one cluster: a thrown ball
 passing by a shelf loses its own velocity while they touch.
+
+Given which points *arrived* (a depth camera's frame: their pixels came nearer since the
+previous frame, :attr:`~dynfab.perception.depth_camera.CameraFrame.arrived`), only the
+clusters holding arrived points are formed and tracked
+(:func:`~dynfab.perception.arrival_clusters.arrival_clusters`: within ``reach`` of them,
+not cut by that bound); every other point is static and reads 0. A track faster than
+``hold_speed`` is followed on without arrivals (a thing moving along the camera's rays
+shows few): the points in its latest extent box, grown by the gate, count as arrived. Without
+arrivals given, every cluster of the frame is tracked.
 """
 
 from __future__ import annotations
@@ -28,6 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from dynfab.perception.arrival_clusters import arrival_clusters, rows_in_box
 from dynfab.perception.clusters import voxel_clusters
 
 __all__ = ["SUMMARY_POINTS", "ClusterSummary", "ClusterTracker", "MovingCluster"]
@@ -107,38 +117,76 @@ class ClusterTracker:
         window: Frames between the summaries a velocity compares.
         quantile: ``q`` of the extents.
         seed: Seed of the samples of large clusters.
+        reach: With arrived points, how far from them a moving cluster may extend [m].
+        min_seeds: With arrived points, fewest a cluster of them needs to be followed.
+        hold_speed: With arrived points, a track faster than this [m/s] is followed without.
         tracks: The live tracks (those matched or started at the latest frame).
     """
 
     def __init__(self, edge: float = 0.03, min_points: int = 20, max_speed: float = 3.0, window: int = 3,
-                 quantile: float = 0.05, seed: int = 0) -> None:
+                 quantile: float = 0.05, seed: int = 0, reach: float = 0.3, min_seeds: int = 5,
+                 hold_speed: float = 0.05) -> None:
         if not edge > 0.0 or min_points < 1 or not max_speed > 0.0 or window < 1 or not 0.0 <= quantile < 0.5:
             raise ValueError("ClusterTracker needs edge > 0, min_points >= 1, max_speed > 0, window >= 1 and "
                              f"0 <= quantile < 0.5; got {edge}, {min_points}, {max_speed}, {window}, {quantile}")
+        if not reach >= 0.0 or min_seeds < 1 or not hold_speed >= 0.0:
+            raise ValueError("ClusterTracker needs reach >= 0, min_seeds >= 1 and hold_speed >= 0; got "
+                             f"{reach}, {min_seeds}, {hold_speed}")
         self.edge, self.min_points, self.max_speed = edge, min_points, max_speed
+        self.reach, self.min_seeds, self.hold_speed = reach, min_seeds, hold_speed
         self.window, self.quantile = window, quantile
         self.tracks: list[_Track] = []
         self._time: float | None = None
         self._rng = np.random.default_rng(seed)
 
-    def update(self, time: float, points: NDArray[np.float64]) -> NDArray[np.float64]:
+    def update(self, time: float, points: NDArray[np.float64],
+               arrived: NDArray[np.bool_] | None = None) -> NDArray[np.float64]:
         """Track the clusters of one frame's points (N, 3) [m] taken at ``time`` [s] (later than
-        the previous frame's); each point's velocity estimate (N, 3) [m/s]."""
+        the previous frame's); each point's velocity estimate (N, 3) [m/s]. ``arrived`` (N,):
+        which points arrived (module docstring); None clusters every point."""
         if self._time is not None and not time > self._time:
             raise ValueError(f"frames must come in time order: {time} after {self._time}")
-        labels, count = voxel_clusters(points, self.edge)
+        if arrived is None:
+            rows = None
+            labels, count = voxel_clusters(points, self.edge)
+        else:
+            rows, labels, count = arrival_clusters(points, self._held(time, points, arrived), self.edge, self.reach,
+                                                   self.min_seeds)
         small = labels.astype(np.uint16) if count <= np.iinfo(np.uint16).max else labels
         order = np.argsort(small, kind="stable")  # a radix sort for 16-bit labels
         starts = np.searchsorted(labels[order], np.arange(count + 1))
-        clusters = {c: order[starts[c]:starts[c + 1]] for c in range(count)
+        members = order if rows is None else rows[order]
+        clusters = {c: members[starts[c]:starts[c + 1]] for c in range(count)
                     if starts[c + 1] - starts[c] >= self.min_points}
-        summaries = {c: self._summary(time, points[rows]) for c, rows in clusters.items()}
+        summaries = {c: self._summary(time, points[cluster_rows]) for c, cluster_rows in clusters.items()}
         tracks = self._match(time, summaries)
         velocities = np.zeros((len(points), 3))
         for c, track in tracks.items():
             velocities[clusters[c]] = track.velocity()
         self.tracks = list(tracks.values())
         self._time = time
+        return velocities
+
+    def _held(self, time: float, points: NDArray[np.float64], arrived: NDArray[np.bool_]) -> NDArray[np.bool_]:
+        """``arrived``, plus the points in the latest box of each track faster than
+        ``hold_speed``, grown by the gate ``max_speed · Δt + h``."""
+        held = [track.latest for track in self.tracks if np.linalg.norm(track.velocity()) > self.hold_speed]
+        if not held or self._time is None:
+            return arrived
+        seeds = np.array(arrived, dtype=bool)
+        gate = self.max_speed * (time - self._time) + self.edge
+        for latest in held:
+            seeds[rows_in_box(points, latest.lo - gate, latest.hi + gate)] = True
+        return seeds
+
+    def velocity_at(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The velocity estimate (k, 3) [m/s] of points (k, 3) [m] of the latest frame: that of
+        the fastest live track whose ball (:meth:`moving`, at the frame's time) holds the
+        point, else 0."""
+        velocities = np.zeros((len(points), 3))
+        for cluster in reversed(self.moving(0.0)):
+            inside = np.linalg.norm(points - cluster.centre, axis=1) <= cluster.radius
+            velocities[inside] = cluster.velocity
         return velocities
 
     def moving(self, min_speed: float) -> list[MovingCluster]:

@@ -44,6 +44,7 @@ from dynfab.geometry.point_cloud import PointCloud
 from dynfab.perception.camera_feed import CameraFeed
 from dynfab.perception.occlusion import behind_surfaces
 from dynfab.perception.depth_camera import DepthCamera, DepthRender
+from dynfab.perception.workspace import robot_workspace
 from dynfab.robots.robot import Robot
 from dynfab.scenario.guided_controller import GuidedController, make_scenario_controller
 from dynfab.scenario.references import scenario_references
@@ -143,4 +144,7 @@ def make_camera_controller(scenario: Scenario, robot: Robot, seed: int = 0) -> C
     blind = dataclasses.replace(scenario, obstacles=(_SLOT,) * TRACKED_SLOTS,
                                 fabric=dataclasses.replace(scenario.fabric, obstacle=tracked))
     inner = make_scenario_controller(blind, robot, scenario_references(blind, robot))
-    return CameraController(inner, CameraFeed(robot, DepthCamera(scenario.camera, robot, seed=seed)))
+    margin = scenario.camera_workspace_margin
+    workspace = None if margin is None else robot_workspace(robot, margin)
+    camera = DepthCamera(scenario.camera, robot, seed=seed, workspace=workspace)
+    return CameraController(inner, CameraFeed(robot, camera))

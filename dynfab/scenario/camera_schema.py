@@ -8,7 +8,10 @@ perception: camera                # truth (default) | camera
 ```
 
 ``camera`` describes a :class:`~dynfab.perception.camera_spec.CameraSpec` (its defaults
-where a key is left out; ``position`` and ``look_at`` are required). With
+where a key is left out; ``position`` and ``look_at`` are required), plus
+``workspace_margin: 0.3`` [m]: keep only the points within the robot's reach plus that
+margin (:func:`~dynfab.perception.workspace.robot_workspace`; a fixed-base robot only, the
+nearest-point leaf's range is 0.2 m); left out, every point is kept. With
 ``perception: camera`` the planner knows the scene only through the camera's point cloud;
 the file's obstacles stay in the physics and in the metrics. ``perception: truth`` gives it
 the file's obstacles, as without a camera.
@@ -30,10 +33,13 @@ PERCEPTIONS: tuple[str, ...] = ("truth", "camera")
 PERCEPTION = Choice(PERCEPTIONS)
 #: Largest image side [pixels] (MuJoCo's offscreen buffer grows to it).
 MAX_PIXELS = 4096
+#: Largest workspace margin [m].
+MAX_MARGIN = 10.0
 
 
 class CameraMapping(ScenarioModel):
-    """``camera: {position, look_at, width, height, fov, rate, noise, delay}`` (module doc)."""
+    """``camera: {position, look_at, width, height, fov, rate, noise, delay, workspace_margin}``
+    (module docstring)."""
 
     position: Point3
     look_at: Point3
@@ -43,6 +49,7 @@ class CameraMapping(ScenarioModel):
     rate: Annotated[float, Range(0.0, 1e3, open_lower=True, unit=" Hz")] = 30.0
     noise: Annotated[float, Range(0.0, 1.0, unit=" m")] = 0.0
     delay: Annotated[float, Range(0.0, 1.0, unit=" s")] = 0.0
+    workspace_margin: Annotated[float, Range(0.0, MAX_MARGIN, unit=" m")] | None = None
 
     @model_validator(mode="after")
     def _valid(self) -> CameraMapping:
@@ -51,7 +58,7 @@ class CameraMapping(ScenarioModel):
 
     def spec(self) -> CameraSpec:
         """The camera value; its problems raise on the field they name."""
-        fields = self.model_dump()
+        fields = self.model_dump(exclude={"workspace_margin"})
         for name in ("width", "height"):
             if float(fields[name]).is_integer():
                 fields[name] = int(fields[name])

@@ -25,6 +25,7 @@ from pydantic import Field, ValidationError, model_validator
 
 from dynfab.fabric.backends import BACKENDS, default_backend
 from dynfab.perception.camera_spec import CameraSpec
+from dynfab.perception.workspace import robot_workspace
 from dynfab.scenario import fields
 from dynfab.scenario.camera_schema import PERCEPTION, CameraMapping
 from dynfab.scenario.fabric_schema import FabricMapping, FabricSpec
@@ -111,6 +112,8 @@ class Scenario:
             :mod:`dynfab.scenario.camera_schema`), or None.
         perception: ``truth`` (the planner is given the obstacles) or ``camera`` (it knows
             the scene only through the camera; the obstacles stay in the physics and metrics).
+        camera_workspace_margin: ``camera.workspace_margin`` [m]: the camera keeps only the
+            points within the robot's reach plus this margin; None keeps every point.
     """
 
     robot: str | BuiltinRobotSpec | UrdfRobotSpec
@@ -129,6 +132,7 @@ class Scenario:
     guidance: bool = True
     camera: CameraSpec | None = None
     perception: str = "truth"
+    camera_workspace_margin: float | None = None
 
     def planning_limits(self, limits: MotionLimits) -> MotionLimits:
         """``limits`` as a planner (and a base's wheel drive) works with them here: every
@@ -225,6 +229,7 @@ class ScenarioDocument(ScenarioModel):
             fabric=self.fabric.spec(),
             camera=None if self.camera is None else self.camera.spec(),
             perception=self.perception,
+            camera_workspace_margin=None if self.camera is None else self.camera.workspace_margin,
         )
 
 
@@ -325,6 +330,11 @@ def validate_for_robot(scenario: Scenario, robot: Robot) -> Scenario:
             raise ScenarioError(f"obstacles[{i}].normal", "a planar robot moves in the xy-plane, which a "
                                 f"horizontal plane never bounds; use a wall (normal with an x or y part), "
                                 f"got {list(obstacle.normal)}")
+    if scenario.camera_workspace_margin is not None:
+        try:
+            robot_workspace(robot, scenario.camera_workspace_margin)
+        except ValueError as error:
+            raise ScenarioError("camera.workspace_margin", f"{error}; leave workspace_margin out") from None
     return dataclasses.replace(scenario, goals=goals, initial_state=state)
 
 
