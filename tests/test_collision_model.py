@@ -194,6 +194,10 @@ def test_pair_selection_refuses_bad_parameters() -> None:
         PairSelection(samples=0)
     with pytest.raises(ValueError, match="cover_slack"):
         PairSelection(cover_slack=-0.01)
+    with pytest.raises(ValueError, match="near_samples"):
+        PairSelection(near_samples=-1)
+    with pytest.raises(ValueError, match="near_spread"):
+        PairSelection(near_spread=0.0)
 
 
 def test_cache_is_used_and_a_changed_urdf_refits(tmp_path: Path) -> None:
@@ -305,7 +309,7 @@ def test_builtin_panda_pairs_follow_the_rules_and_see_every_mesh_contact(fingers
     kinematics = franka_kinematics(fingers)
     body_of = bodies(kinematics)
     depth = [body_of[s.link] for s in spheres]
-    assert len(set(pairs)) == len(pairs) == 123
+    assert len(set(pairs)) == len(pairs) == 268
     assert all(abs(depth[a] - depth[b]) >= 2 for a, b in pairs)
     centres, radii = panda.sphere_centers(panda.default_q), panda.sphere_radii
     assert min(np.linalg.norm(centres[a] - centres[b]) - radii[a] - radii[b] for a, b in pairs) > 0.01
