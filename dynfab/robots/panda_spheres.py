@@ -33,7 +33,12 @@ obstacle leaves of 58 moving spheres (17 on ``panda_link0`` never move and cost 
 per step); the 123 pairs are about a third (VM: 0.40 ms without them). The trade-off on
 the table: the hand and fingers as here (19 spheres at 5 mm / 1 cm, what the grasp goals
 need) and the arm at the previous 1 cm / 3 cm (24 spheres), 43 spheres and 65 pairs,
-0.33 ms a step in the same scene, 1.9x.
+0.33 ms a step in the same scene, 1.9x. The 268 pairs of the near-contact selection
+(issue 19, the 123 above missed finger contacts) against the 123, both timed in the same
+run beside no pairs (``bench/bench_self_pairs.py``, the same scene, 2000 interleaved
+steps, 2026-11-26, load 13-16 on the 2 cores): VM 0.225 against 0.188 ms (1.20x; no
+pairs 0.147 ms), compiled C 75 against 58 us (1.29x; no pairs 36 us); the C planner has
+122,235 instructions against 94,819 and compiled in 211 s against 101 s (gcc -O1, cold).
 
 On seeds (issue 21): the first fit's parameters (issue 9: 1 cm coverage, 3 cm bulge) were
 chosen on Experiment 1 seeds 0-49, the seeds docs/results.md reports; this fit's (5 mm,
