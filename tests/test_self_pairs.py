@@ -11,7 +11,8 @@ from dynfab.robots.builtin import panda_robot
 from dynfab.robots.franka import DYNFAB_LINKS, franka_kinematics
 from dynfab.robots.panda_spheres import PANDA_FITTED_SPHERES
 from dynfab.robots.robot import CollisionSphere
-from dynfab.robots.self_collision import PairSelection, bodies, sample_configurations, sphere_centres
+from dynfab.robots.self_collision import (PairSelection, bodies, configurations_around, sample_configurations,
+                                          sphere_centres)
 
 #: Deepest samples of two runs where a finger went into the arm's base on the meshes while
 #: the 123 pairs of the previous selection saw no overlap: (name, q, the two bodies).
@@ -36,7 +37,8 @@ def _kept_gaps(fingers: float, q: np.ndarray, body_pair: tuple[int, int]) -> np.
     assert len(kept), body_pair
     radii = np.array([s.radius for s in spheres])
     centres = sphere_centres(kinematics, spheres, q)
-    return np.linalg.norm(centres[:, kept[:, 0]] - centres[:, kept[:, 1]], axis=2) - radii[kept[:, 0]] - radii[kept[:, 1]]
+    distances = np.linalg.norm(centres[:, kept[:, 0]] - centres[:, kept[:, 1]], axis=2)
+    return distances - radii[kept[:, 0]] - radii[kept[:, 1]]
 
 
 @pytest.mark.parametrize(("name", "q", "body_pair"), FINGER_CONTACTS, ids=[c[0] for c in FINGER_CONTACTS])
@@ -66,8 +68,7 @@ def test_near_self_contact_of_hand_and_base_every_deep_mesh_contact_has_an_overl
     for body_pair in ((0, 7), (1, 7)):
         close = uniform[meshes.distances(uniform, [body_pair], selection.margin)[body_pair] < selection.margin]
         assert len(close) > 10, body_pair
-        picks = close[rng.integers(len(close), size=600)]
-        q = np.clip(picks + rng.normal(scale=selection.near_spread, size=picks.shape), kinematics.lower, kinematics.upper)
+        q = configurations_around(close, kinematics, 600, selection.near_spread, rng)
         inside = meshes.distances(q, [body_pair], selection.margin)[body_pair] < -0.01
         deep += int(inside.sum())
         seen = _kept_gaps(fingers, q[inside], body_pair).min(axis=1)

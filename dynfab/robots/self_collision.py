@@ -55,7 +55,8 @@ from .kinematics import Kinematics
 from .robot import CollisionSphere
 from .urdf import Joint
 
-__all__ = ["PairSelection", "bodies", "sample_configurations", "select_pairs", "sphere_centres"]
+__all__ = ["PairSelection", "bodies", "configurations_around", "sample_configurations", "select_pairs",
+           "sphere_centres"]
 
 
 @dataclass(frozen=True)
@@ -126,7 +127,7 @@ def select_pairs(kinematics: Kinematics, spheres: Sequence[CollisionSphere],
         if not close.any():
             continue
         if selection.near_samples:
-            around = _around(q[close], kinematics, selection, rng)
+            around = configurations_around(q[close], kinematics, selection.near_samples, selection.near_spread, rng)
             more_gaps, more_distance = gauge.pair(around, sphere_centres(kinematics, spheres, around), a, b)
             gaps, distance = np.vstack([gaps, more_gaps]), np.concatenate([distance, more_distance])
             close = distance < selection.margin
@@ -173,14 +174,14 @@ class _BodyGauge:
         return gaps, on_meshes.get((a, b), gaps.min(axis=1))
 
 
-def _around(close: np.ndarray, kinematics: Kinematics, selection: PairSelection,
-            rng: np.random.Generator) -> np.ndarray:
-    """``selection.near_samples`` configurations ``clip(q + N(0, near_spread^2))``, each
-    ``q`` drawn from the rows of ``close``, within the limits (see
-    :func:`sample_configurations`), shape (near_samples, dof)."""
+def configurations_around(close: np.ndarray, kinematics: Kinematics, count: int, spread: float,
+                          rng: np.random.Generator) -> np.ndarray:
+    """``count`` configurations ``clip(q + N(0, spread^2))``, each ``q`` a row of ``close``
+    drawn at random, within the limits (see :func:`sample_configurations`), shape
+    (count, dof); ``spread`` in rad (m for prismatic joints)."""
     lower, upper = _sampled_limits(kinematics)
-    picks = close[rng.integers(len(close), size=selection.near_samples)]
-    return np.clip(picks + rng.normal(scale=selection.near_spread, size=picks.shape), lower, upper)
+    picks = close[rng.integers(len(close), size=count)]
+    return np.clip(picks + rng.normal(scale=spread, size=picks.shape), lower, upper)
 
 
 def bodies(kinematics: Kinematics) -> dict[str, int]:
