@@ -36,9 +36,10 @@ shoulder held off the base by a pair of bulging spheres, into successes):
   contacts unseen (issue 19: a finger 12-14 mm into ``panda_link1`` and ``panda_link0``
   while every kept pair of those bodies stayed apart). Each body pair that came close is
   sampled again around its close samples, ``q' = clip(q + N(0, near_spread^2))`` [rad],
-  ``near_samples`` times, and the cover is chosen on both sets. It roughly doubles the
-  pairs: the built-in Panda 123 -> 268, the ``auto`` models of example-robot-data's UR5
-  95, Kinova j2s6s200 104, xArm7 132 and Panda 111 (default fits, tests/test_collision_model.py).
+  ``near_samples`` times, and the cover is chosen on both sets. The built-in Panda's
+  pairs went from 123 to 268; the ``auto`` models of example-robot-data's UR5, Kinova
+  j2s6s200, xArm7 and Panda now keep 95, 104, 132 and 111 pairs (default fits, as
+  tests/test_collision_model.py makes them).
 """
 
 from __future__ import annotations
