@@ -54,7 +54,7 @@ _PANDA_SPHERES: tuple[tuple[str, str, tuple[float, float, float], float], ...] =
 #: Which spheres the built-in ``panda`` uses: ``"fitted"`` (panda_spheres.py: 75 spheres
 #: fitted to Franka's collision meshes of the arm, the hand and each finger, none of whose
 #: surface points lies more than 5 mm outside them, reaching at most 1 cm out of the hand
-#: and fingers and 2 cm elsewhere, and 123 pairs chosen on the meshes) or ``"hand-written"`` (the table above,
+#: and fingers and 2 cm elsewhere, and 268 pairs chosen on the meshes) or ``"hand-written"`` (the table above,
 #: the default until 2026-11: it leaves 29 % of the mesh surface more than 1 cm and 12 %
 #: more than 3 cm outside, up to 8.3 cm at PANDA_DEFAULT_Q, and its pairs let the meshes
 #: touch themselves in 11 of 50 Experiment-1 runs). ``panda_robot("hand-written")`` keeps
