@@ -127,12 +127,14 @@ class GuidedFabric:
         self._next_check = 0.0
         self._best = np.inf
         self._best_time = 0.0
-        self._ended_seen = False
+        self._stage: str | None = None
         self._progress_needed = settings.stall_floor
         self._seed = 0
         self._allowances = np.zeros(0)
         self._approaching = False
         self._lagging_since: float | None = None
+        self._short_since: float | None = None
+        self._close = False
 
     @property
     def plan(self) -> Plan | None:
@@ -185,7 +187,7 @@ class GuidedFabric:
         dt = 0.0 if self._last_t is None else max(0.0, t - self._last_t)
         self._last_t = t
         in_approach = self._in_approach()
-        slow, stop = ((settings.approach_lag_slow, settings.approach_lag_stop) if in_approach
+        slow, stop = ((settings.approach_lag_slow, settings.approach_lag_stop) if in_approach or self._close
                       else (settings.lag_slow, settings.lag_stop))
         self._approaching = self._approaching or (in_approach and lag <= settings.approach_lag_stop)
         rate = float(np.clip((stop - lag) / (stop - slow), 0.0, 1.0))
@@ -209,9 +211,9 @@ class GuidedFabric:
     def _replan_reason(self, t: float, q: NDArray[np.float64], lag: float,
                        moving: Sequence[PlacedObstacle]) -> str | None:
         """``held`` if progress stalled on the way (the reference running, not in an
-        approach), ``stalled`` if it stalled elsewhere, ``blocked`` if the reference is
-        blocked ahead by something moving, else None (module docstring); ``lag``:
-        ``‖q − q_r‖`` [rad]."""
+        approach), ``short`` if the robot is held short of the approach's start,
+        ``stalled`` if it stalled elsewhere, ``blocked`` if the reference is blocked ahead
+        by something moving, else None (module docstring); ``lag``: ``‖q − q_r‖`` [rad]."""
         assert self._plan is not None
         settings = self._settings
         running = self._tau < self._plan.trajectory.duration
@@ -222,15 +224,17 @@ class GuidedFabric:
         if self._lagging_since is not None and t - self._lagging_since > settings.stall_lag_time:
             self.status = replace(self.status, replans_stalled=self.status.replans_stalled + 1)
             return "held"
-        if running:  # on the way: the reference's clock must advance
-            progress, needed = -self._tau, settings.stall_rate * settings.stall_window
-            at_goal = False
-        else:  # the reference has ended: the robot must close in on the goal configuration
-            progress, needed = float(np.linalg.norm(q - self._plan.goal)), self._progress_needed
-            at_goal = progress <= settings.stall_floor
-        if progress < self._best - needed or not self._ended_seen and self._tau >= self._plan.trajectory.duration:
-            self._ended_seen = self._tau >= self._plan.trajectory.duration
-            self._best, self._best_time = progress, t
+        if running and self._in_approach() and not self._approaching and lag > settings.approach_lag_stop:
+            self._short_since = t if self._short_since is None else self._short_since
+        else:
+            self._short_since = None
+        if self._short_since is not None and t - self._short_since > settings.approach_hold_time:
+            self.status = replace(self.status, replans_stalled=self.status.replans_stalled + 1)
+            return "short"
+        stage, progress, needed = self._progress(q)
+        if progress < self._best - needed or stage != self._stage:
+            self._stage, self._best, self._best_time = stage, progress, t
+        at_goal = stage == "ended" and progress <= settings.stall_floor
         if not at_goal and t - self._best_time > settings.stall_window:
             self.status = replace(self.status, replans_stalled=self.status.replans_stalled + 1)
             return "held" if running and not self._in_approach() else "stalled"
@@ -240,6 +244,21 @@ class GuidedFabric:
                 self.status = replace(self.status, replans_blocked=self.status.replans_blocked + 1)
                 return "blocked"
         return None
+
+    def _progress(self, q: NDArray[np.float64]) -> tuple[str, float, float]:
+        """The stage the run is in, its measure of progress (smaller is better) and the
+        least decrease of it expected within ``stall_window``: on the way (``way``), the
+        reference's clock ``−τ`` [s] must advance; on the approach once the robot follows it
+        (``approach``), however slowly the clock runs there, and after the reference ended
+        (``ended``), the joint-space distance to the goal configuration [rad] must shrink."""
+        assert self._plan is not None
+        settings = self._settings
+        distance = float(np.linalg.norm(q - self._plan.goal))
+        if self._tau >= self._plan.trajectory.duration:
+            return "ended", distance, self._progress_needed
+        if self._approaching:
+            return "approach", distance, settings.stall_floor
+        return "way", -self._tau, settings.stall_rate * settings.stall_window
 
     def _replan(self, t: float, q: NDArray[np.float64], moving: Sequence[PlacedObstacle], first: bool,
                 after: str | None = None) -> None:
@@ -251,30 +270,36 @@ class GuidedFabric:
             moving = tuple(o for o in moving if self.guidance.obstacle_clearance(self._plan.goal, o) >= margin)
         obstacles = self._static if first else self._static + tuple(moving)
         began = time.perf_counter()
-        try:
-            plan = self.guidance.plan(q, self._goal, obstacles, seed=self._seed, wide=after == "held")
-            failure, message = None, None
-        except GuidanceError as error:
-            plan, failure, message = None, error.reason, str(error)
+        plan = None
+        if after == "short":
+            assert self._plan is not None
+            plan = self.guidance.approach_from(q, self._plan.goal)
+        failure, message = None, None
+        if plan is None:
+            try:
+                plan = self.guidance.plan(q, self._goal, obstacles, seed=self._seed, wide=after in ("held", "short"))
+            except GuidanceError as error:
+                failure, message = error.reason, str(error)
+            self._seed += self._settings.attempts
         elapsed_ms = 1e3 * (time.perf_counter() - began)
-        self._seed += self._settings.attempts
         status = self.status
         self.status = replace(status, guided=plan is not None or (status.guided and not first),
                               plans=status.plans + 1,
                               plan_time_ms=elapsed_ms if status.plan_time_ms is None else status.plan_time_ms,
                               plan_times_ms=status.plan_times_ms + (elapsed_ms,), failure=failure)
         self.failure_message = message
-        self._best, self._best_time, self._ended_seen = np.inf, t, False
+        self._best, self._best_time, self._stage = np.inf, t, None
         self._next_check = t + (self._settings.blocked_interval if after == "blocked" else 0.0)
-        self._lagging_since = None
+        self._lagging_since = self._short_since = None
         if plan is None:
             if first:
                 self._plan = None
                 self._hold(q)
             return  # a failed replan keeps following the old reference
         self._plan = plan
+        self._close = after == "short"
         self._approaching = False
-        self._allowances = (self.guidance.allowances(plan.goal, self._static, self._buffers()) if plan.approach > 0
+        self._allowances = (self.guidance.approach_allowances(plan, self._static, self._buffers()) if plan.approach > 0
                             else np.zeros(len(self._static)))
         self._tau = 0.0
         self._last_t = t
