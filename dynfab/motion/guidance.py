@@ -108,6 +108,11 @@ class GuidanceSettings:
             from where the robot is (:meth:`JointGuidance.approach_from`) [s]: the
             obstacle leaves can hold it 0.05-0.15 rad short of a start the planner put
             at its 1 cm margin (problems 21-28, as posed: 7 of 9 failures stalled so).
+        close_lag_slow, close_lag_stop: ``lag_slow`` and ``lag_stop`` on the way of a plan
+            made after the robot was held short of an approach, when the straight
+            approach from where it was is blocked: it had cut a corner on the way there,
+            so the new way is followed more closely [rad] (chosen on problems 21-28, as
+            posed: with the approach's 0.01 and 0.03 the way crawled and stalled).
     """
 
     path: JointPlannerSettings = field(default_factory=JointPlannerSettings)
@@ -135,6 +140,9 @@ class GuidanceSettings:
     approach_lag_slow: float = 0.01
     approach_lag_stop: float = 0.03
     approach_hold_time: float = 1.0
+    close_lag_slow: float = 0.03
+    close_lag_stop: float = 0.1
+    close_time: float = 1.0
 
 
 class GuidanceError(RuntimeError):

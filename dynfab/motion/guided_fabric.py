@@ -187,7 +187,8 @@ class GuidedFabric:
         dt = 0.0 if self._last_t is None else max(0.0, t - self._last_t)
         self._last_t = t
         in_approach = self._in_approach()
-        slow, stop = ((settings.approach_lag_slow, settings.approach_lag_stop) if in_approach or self._close
+        slow, stop = ((settings.approach_lag_slow, settings.approach_lag_stop) if in_approach
+                      else (settings.close_lag_slow, settings.close_lag_stop) if self._close or self._entering()
                       else (settings.lag_slow, settings.lag_stop))
         self._approaching = self._approaching or (in_approach and lag <= settings.approach_lag_stop)
         rate = float(np.clip((stop - lag) / (stop - slow), 0.0, 1.0))
@@ -202,6 +203,11 @@ class GuidedFabric:
         """:meth:`update`, then the fabric's command (always finite, within the limits)."""
         self.update(t, q, moving)
         return self.fabric.compute(q, qdot)
+
+    def _entering(self) -> bool:
+        """Whether the reference's clock is within ``close_time`` before the plan's approach."""
+        assert self._plan is not None
+        return self._plan.approach > 0.0 and self._tau >= self._plan.approach_start - self._settings.close_time
 
     def _in_approach(self) -> bool:
         """Whether the reference's clock is in the plan's approach."""
