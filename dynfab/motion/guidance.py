@@ -113,6 +113,10 @@ class GuidanceSettings:
             approach from where it was is blocked: it had cut a corner on the way there,
             so the new way is followed more closely [rad] (chosen on problems 21-28, as
             posed: with the approach's 0.01 and 0.03 the way crawled and stalled).
+        close_time: the way's last this many seconds before a grasp's approach are
+            followed as closely (``close_lag_slow``, ``close_lag_stop``): where the robot
+            enters the approach's start it must not cut the corner [s] (chosen on problems
+            21-28, as posed: bookshelf_small/0021, 0022 and 0025).
     """
 
     path: JointPlannerSettings = field(default_factory=JointPlannerSettings)

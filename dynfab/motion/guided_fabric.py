@@ -11,7 +11,10 @@ self-collision leaves keep acting on everything the user writes into its slots.
 
 The reference runs on its own clock ``τ``, which slows while the robot lags behind it
 (a moving obstacle in the way; during a grasp's approach, below, ``approach_lag_slow`` and
-``approach_lag_stop`` take the place of ``e_slow`` and ``e_stop``):
+``approach_lag_stop`` take the place of ``e_slow`` and ``e_stop``, and in the last
+``close_time`` of the way before it, and on the whole way of a plan made after the robot
+was held short of an approach, ``close_lag_slow`` and ``close_lag_stop``: a robot lagging
+there cuts the corner into the approach and is held by what it passes):
 
     ρ = clip((e_stop − e) / (e_stop − e_slow), 0, 1),   e = ‖q − q_r(τ)‖,
     τ ← τ + ρ Δt,   q̇_r ← ρ q̇_r(τ),   q̈_r ← ρ² q̈_r(τ).
@@ -24,11 +27,19 @@ It replans from where the robot is (at most ``replans`` times) when
 - the run stalls: while the reference runs, the robot has stayed more than ``e_slow``
   behind it for ``stall_lag_time`` seconds (outside an approach), or the clock ``τ`` has
   not advanced by ``stall_rate · stall_window`` within ``stall_window`` seconds (the robot
-  is held back); once it has ended, the joint-space distance to the goal configuration
-  has not come ``max(stall_floor, stall_progress · d₀)`` below its best for
-  ``stall_window`` seconds (``d₀``: its distance when the goal was set, so the test
-  scales with the motion asked for). A detour that leads away from the goal is progress
-  as long as it is followed.
+  is held back); on an approach the robot follows, the joint-space distance to the goal
+  configuration has not come ``stall_floor`` below its best for ``stall_window`` seconds
+  (the clock waits for a robot the obstacle leaves slow down; it still closes in); once
+  the reference has ended, that distance has not come ``max(stall_floor,
+  stall_progress · d₀)`` below its best for ``stall_window`` seconds (``d₀``: its
+  distance when the goal was set, so the test scales with the motion asked for). A
+  detour that leads away from the goal is progress as long as it is followed;
+- the robot is held short of the approach: the reference waits at the approach's start
+  and the robot has stayed more than ``approach_lag_stop`` from it for
+  ``approach_hold_time`` seconds. The new plan is the straight approach from where the
+  robot is, if that segment goes no deeper into anything than the goal
+  (:meth:`~dynfab.motion.guidance.JointGuidance.approach_from`); else a plan as after a
+  stall, whose way is followed closely.
 
 Replans plan among the static obstacles and the moving ones where they are now, except
 those that touch the goal configuration (they are passing it: a plan around where they
@@ -44,8 +55,9 @@ only against going deeper than the goal (:attr:`~dynfab.motion.guidance.Plan.app
 timed as a slow phase of its own after a stop, and followed closely. Once the robot is
 on it (the clock in the approach, the robot within ``approach_lag_stop`` of the
 reference), :meth:`GuidedFabric.allowances` gives each static obstacle, until the next
-plan, the allowance its leaves need to let the spheres reach the goal
-(:meth:`~dynfab.motion.guidance.JointGuidance.allowances`); the caller writes them into the
+plan, the allowance its leaves need to let the spheres reach the goal and everything on
+the approach's straight segment
+(:meth:`~dynfab.motion.guidance.JointGuidance.approach_allowances`); the caller writes them into the
 obstacles' slots (``allowance`` of a shape, a smaller radius for a sphere). If no
 plan can be made the reference holds the configuration the robot had (the fabric then
 brakes and keeps avoiding), and :attr:`GuidedFabric.status` says why.
