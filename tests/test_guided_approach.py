@@ -73,21 +73,21 @@ def test_approach_from_times_the_straight_segment_from_the_robot_as_an_approach(
     assert guidance.approach_from(grasp, grasp) is None   # already there
 
 
-def test_approach_allowances_cover_the_whole_segment(panda, grasp) -> None:
+def test_approach_allowances_are_given_along_the_segment(panda, grasp) -> None:
     guidance = JointGuidance(panda)
     plan = guidance.plan(START, JointTarget(tuple(grasp)), [WALL])
     assert plan.approach > 0.0
-    # a block beside the middle of the approach, farther from the goal than the allowance reaches
+    # a block beside the middle of the approach, where the goal is farther from it
     middle = 0.5 * (plan.trajectory.waypoints[-2] + grasp)
     hand = np.asarray(panda.kinematics.position(middle, "panda_hand")).ravel()
     block = PlacedObstacle(Box((0.02, 0.02, 0.02)), Placement(tuple(hand + np.array([0.0, 0.0, 0.12]))))
     buffers = [0.005, 0.005]
-    segment = polyline_samples(plan.trajectory.phases[-1].waypoints, guidance.settings.path.resolution)
-    expected = np.max([guidance.allowances(q, [WALL, block], buffers) for q in segment], axis=0)
-    allowances = guidance.approach_allowances(plan, [WALL, block], buffers)
-    np.testing.assert_allclose(allowances, expected, atol=1e-12)
-    at_goal = guidance.allowances(grasp, [WALL, block], buffers)
-    assert (allowances >= at_goal).all() and allowances[0] == pytest.approx(at_goal[0])
+    segment, table = guidance.approach_allowances(plan, [WALL, block], buffers)
+    np.testing.assert_allclose(segment[0], plan.trajectory.waypoints[-2], atol=1e-12)
+    np.testing.assert_allclose(segment[-1], grasp, atol=1e-12)
+    assert np.linalg.norm(np.diff(segment, axis=0), axis=1).max() <= guidance.settings.path.resolution + 1e-12
+    np.testing.assert_allclose(table, [guidance.allowances(q, [WALL, block], buffers) for q in segment], atol=1e-12)
+    assert table[:, 1].max() > table[-1, 1] and table[-1, 0] == table[:, 0].max()   # the block: mid-way; the wall: at the goal
 
 
 def _guided(panda, goal: np.ndarray):
@@ -134,7 +134,12 @@ def test_a_robot_held_short_of_the_approach_approaches_from_where_it_is(panda, g
     assert plan.approach_start == 0.0 and plan.approach == pytest.approx(np.linalg.norm(grasp - held))
     np.testing.assert_allclose(plan.trajectory.evaluate(0.0).position, held, atol=1e-9)
     guided.update(t + DT, held)
-    assert guided.approaching and guided.allowances()[0] > 0.0
+    assert guided.approaching
+    segment, table = guided.guidance.approach_allowances(plan, guided._static, guided._buffers())
+    np.testing.assert_allclose(guided.allowances(), table.max(axis=0))   # at the start: the whole segment's
+    guided.update(t + 2 * DT, grasp)
+    np.testing.assert_allclose(guided.allowances(), table[-2:].max(axis=0))   # at the goal: what is left of it
+    assert guided.allowances()[0] > 0.0
 
 
 def test_on_the_approach_a_robot_closing_in_slowly_does_not_stall_and_one_that_stops_does(panda, grasp) -> None:

@@ -288,21 +288,21 @@ class JointGuidance:
         return Plan(trajectory, np.asarray(goal, dtype=float), time.perf_counter() - began, 0, length, 0.0)
 
     def approach_allowances(self, plan: Plan, obstacles: Sequence[PlacedObstacle],
-                            buffers: Sequence[float]) -> NDArray[np.float64]:
-        """:meth:`allowances` over the whole of ``plan``'s approach (its configurations every
-        ``path.resolution``), the largest of each obstacle: the straight approach may pass
-        closer to an obstacle than the goal is (a table under a grasp), where the leaves
-        would hold the robot short of the goal (problems 21-28, as posed: table_pick)."""
-        if not obstacles:
-            return np.zeros(0)
+                            buffers: Sequence[float]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """:meth:`allowances` along ``plan``'s approach: its configurations every
+        ``path.resolution`` from its start to the goal (k, n) [rad] and the allowances of
+        ``obstacles`` at each (k, m) [m]. The straight approach may pass closer to an
+        obstacle than the goal is (a table under a grasp), where the leaves would hold the
+        robot short of the goal (problems 21-28, as posed: table_pick); what it may pass
+        matters only until the robot is past it (:meth:`GuidedFabric.allowances`)."""
         if not isinstance(plan.trajectory, PhasedTrajectory):
             raise ValueError("approach_allowances: the plan has no approach")
         segment = polyline_samples(plan.trajectory.phases[-1].waypoints, self.settings.path.resolution)
-        clearances = np.empty(len(obstacles))
+        clearances = np.empty((len(segment), len(obstacles)))
         for k, obstacle in enumerate(obstacles):
             self._single.set_obstacles((obstacle,))
-            clearances[k] = self._single.batch(segment)[:, 0].min()
-        return np.maximum(0.0, np.asarray(buffers, dtype=float) + self.settings.goal_clearance - clearances)
+            clearances[:, k] = self._single.batch(segment)[:, 0]
+        return segment, np.maximum(0.0, np.asarray(buffers, dtype=float) + self.settings.goal_clearance - clearances)
 
     def allowances(self, q: NDArray[np.float64], obstacles: Sequence[PlacedObstacle],
                    buffers: Sequence[float]) -> NDArray[np.float64]:

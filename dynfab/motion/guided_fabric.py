@@ -142,7 +142,9 @@ class GuidedFabric:
         self._stage: str | None = None
         self._progress_needed = settings.stall_floor
         self._seed = 0
-        self._allowances = np.zeros(0)
+        self._segment = np.zeros((1, fabric.robot.dof))   # the approach's configurations (k, n) [rad]
+        self._table = np.zeros((1, 0))                     # the allowances at each (k, m) [m]
+        self._q = np.zeros(fabric.robot.dof)               # the robot at the last update [rad]
         self._approaching = False
         self._lagging_since: float | None = None
         self._short_since: float | None = None
@@ -156,7 +158,7 @@ class GuidedFabric:
     def set_obstacles(self, obstacles: Sequence[PlacedObstacle]) -> None:
         """The obstacles plans avoid (those that do not move; moving ones go to :meth:`update`)."""
         self._static = tuple(obstacles)
-        self._allowances = np.zeros(len(self._static))
+        self._table = np.zeros((1, len(self._static)))
 
     @property
     def approaching(self) -> bool:
@@ -166,9 +168,18 @@ class GuidedFabric:
 
     def allowances(self) -> NDArray[np.float64]:
         """Per static obstacle (:meth:`set_obstacles` order), how far [m] the fabric's
-        spheres may enter it now: the goal's allowances while :attr:`approaching`, else
-        zeros (module docstring)."""
-        return self._allowances.copy() if self._approaching else np.zeros(len(self._static))
+        spheres may enter it now: while :attr:`approaching`, the largest allowance at the
+        approach's configurations from the robot's (its projection on the segment, less one
+        sample) to the goal, else zeros (module docstring)."""
+        if not self._approaching:
+            return np.zeros(len(self._static))
+        start, end = self._segment[0], self._segment[-1]
+        direction = end - start
+        reached = float(np.clip(np.dot(self._q - start, direction) / max(float(np.dot(direction, direction)), 1e-12),
+                                0.0, 1.0))
+        count = len(self._segment)
+        first = max(0, int(np.floor(reached * (count - 1))) - 1)
+        return self._table[first:].max(axis=0)
 
     def set_goal(self, goal: GoalTargets, t: float, q: NDArray[np.float64],
                  moving: Sequence[PlacedObstacle] = ()) -> None:
@@ -188,6 +199,7 @@ class GuidedFabric:
             return
         settings = self._settings
         params = self.fabric.parameters
+        self._q = np.array(q, dtype=float)
         lag = float(np.linalg.norm(q - params.goal_position[0]))   # the reference at τ, written last tick
         if self.status.plans <= settings.replans:
             reason = self._replan_reason(t, q, lag, moving)
@@ -317,8 +329,10 @@ class GuidedFabric:
         self._plan = plan
         self._close = after == "short"
         self._approaching = False
-        self._allowances = (self.guidance.approach_allowances(plan, self._static, self._buffers()) if plan.approach > 0
-                            else np.zeros(len(self._static)))
+        if plan.approach > 0:
+            self._segment, self._table = self.guidance.approach_allowances(plan, self._static, self._buffers())
+        else:
+            self._segment, self._table = plan.goal[None], np.zeros((1, len(self._static)))
         self._tau = 0.0
         self._last_t = t
         self._hold(plan.trajectory.evaluate(0.0).position)   # the new reference's start, at rest
