@@ -66,9 +66,7 @@ class JointPlannerSettings:
         self_margin: clearance kept between the spheres of self-collision pairs [m].
         simplify_time: time given to OMPL's path simplifier [s].
         escape_radius: farthest a free endpoint is looked for around a blocked one [rad].
-        escape_samples: samples tried per endpoint, one random direction each at radii
-            growing to ``escape_radius`` [-]. 2000: with 400, as-posed cage/0028 (problems
-            21-28) found no free configuration within 0.4 rad; 2000 find one 0.31 rad away.
+        escape_samples: samples tried per endpoint [-].
         escape_slack: how much deeper [m] than the blocked endpoint itself the straight
             segment from the free configuration to it may reach into obstacles (or into
             the robot, for self-collision pairs).
@@ -89,7 +87,7 @@ class JointPlannerSettings:
     self_margin: float = 0.0
     simplify_time: float = 0.05
     escape_radius: float = 0.4
-    escape_samples: int = 2000
+    escape_samples: int = 400
     escape_slack: float = 0.002
     step: float = 0.7
     self_tolerance: float = 0.01
