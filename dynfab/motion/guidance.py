@@ -34,7 +34,8 @@ from dynfab.perception.surfaces import surface_clearance
 from dynfab.robots.builtin_meshes import builtin_collision_meshes
 from dynfab.robots.link_meshes import LinkMeshError
 from dynfab.robots.mesh_collision import mesh_collision_model
-from dynfab.motion.joint_planning import JointPath, JointPlannerSettings, NoPathError, plan_joint_path
+from dynfab.motion.joint_planning import (JointPath, JointPlannerSettings, NoPathError, approach_clear,
+                                          plan_joint_path, polyline_samples)
 from dynfab.motion.joint_trajectory import JointTrajectory, TimingError, TimingSettings, time_path
 from dynfab.motion.phased_trajectory import PhasedTrajectory
 from dynfab.robots.robot import Robot
@@ -43,6 +44,8 @@ __all__ = ["GuidanceError", "GuidanceSettings", "JointGuidance", "JointTarget", 
 
 #: a value within this of a joint limit counts as at the limit [rad or m]
 LIMIT_SLACK = 1e-6
+#: an approach shorter than this is none: the robot is at the goal [rad]
+SHORTEST_APPROACH = 1e-6
 
 
 @dataclass(frozen=True)
@@ -113,6 +116,20 @@ class GuidanceSettings:
         approach_lag_slow, approach_lag_stop: ``lag_slow`` and ``lag_stop`` during the
             approach: it is followed closely, so that the robot does not cut into what
             the goal is close to [rad].
+        approach_hold_time: time the robot may stay more than ``approach_lag_stop`` from
+            the reference waiting at the approach's start before the approach starts
+            from where the robot is (:meth:`JointGuidance.approach_from`) [s]: the
+            obstacle leaves can hold it 0.05-0.15 rad short of a start the planner put
+            at its 1 cm margin (problems 21-28, as posed: 7 of 9 failures stalled so).
+        close_lag_slow, close_lag_stop: ``lag_slow`` and ``lag_stop`` on the way of a plan
+            made after the robot was held short of an approach, when the straight
+            approach from where it was is blocked: it had cut a corner on the way there,
+            so the new way is followed more closely [rad] (chosen on problems 21-28, as
+            posed: with the approach's 0.01 and 0.03 the way crawled and stalled).
+        close_time: the way's last this many seconds before a grasp's approach are
+            followed as closely (``close_lag_slow``, ``close_lag_stop``): where the robot
+            enters the approach's start it must not cut the corner [s] (chosen on problems
+            21-28, as posed: bookshelf_small/0021, 0022 and 0025).
     """
 
     path: JointPlannerSettings = field(default_factory=JointPlannerSettings)
@@ -140,6 +157,10 @@ class GuidanceSettings:
     approach_speed: float = 0.1
     approach_lag_slow: float = 0.01
     approach_lag_stop: float = 0.03
+    approach_hold_time: float = 1.0
+    close_lag_slow: float = 0.03
+    close_lag_stop: float = 0.1
+    close_time: float = 1.0
 
 
 class GuidanceError(RuntimeError):
@@ -278,6 +299,36 @@ class JointGuidance:
         assert error is not None
         raise error
 
+    def approach_from(self, q: NDArray[np.float64], goal: NDArray[np.float64]) -> Plan | None:
+        """A plan that is only an approach: the straight segment from ``q`` (the robot, held
+        short of its plan's approach) to the blocked ``goal``, timed as an approach, if it
+        goes no deeper into the last plan's obstacles than ``goal`` does
+        (:func:`~dynfab.motion.joint_planning.approach_clear`); else None."""
+        began = time.perf_counter()
+        start = np.clip(np.asarray(q, dtype=float), self._lower, self._upper)
+        length = float(np.linalg.norm(goal - start))
+        if length < SHORTEST_APPROACH or not approach_clear(self.checker, start, goal, self.settings.path):
+            return None
+        trajectory = PhasedTrajectory((self._approach_timed(np.vstack([start, goal])),))
+        return Plan(trajectory, np.asarray(goal, dtype=float), time.perf_counter() - began, 0, length, 0.0)
+
+    def approach_allowances(self, plan: Plan, obstacles: Sequence[PlacedObstacle],
+                            buffers: Sequence[float]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """:meth:`allowances` along ``plan``'s approach: its configurations every
+        ``path.resolution`` from its start to the goal (k, n) [rad] and the allowances of
+        ``obstacles`` at each (k, m) [m]. The straight approach may pass closer to an
+        obstacle than the goal is (a table under a grasp), where the leaves would hold the
+        robot short of the goal (problems 21-28, as posed: table_pick); what it may pass
+        matters only until the robot is past it (:meth:`GuidedFabric.allowances`)."""
+        if not isinstance(plan.trajectory, PhasedTrajectory):
+            raise ValueError("approach_allowances: the plan has no approach")
+        segment = polyline_samples(plan.trajectory.phases[-1].waypoints, self.settings.path.resolution)
+        clearances = np.empty((len(segment), len(obstacles)))
+        for k, obstacle in enumerate(obstacles):
+            self._single.set_obstacles((obstacle,))
+            clearances[:, k] = self._single.batch(segment)[:, 0]
+        return segment, np.maximum(0.0, np.asarray(buffers, dtype=float) + self.settings.goal_clearance - clearances)
+
     def allowances(self, q: NDArray[np.float64], obstacles: Sequence[PlacedObstacle],
                    buffers: Sequence[float]) -> NDArray[np.float64]:
         """How far [m] the fabric's spheres may enter each obstacle so that its leaves,
@@ -318,9 +369,13 @@ class JointGuidance:
         if not path.escaped_goal:
             return time_path(path.waypoints, *cruise, settings.timing)
         way = time_path(path.waypoints[:-1], *cruise, settings.timing)
-        approach = time_path(path.waypoints[-2:], settings.approach_speed * limits.velocity,
-                             settings.approach_speed * limits.acceleration, settings.timing)
-        return PhasedTrajectory((way, approach))
+        return PhasedTrajectory((way, self._approach_timed(path.waypoints[-2:])))
+
+    def _approach_timed(self, segment: NDArray[np.float64]) -> JointTrajectory:
+        """A grasp's approach segment (2, n) timed at ``approach_speed`` of the limits."""
+        limits, settings = self.robot.limits, self.settings
+        return time_path(segment, settings.approach_speed * limits.velocity,
+                         settings.approach_speed * limits.acceleration, settings.timing)
 
     def _mesh_approach(self) -> Callable[[NDArray[np.float64], NDArray[np.float64]], bool] | None:
         """Among meshes or point clouds, the check of an escaped goal's approach on the robot's

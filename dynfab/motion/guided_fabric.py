@@ -24,7 +24,10 @@ began; the lag rule below slows its clock until the robot is on it.
 
 The reference runs on its own clock ``τ``, which slows while the robot lags behind it
 (a moving obstacle in the way; during a grasp's approach, below, ``approach_lag_slow`` and
-``approach_lag_stop`` take the place of ``e_slow`` and ``e_stop``):
+``approach_lag_stop`` take the place of ``e_slow`` and ``e_stop``, and in the last
+``close_time`` of the way before it, and on the whole way of a plan made after the robot
+was held short of an approach, ``close_lag_slow`` and ``close_lag_stop``: a robot lagging
+there cuts the corner into the approach and is held by what it passes):
 
     ρ = clip((e_stop − e) / (e_stop − e_slow), 0, 1),   e = ‖q − q_r(τ)‖,
     τ ← τ + ρ Δt,   q̇_r ← ρ q̇_r(τ),   q̈_r ← ρ² q̈_r(τ).
@@ -44,11 +47,19 @@ reached their goals) when
 - the run stalls: while the reference runs, the robot has stayed more than ``e_slow``
   behind it for ``stall_lag_time`` seconds (outside an approach), or the clock ``τ`` has
   not advanced by ``stall_rate · stall_window`` within ``stall_window`` seconds (the robot
-  is held back); once it has ended, the joint-space distance to the goal configuration
-  has not come ``max(stall_floor, stall_progress · d₀)`` below its best for
-  ``stall_window`` seconds (``d₀``: its distance when the goal was set, so the test
-  scales with the motion asked for). A detour that leads away from the goal is progress
-  as long as it is followed.
+  is held back); on an approach the robot follows, the joint-space distance to the goal
+  configuration has not come ``stall_floor`` below its best for ``stall_window`` seconds
+  (the clock waits for a robot the obstacle leaves slow down; it still closes in); once
+  the reference has ended, that distance has not come ``max(stall_floor,
+  stall_progress · d₀)`` below its best for ``stall_window`` seconds (``d₀``: its
+  distance when the goal was set, so the test scales with the motion asked for). A
+  detour that leads away from the goal is progress as long as it is followed;
+- the robot is held short of the approach: the reference waits at the approach's start
+  and the robot has stayed more than ``approach_lag_stop`` from it for
+  ``approach_hold_time`` seconds. The new plan is the straight approach from where the
+  robot is, if that segment goes no deeper into anything than the goal
+  (:meth:`~dynfab.motion.guidance.JointGuidance.approach_from`); else a plan as after a
+  stall, whose way is followed closely.
 
 Replans plan among the static obstacles and the moving ones where they are now, except
 those that touch the goal configuration (they are passing it: a plan around where they
@@ -64,8 +75,9 @@ only against going deeper than the goal (:attr:`~dynfab.motion.guidance.Plan.app
 timed as a slow phase of its own after a stop, and followed closely. Once the robot is
 on it (the clock in the approach, the robot within ``approach_lag_stop`` of the
 reference), :meth:`GuidedFabric.allowances` gives each static obstacle, until the next
-plan, the allowance its leaves need to let the spheres reach the goal
-(:meth:`~dynfab.motion.guidance.JointGuidance.allowances`); the caller writes them into the
+plan, the allowance its leaves need to let the spheres reach the goal and everything on
+the approach's straight segment
+(:meth:`~dynfab.motion.guidance.JointGuidance.approach_allowances`); the caller writes them into the
 obstacles' slots (``allowance`` of a shape, a smaller radius for a sphere). If no
 plan can be made the reference holds the configuration the robot had (the fabric then
 brakes and keeps avoiding), and :attr:`GuidedFabric.status` says why.
@@ -160,12 +172,16 @@ class GuidedFabric:
         self._next_check = 0.0
         self._best = np.inf
         self._best_time = 0.0
-        self._ended_seen = False
+        self._stage: str | None = None
         self._progress_needed = settings.stall_floor
         self._seed = 0
-        self._allowances = np.zeros(0)
+        self._segment = np.zeros((1, fabric.robot.dof))   # the approach's configurations (k, n) [rad]
+        self._table = np.zeros((1, 0))                     # the allowances at each (k, m) [m]
+        self._q = np.zeros(fabric.robot.dof)               # the robot at the last update [rad]
         self._approaching = False
         self._lagging_since: float | None = None
+        self._short_since: float | None = None
+        self._close = False
 
     @property
     def plan(self) -> Plan | None:
@@ -185,7 +201,7 @@ class GuidedFabric:
     def set_obstacles(self, obstacles: Sequence[PlacedObstacle]) -> None:
         """The obstacles plans avoid (those that do not move; moving ones go to :meth:`update`)."""
         self._static = tuple(obstacles)
-        self._allowances = np.zeros(len(self._static))
+        self._table = np.zeros((1, len(self._static)))
 
     @property
     def approaching(self) -> bool:
@@ -195,9 +211,18 @@ class GuidedFabric:
 
     def allowances(self) -> NDArray[np.float64]:
         """Per static obstacle (:meth:`set_obstacles` order), how far [m] the fabric's
-        spheres may enter it now: the goal's allowances while :attr:`approaching`, else
-        zeros (module docstring)."""
-        return self._allowances.copy() if self._approaching else np.zeros(len(self._static))
+        spheres may enter it now: while :attr:`approaching`, the largest allowance at the
+        approach's configurations from the robot's (its projection on the segment, less one
+        sample) to the goal, else zeros (module docstring)."""
+        if not self._approaching:
+            return np.zeros(len(self._static))
+        start, end = self._segment[0], self._segment[-1]
+        direction = end - start
+        reached = float(np.clip(np.dot(self._q - start, direction) / max(float(np.dot(direction, direction)), 1e-12),
+                                0.0, 1.0))
+        count = len(self._segment)
+        first = max(0, int(np.floor(reached * (count - 1))) - 1)
+        return self._table[first:].max(axis=0)
 
     def set_goal(self, goal: GoalTargets, t: float, q: NDArray[np.float64],
                  moving: Sequence[PlacedObstacle] = ()) -> None:
@@ -226,6 +251,7 @@ class GuidedFabric:
             return
         settings = self._settings
         params = self.fabric.parameters
+        self._q = np.array(q, dtype=float)
         lag = float(np.linalg.norm(q - params.goal_position[0]))   # the reference at τ, written last tick
         if self._pending is None and self.status.plans <= settings.replans:
             reason = self._replan_reason(t, q, lag, moving)
@@ -237,6 +263,7 @@ class GuidedFabric:
         self._last_t = t
         in_approach = self._in_approach()
         slow, stop = ((settings.approach_lag_slow, settings.approach_lag_stop) if in_approach
+                      else (settings.close_lag_slow, settings.close_lag_stop) if self._close or self._entering()
                       else (settings.lag_slow, settings.lag_stop))
         self._approaching = self._approaching or (in_approach and lag <= settings.approach_lag_stop)
         waiting = self._pending is not None and not in_approach
@@ -250,6 +277,11 @@ class GuidedFabric:
         self.update(t, q, moving)
         return self.fabric.compute(q, qdot)
 
+    def _entering(self) -> bool:
+        """Whether the reference's clock is within ``close_time`` before the plan's approach."""
+        assert self._plan is not None
+        return self._plan.approach > 0.0 and self._tau >= self._plan.approach_start - self._settings.close_time
+
     def _in_approach(self) -> bool:
         """Whether the reference's clock is in the plan's approach."""
         assert self._plan is not None
@@ -258,9 +290,9 @@ class GuidedFabric:
     def _replan_reason(self, t: float, q: NDArray[np.float64], lag: float,
                        moving: Sequence[PlacedObstacle]) -> str | None:
         """``held`` if progress stalled on the way (the reference running, not in an
-        approach), ``stalled`` if it stalled elsewhere, ``blocked`` if the reference is
-        blocked ahead by something moving, else None (module docstring); ``lag``:
-        ``‖q − q_r‖`` [rad]."""
+        approach), ``short`` if the robot is held short of the approach's start,
+        ``stalled`` if it stalled elsewhere, ``blocked`` if the reference is blocked ahead
+        by something moving, else None (module docstring); ``lag``: ``‖q − q_r‖`` [rad]."""
         assert self._plan is not None
         settings = self._settings
         running = self._tau < self._plan.trajectory.duration
@@ -271,15 +303,17 @@ class GuidedFabric:
         if self._lagging_since is not None and t - self._lagging_since > settings.stall_lag_time:
             self.status = replace(self.status, replans_stalled=self.status.replans_stalled + 1)
             return "held"
-        if running:  # on the way: the reference's clock must advance
-            progress, needed = -self._tau, settings.stall_rate * settings.stall_window
-            at_goal = False
-        else:  # the reference has ended: the robot must close in on the goal configuration
-            progress, needed = float(np.linalg.norm(q - self._plan.goal)), self._progress_needed
-            at_goal = progress <= settings.stall_floor
-        if progress < self._best - needed or not self._ended_seen and self._tau >= self._plan.trajectory.duration:
-            self._ended_seen = self._tau >= self._plan.trajectory.duration
-            self._best, self._best_time = progress, t
+        if running and self._in_approach() and not self._approaching and lag > settings.approach_lag_stop:
+            self._short_since = t if self._short_since is None else self._short_since
+        else:
+            self._short_since = None
+        if self._short_since is not None and t - self._short_since > settings.approach_hold_time:
+            self.status = replace(self.status, replans_stalled=self.status.replans_stalled + 1)
+            return "short"
+        stage, progress, needed = self._progress(q)
+        if progress < self._best - needed or stage != self._stage:
+            self._stage, self._best, self._best_time = stage, progress, t
+        at_goal = stage == "ended" and progress <= settings.stall_floor
         if not at_goal and t - self._best_time > settings.stall_window:
             self.status = replace(self.status, replans_stalled=self.status.replans_stalled + 1)
             return "held" if running and not self._in_approach() else "stalled"
@@ -290,13 +324,28 @@ class GuidedFabric:
                 return "blocked"
         return None
 
+    def _progress(self, q: NDArray[np.float64]) -> tuple[str, float, float]:
+        """The stage the run is in, its measure of progress (smaller is better) and the
+        least decrease of it expected within ``stall_window``: on the way (``way``), the
+        reference's clock ``−τ`` [s] must advance; on the approach once the robot follows it
+        (``approach``), however slowly the clock runs there, and after the reference ended
+        (``ended``), the joint-space distance to the goal configuration [rad] must shrink."""
+        assert self._plan is not None
+        settings = self._settings
+        distance = float(np.linalg.norm(q - self._plan.goal))
+        if self._tau >= self._plan.trajectory.duration:
+            return "ended", distance, self._progress_needed
+        if self._approaching:
+            return "approach", distance, settings.stall_floor
+        return "way", -self._tau, settings.stall_rate * settings.stall_window
+
     def _request(self, t: float, q: NDArray[np.float64], moving: Sequence[PlacedObstacle],
                  after: str | None) -> None:
         """Ask for a plan from ``q`` at time ``t`` [s]; ``after``: why (:meth:`_replan_reason`), None at first."""
         assert self._goal is not None
         request = PlanRequest(t, np.array(q, dtype=float), self._goal, self._static, tuple(moving),
                               None if after is None or self._plan is None else self._plan.goal.copy(),
-                              self._seed, after == "held", tuple(self._buffers()), after)
+                              self._seed, after in ("held", "short"), tuple(self._buffers()), after)
         self._seed += self._settings.attempts
         self._pending = self._maker.submit(request)
 
@@ -315,9 +364,9 @@ class GuidedFabric:
                               plan_time_ms=outcome.elapsed_ms if status.plan_time_ms is None else status.plan_time_ms,
                               plan_times_ms=status.plan_times_ms + (outcome.elapsed_ms,), failure=outcome.failure)
         self.failure_message = outcome.message
-        self._best, self._best_time, self._ended_seen = np.inf, t, False
+        self._best, self._best_time, self._stage = np.inf, t, None
         self._next_check = t + (self._settings.blocked_interval if request.after == "blocked" else 0.0)
-        self._lagging_since = None
+        self._lagging_since = self._short_since = None
         plan = outcome.plan
         if plan is None:
             if first:
@@ -328,8 +377,9 @@ class GuidedFabric:
             distance = float(np.linalg.norm(request.q - plan.goal))
             self._progress_needed = max(self._settings.stall_floor, self._settings.stall_progress * distance)
         self._plan = plan
+        self._close = request.after == "short"
         self._approaching = False
-        self._allowances = outcome.allowances
+        self._segment, self._table = outcome.segment, outcome.table
         self._tau = self._join_time(plan, np.asarray(q, dtype=float), request.static + tuple(moving))
         self._last_t = t
         self._write(self._tau, 1.0)

@@ -47,7 +47,7 @@ from ompl import util as ou
 from dynfab.motion.ompl_problem import solve_in_box
 from dynfab.motion.configuration_checker import ConfigurationChecker
 
-__all__ = ["JointPath", "JointPlannerSettings", "NoPathError", "plan_joint_path"]
+__all__ = ["JointPath", "JointPlannerSettings", "NoPathError", "approach_clear", "plan_joint_path"]
 
 PlannerName = Literal["RRTConnect", "RRT", "KPIECE1", "BKPIECE1", "PRM"]
 _PLANNERS: dict[str, type] = {"RRTConnect": og.RRTConnect, "RRT": og.RRT, "KPIECE1": og.KPIECE1,
@@ -233,9 +233,6 @@ def _free_near(q: NDArray[np.float64], validity: _Validity, checker: Configurati
     ``approach`` accepts, if given; module docstring)."""
     if validity.free(q):
         return q
-    obstacle, itself = checker.clearances(q)
-    deep = min(settings.margin, obstacle) - settings.escape_slack
-    deep_self = min(settings.self_margin, itself) - settings.escape_slack
     count = settings.escape_samples
     near, far = settings.escape_radius, max(settings.escape_radius, settings.escape_far_radius)
     rounds = [near * (np.arange(1, count + 1) / count)]
@@ -245,12 +242,31 @@ def _free_near(q: NDArray[np.float64], validity: _Validity, checker: Configurati
         directions = rng.normal(size=(count, q.size))
         directions /= np.linalg.norm(directions, axis=1, keepdims=True)
         for candidate in np.clip(q + radii[:, None] * directions, lower, upper):
-            if (validity.free(candidate) and checker.motion_free(candidate, q, settings.resolution, deep, deep_self)[0]
+            if (validity.free(candidate) and _no_deeper(checker, candidate, q, settings)
                     and (approach is None or approach(candidate, q))):
                 return candidate
     reason = f"{name}_in_collision"
     raise NoPathError(reason, f"the {name} is in collision on the collision spheres and no free configuration "
                               f"lies within {far} rad of it")
+
+
+def approach_clear(checker: ConfigurationChecker, q: NDArray[np.float64], goal: NDArray[np.float64],
+                   settings: JointPlannerSettings = JointPlannerSettings()) -> bool:
+    """Whether the straight segment from ``q`` to a blocked ``goal`` goes no deeper into the
+    checker's obstacles (and into the robot) than ``goal`` does, ``escape_slack`` aside: the
+    test of an escaped endpoint's segment (module docstring), with ``self_margin`` lowered
+    to the endpoints' own self-overlap as a plan between them would."""
+    return _no_deeper(checker, q, goal, _tolerating_endpoint_overlap(checker, q, goal, settings))
+
+
+def _no_deeper(checker: ConfigurationChecker, q: NDArray[np.float64], end: NDArray[np.float64],
+               settings: JointPlannerSettings) -> bool:
+    """Whether the straight segment from ``q`` to ``end`` stays at clearances at least
+    ``min(margin, c(end)) − escape_slack`` (obstacles and self-collision pairs alike)."""
+    obstacle, itself = checker.clearances(end)
+    deep = min(settings.margin, obstacle) - settings.escape_slack
+    deep_self = min(settings.self_margin, itself) - settings.escape_slack
+    return checker.motion_free(q, end, settings.resolution, deep, deep_self)[0]
 
 
 def _planner(name: PlannerName, step: float, information: ob.SpaceInformation) -> ob.Planner:

@@ -7,7 +7,7 @@ when it is made. :func:`make_plan` turns it into a :class:`PlanOutcome`: the goa
 configuration (inverse kinematics for task goals), published on the
 :class:`PendingPlan` as soon as it is known (the fabric can head for it while the path is
 planned), then the path and its timing (:meth:`JointGuidance.plan`), and the static
-obstacles' allowances of a goal closer to them than the planner's margin.
+obstacles' allowances along a grasp's approach.
 
 Two ways to make it:
 
@@ -54,7 +54,9 @@ class PlanRequest:
         seed: the first planning seed [-].
         wide: keep the stall margin first (a replan after a stall on the way).
         buffers: per static obstacle, the clearance its fabric leaves keep [m].
-        after: why the plan is asked for (``held``, ``stalled``, ``blocked``), None at first.
+        after: why the plan is asked for (``held``, ``short``, ``stalled``, ``blocked``), None
+            at first; after ``short`` the straight approach from ``q`` to ``previous_goal`` is
+            tried first (:meth:`~dynfab.motion.guidance.JointGuidance.approach_from`).
     """
 
     t: float
@@ -78,15 +80,18 @@ class PlanOutcome:
         failure: why not (:class:`GuidanceError` reasons), or None.
         message: the error's message, or None.
         elapsed_ms: wall time of making it (IK, path, timing, allowances) [ms].
-        allowances: per static obstacle, how far [m] the fabric's spheres may enter it near
-            the goal (zeros unless the plan has an approach).
+        segment: the approach's configurations (k, n) [rad] (the goal alone without one).
+        table: per configuration of ``segment`` and static obstacle, how far [m] the
+            fabric's spheres may enter it there (k, m) (zeros without an approach;
+            :meth:`~dynfab.motion.guidance.JointGuidance.approach_allowances`).
     """
 
     plan: Plan | None
     failure: str | None
     message: str | None
     elapsed_ms: float
-    allowances: NDArray[np.float64]
+    segment: NDArray[np.float64]
+    table: NDArray[np.float64]
 
 
 class PendingPlan:
@@ -143,17 +148,23 @@ def make_plan(guidance: JointGuidance, request: PlanRequest,
         margin = guidance.settings.path.margin
         moving = tuple(o for o in moving if guidance.obstacle_clearance(request.previous_goal, o) >= margin)
     obstacles = request.static + moving if request.previous_goal is not None else request.static
-    allowances = np.zeros(len(request.static))
+    none = np.zeros((1, len(request.static)))
     try:
         guidance.checker.set_obstacles(obstacles)
-        target = guidance.goal_configuration(request.goal, request.q, request.seed)
-        publish(target)
-        plan = guidance.plan(request.q, JointTarget(tuple(target)), obstacles, seed=request.seed, wide=request.wide)
+        plan = None
+        if request.after == "short" and request.previous_goal is not None:   # held short of an approach
+            plan = guidance.approach_from(request.q, request.previous_goal)
+        if plan is None:
+            target = guidance.goal_configuration(request.goal, request.q, request.seed)
+            publish(target)
+            plan = guidance.plan(request.q, JointTarget(tuple(target)), obstacles, seed=request.seed,
+                                 wide=request.wide)
     except GuidanceError as error:
-        return PlanOutcome(None, error.reason, str(error), _ms_since(began), allowances)
+        return PlanOutcome(None, error.reason, str(error), _ms_since(began), request.q[None], none)
     if plan.approach > 0:
-        allowances = guidance.allowances(plan.goal, request.static, request.buffers)
-    return PlanOutcome(plan, None, None, _ms_since(began), allowances)
+        segment, table = guidance.approach_allowances(plan, request.static, request.buffers)
+        return PlanOutcome(plan, None, None, _ms_since(began), segment, table)
+    return PlanOutcome(plan, None, None, _ms_since(began), plan.goal[None], none)
 
 
 def _ms_since(began: float) -> float:

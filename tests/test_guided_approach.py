@@ -1,0 +1,164 @@
+"""A grasp's approach under guidance: started from where the robot is when the obstacle
+leaves hold it short of the planned one, its allowances over the whole segment, and
+progress on it judged on the distance to the goal rather than on the reference's clock."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from dynfab.geometry.shapes import Box, Placement
+from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
+from dynfab.motion.guidance import JointGuidance, JointTarget
+from dynfab.motion.joint_planning import JointPlannerSettings, approach_clear, polyline_samples
+from dynfab.motion.phased_trajectory import PhasedTrajectory
+from dynfab.robots import load_robot
+from dynfab.scenario.guided_controller import make_scenario_controller
+from dynfab.scenario.references import scenario_references
+from dynfab.scenario.schema import scenario_from_dict, validate_for_robot
+
+WALL = PlacedObstacle(Box((0.6, 0.04, 0.7)), Placement((0.45, 0.0, 0.35)))
+START = np.array([-1.3, 0.3, 0.0, -1.8, 0.0, 2.1, 0.8])
+DT = 0.01
+
+
+@pytest.fixture(scope="module")
+def panda():
+    return load_robot("panda")
+
+
+@pytest.fixture(scope="module")
+def grasp(panda) -> np.ndarray:
+    """START turned about joint 1 toward the wall until its spheres are 4 mm from it (the
+    planner's margin is 10 mm): a goal that is escaped and approached."""
+    checker = ConfigurationChecker(panda, [WALL])
+    goal = START.copy()
+    for q1 in np.linspace(-1.3, 0.0, 1301):
+        goal[0] = q1
+        if checker.clearances(goal)[0] < 0.004:
+            return goal
+    raise AssertionError("the wall is never that close")
+
+
+def _turned(q: np.ndarray, by: float) -> np.ndarray:
+    turned = q.copy()
+    turned[0] += by
+    return turned
+
+
+def test_an_approach_is_clear_from_the_side_of_the_goal_and_not_through_the_wall(panda, grasp) -> None:
+    checker = ConfigurationChecker(panda, [WALL])
+    assert approach_clear(checker, _turned(grasp, -0.1), grasp)
+    beyond = _turned(grasp, 1.8)   # the arm on the wall's other side
+    assert checker.clearances(beyond)[0] > 0.0 and not approach_clear(checker, beyond, grasp)
+    # the test is "no deeper than the goal": a segment to a goal deeper in the wall may reach that deep
+    deeper = _turned(grasp, 0.02)
+    assert checker.clearances(deeper)[0] < checker.clearances(grasp)[0]
+    assert approach_clear(checker, _turned(grasp, -0.1), deeper, JointPlannerSettings())
+
+
+def test_approach_from_times_the_straight_segment_from_the_robot_as_an_approach(panda, grasp) -> None:
+    guidance = JointGuidance(panda)
+    guidance.plan(START, JointTarget(tuple(grasp)), [WALL])   # sets the checker's obstacles
+    here = _turned(grasp, -0.12)
+    plan = guidance.approach_from(here, grasp)
+    assert plan is not None and isinstance(plan.trajectory, PhasedTrajectory) and len(plan.trajectory.phases) == 1
+    assert plan.approach_start == 0.0 and plan.approach == pytest.approx(0.12, abs=1e-9)
+    np.testing.assert_allclose(plan.trajectory.evaluate(0.0).position, here, atol=1e-9)
+    np.testing.assert_allclose(plan.trajectory.end, grasp, atol=1e-9)
+    velocity = plan.trajectory.sample(np.linspace(0.0, plan.trajectory.duration, 501))[1]
+    limit = guidance.settings.approach_speed * panda.limits.velocity
+    assert (np.abs(velocity) <= limit + 1e-9).all()
+    assert guidance.approach_from(_turned(grasp, 1.8), grasp) is None   # through the wall
+    assert guidance.approach_from(grasp, grasp) is None   # already there
+
+
+def test_approach_allowances_are_given_along_the_segment(panda, grasp) -> None:
+    guidance = JointGuidance(panda)
+    plan = guidance.plan(START, JointTarget(tuple(grasp)), [WALL])
+    assert plan.approach > 0.0
+    # a block beside the middle of the approach, where the goal is farther from it
+    middle = 0.5 * (plan.trajectory.waypoints[-2] + grasp)
+    hand = np.asarray(panda.kinematics.position(middle, "panda_hand")).ravel()
+    block = PlacedObstacle(Box((0.02, 0.02, 0.02)), Placement(tuple(hand + np.array([0.0, 0.0, 0.12]))))
+    buffers = [0.005, 0.005]
+    segment, table = guidance.approach_allowances(plan, [WALL, block], buffers)
+    np.testing.assert_allclose(segment[0], plan.trajectory.waypoints[-2], atol=1e-12)
+    np.testing.assert_allclose(segment[-1], grasp, atol=1e-12)
+    assert np.linalg.norm(np.diff(segment, axis=0), axis=1).max() <= guidance.settings.path.resolution + 1e-12
+    np.testing.assert_allclose(table, [guidance.allowances(q, [WALL, block], buffers) for q in segment], atol=1e-12)
+    assert table[:, 1].max() > table[-1, 1] and table[-1, 0] == table[:, 0].max()   # the block: mid-way; the wall: at the goal
+
+
+def _guided(panda, goal: np.ndarray):
+    data = {"robot": "panda", "planner": "dynamic-fabric", "dt": DT, "duration": 5.0,
+            "initial_state": {"q": START.tolist()}, "goal": [{"type": "joint", "position": goal.tolist()}],
+            "obstacles": [{"type": "box", "position": [0.45, 0.0, 0.35], "size": [0.6, 0.04, 0.7]}]}
+    scenario = validate_for_robot(scenario_from_dict(data), panda)
+    return make_scenario_controller(scenario, panda, scenario_references(scenario, panda), plan_latency=0.0).guided
+
+
+def _follow_to_the_approach(guided) -> float:
+    """Update with the robot exactly on the reference until its clock reaches the approach; the time."""
+    plan = guided.plan
+    t = 0.0
+    while guided._tau < plan.approach_start:   # the clock of a perfectly tracking robot
+        t += DT
+        guided.update(t, plan.trajectory.evaluate(guided._tau).position.copy())
+    return t
+
+
+def _held_short(guided, grasp: np.ndarray) -> tuple[float, np.ndarray]:
+    """Follow the plan to its approach, then hold the robot 0.06 rad short of the approach's
+    start until guidance replans; the time and where the robot is held."""
+    settings = guided.guidance.settings
+    guided.set_goal(JointTarget(tuple(grasp)), 0.0, START)
+    first = guided.plan
+    t = _follow_to_the_approach(guided)
+    held = _turned(first.trajectory.waypoints[-2], -0.06)   # short of the approach's start, on the goal's side
+    assert np.linalg.norm(held - first.trajectory.waypoints[-2]) > settings.approach_lag_stop
+    began = t
+    while guided.plan is first:
+        t += DT
+        guided.update(t, held)
+        assert t < began + settings.approach_hold_time + 0.1, "never replanned"
+    assert t == pytest.approx(began + settings.approach_hold_time, abs=3 * DT)
+    return t, held
+
+
+def test_a_robot_held_short_of_the_approach_approaches_from_where_it_is(panda, grasp) -> None:
+    guided = _guided(panda, grasp)
+    t, held = _held_short(guided, grasp)
+    assert guided.status.replans_stalled == 1 and guided.status.plans == 2
+    plan = guided.plan
+    assert plan.approach_start == 0.0 and plan.approach == pytest.approx(np.linalg.norm(grasp - held))
+    np.testing.assert_allclose(plan.trajectory.evaluate(0.0).position, held, atol=1e-9)
+    guided.update(t + DT, held)
+    assert guided.approaching
+    segment, table = guided.guidance.approach_allowances(plan, guided._static, guided._buffers())
+    np.testing.assert_allclose(guided.allowances(), table.max(axis=0))   # at the start: the whole segment's
+    guided.update(t + 2 * DT, grasp)
+    np.testing.assert_allclose(guided.allowances(), table[-2:].max(axis=0))   # at the goal: what is left of it
+    assert guided.allowances()[0] > 0.0
+
+
+def test_on_the_approach_a_robot_closing_in_slowly_does_not_stall_and_one_that_stops_does(panda, grasp) -> None:
+    guided = _guided(panda, grasp)
+    settings = guided.guidance.settings
+    t, q = _held_short(guided, grasp)   # now on an approach from q, about 0.12 rad long
+    direction = (grasp - q) / np.linalg.norm(grasp - q)
+    speed = 1.5 * settings.stall_floor / settings.stall_window   # slower than the reference: its clock waits
+    for _ in range(int(2.5 * settings.stall_window / DT)):
+        t += DT
+        q = q + speed * DT * direction
+        guided.update(t, q)
+    assert guided.approaching and guided._tau < guided.plan.trajectory.duration
+    assert guided.status.replans_stalled == 1   # the clock waited, the robot kept closing in
+    stopped = t
+    while guided.status.replans_stalled == 1:
+        t += DT
+        guided.update(t, q)
+        assert t < stopped + 2 * settings.stall_window, "never stalled"
+    # within stall_window of the last stall_floor of progress, which came at most
+    # stall_floor / speed before the robot stopped
+    assert stopped + settings.stall_window - settings.stall_floor / speed - DT <= t <= stopped + settings.stall_window + DT
