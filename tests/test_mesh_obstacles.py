@@ -31,7 +31,7 @@ def _scenario(obstacles: list[dict], **extra: object) -> dict:
 
 @pytest.fixture(scope="module")
 def files(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A shelf (two boards and a back, an open surface as a whole), a scene URDF naming it and
+    """A shelf (two boards and a back, each closed), a scene URDF naming it and
     a box, a URDF naming a missing mesh, and files that are not meshes."""
     folder = tmp_path_factory.mktemp("meshes")
     boards = [trimesh.creation.box(extents=(0.4, 0.8, 0.02)).apply_translation((0, 0, z)) for z in (0.0, 0.35)]
@@ -58,7 +58,7 @@ def test_a_urdf_scene_becomes_its_collision_geometry_placed(files: Path) -> None
     shelf, table = scenario.obstacles
     assert shelf.type == "mesh" and shelf.position == pytest.approx((0.85, 0.0, 0.25))
     assert table.type == "box" and table.size == (1.0, 1.0, 0.05) and table.position == pytest.approx((0.75, 0.0, -0.05))
-    assert not shelf.mesh.watertight  # an open surface is a valid obstacle
+    assert shelf.mesh.watertight  # three closed boards: solid once the STL's repeated vertices are merged
 
 
 @pytest.mark.parametrize(("entry", "field", "problem"), [

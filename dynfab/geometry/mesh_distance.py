@@ -106,10 +106,11 @@ def nearest_on_mesh(mesh: Mesh, points: ArrayLike, max_distance: float = np.inf,
     normals[rows] = offsets / np.where(on_surface, 1.0, lengths)[:, None]
     if on_surface.any():  # the point lies on a triangle: that triangle's normal
         normals[rows[on_surface]] = _face_normals(mesh, x[rows[on_surface]])
-    if signed_within > 0.0 and mesh.watertight:
+    solid = mesh.solid if signed_within > 0.0 else None
+    if solid is not None:
         near = rows[distances[rows] < signed_within]
         if near.size:
-            inside = near[mesh.triangles.contains(x[near])]
+            inside = near[solid.contains(x[near])]
             distances[inside] *= -1.0
             normals[inside] *= -1.0
     return NearestPoints(nearest, normals, distances, found)

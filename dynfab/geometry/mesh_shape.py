@@ -72,10 +72,22 @@ class Mesh:
         return trimesh.Trimesh(self.vertices, self.faces, process=False)
 
     @cached_property
+    def solid(self) -> trimesh.Trimesh | None:
+        """The mesh with its coincident vertices merged if that closes it (every edge
+        shared by exactly two faces), for inside tests; None for an open surface. An STL
+        file repeats every vertex in each face that has it, so :attr:`triangles` of a
+        closed STL mesh is open: it must be merged to see its inside."""
+        import trimesh
+
+        merged = trimesh.Trimesh(self.vertices, self.faces, process=False)
+        merged.merge_vertices()
+        return merged if merged.is_watertight else None
+
+    @property
     def watertight(self) -> bool:
-        """Whether the mesh is closed (every edge shared by exactly two faces): then it has
-        an inside."""
-        return bool(self.triangles.is_watertight)
+        """Whether the mesh is closed once its coincident vertices are merged (:attr:`solid`):
+        then it has an inside."""
+        return self.solid is not None
 
     @cached_property
     def bounding_radius(self) -> float:
