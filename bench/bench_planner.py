@@ -4,7 +4,7 @@ the same run when it is installed in ``.venv-reference`` (``bash bench/setup_ref
 1. issue 21 (bench/bench_same_model.py): the planner ``dynfab run`` builds for an
    experiment-1 scene, against the reference on the SAME robot model, both ways: the
    reference's model (5 spheres at link origins, 2 pairs) given to ours, and our built-in
-   model (75 spheres, 123 pairs) given to the reference;
+   model (75 spheres, 268 pairs) given to the reference;
 2. the Panda static fabric with 1, 5 and 10 sphere obstacles, self-collision and joint
    limits, ours (default backend) and the reference's, both on the reference's model;
 3. ours only: dynamic fabrics, a scene with boxes and a pose goal, the two sphere models
@@ -119,7 +119,7 @@ def main(argv: list[str] | None = None) -> int:
         print()
         _print_sweep(args.spheres, args.steps)
         print()
-    print("ours only from here on, the built-in Panda (75 spheres, 123 pairs), default backend, cache "
+    print("ours only from here on, the built-in Panda (75 spheres, 268 pairs), default backend, cache "
           f"{os.environ.get('DYNFAB_CACHE_DIR', '~/.cache/dynfab')} (build = load when it holds the library).")
     print("dynamic fabrics (moving goal and obstacles):")
     for n in args.spheres:
@@ -202,7 +202,7 @@ def _print_speed(speed: dict) -> None:
     """The issue-12 report: backends side by side, with the targets (ours only: the
     comparison with the reference on the same robot model is the first section)."""
     c_us = speed["c"]["step_us_median"]
-    print(f"backends (issue 12), ours only, the built-in Panda (75 spheres, 123 pairs), 5 spheres, self-collision, "
+    print(f"backends (issue 12), ours only, the built-in Panda (75 spheres, 268 pairs), 5 spheres, self-collision, "
           f"joint limits, static unless said; {speed['cpus']} CPUs, load average {speed['load_before'][0]:.2f} "
           f"before, {speed['load_after'][0]:.2f} after:")
     rows = [("VM step from Python", speed["vm"]["step_us_median"], None),

@@ -20,7 +20,7 @@ Two robot models, each given to both sides:
   panda_hand-panda_link2 and panda_hand-panda_link3. Ours: the built-in Panda's
   kinematics with exactly these spheres (a sphere at panda_link2's origin for the pair;
   that point does not move, so neither side gives it obstacle leaves);
-- ``builtin``: our built-in Panda (75 spheres with centre offsets in link frames, 123
+- ``builtin``: our built-in Panda (75 spheres with centre offsets in link frames, 268
   pairs, hand open). The reference takes it through a rewritten URDF, one fixed link per
   sphere (``reference_fabrics.py --model``).
 """
@@ -205,7 +205,7 @@ def summary(results: dict) -> list[str]:
              "medians of per-process medians (fresh processes, alternating), [min-max of 5-block medians]"]
     names = {"reference": "the reference's model: 5 spheres of 0.08 m at the origins of panda_link3/4/5/7/hand, "
                           "pairs hand-link2, hand-link3",
-             "builtin": "the built-in model: 75 spheres (centres offset in link frames), 123 pairs, hand open"}
+             "builtin": "the built-in model: 75 spheres (centres offset in link frames), 268 pairs, hand open"}
     settings = {"default": "`dynfab run` default (guided: dynamic fabric, joint-space reference goal)",
                 "paper": "`guidance: false`, the paper's setup (static fabric, position goal)"}
     for model, data in results["models"].items():
