@@ -16,11 +16,9 @@ the goal alone, its obstacle, limit and self-collision leaves on. Every tick
 pullback and energization of the fabric (paper section IV) track it, while the fabric's
 leaves keep acting on everything the user writes into its slots.
 
-A plan arrives after the robot has moved: its clock starts at the reference's point
-nearest the robot (sampled every :data:`JOIN_SAMPLE_PERIOD`, before any approach) whose
-straight segment from the robot touches no obstacle (of the :data:`JOIN_CANDIDATES`
-nearest; the nearest if none), so the reference does not jump back to where the plan
-began; the lag rule below slows its clock until the robot is on it.
+A plan arrives after the robot has moved: its clock starts where the robot joins it
+(:func:`~dynfab.motion.plan_joining.join_time`), so the reference does not jump back to
+where the plan began; the lag rule below slows its clock until the robot is on it.
 
 The reference runs on its own clock ``τ``, which slows while the robot lags behind it
 (a moving obstacle in the way; during a grasp's approach, below, ``approach_lag_slow`` and
@@ -86,7 +84,7 @@ brakes and keeps avoiding), and :attr:`GuidedFabric.status` says why.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -95,45 +93,18 @@ from dynfab.fabric.leaves.goal import GoalAttractor
 from dynfab.fabric.planner import FabricPlanner, GoalConfig
 from dynfab.geometry.shapes import Sphere
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
-from dynfab.motion.guidance import GoalTargets, GuidanceSettings, JointGuidance, Plan
+from dynfab.motion.guidance import GoalTargets, GuidanceSettings, JointGuidance, Plan, allowances_ahead
+from dynfab.motion.guidance_status import GuidanceStatus
+from dynfab.motion.plan_joining import join_time
 from dynfab.motion.plan_requests import PendingPlan, PlanRequest, plan_maker
 from dynfab.motion.straight_motion import StraightMotion
 
 __all__ = ["GuidanceStatus", "GuidedFabric", "guided_goal_config"]
 
-#: how finely a plan arriving late is searched for the point where the robot joins it [s]
-JOIN_SAMPLE_PERIOD = 0.02
-#: nearest points of a plan whose straight segment from the robot is checked when it joins [-]
-JOIN_CANDIDATES = 8
-
 
 def guided_goal_config(attractor: GoalAttractor = GoalAttractor()) -> GoalConfig:
     """The joint-space goal a guided fabric's planner must have first (every joint)."""
     return GoalConfig(link=None, attractor=attractor)
-
-
-@dataclass(frozen=True)
-class GuidanceStatus:
-    """What guidance did so far.
-
-    Attributes:
-        guided: a plan was made and is being followed.
-        plans: plans made (the first included) [-].
-        plan_time_ms: wall time of the first plan [ms]; None before it.
-        plan_times_ms: wall time of every plan [ms].
-        replans_blocked: replans because the reference ahead was blocked [-].
-        replans_stalled: replans because progress stalled [-].
-        failure: why the last plan failed (:class:`~dynfab.motion.guidance.GuidanceError`
-            reasons); None if it did not.
-    """
-
-    guided: bool = False
-    plans: int = 0
-    plan_time_ms: float | None = None
-    plan_times_ms: tuple[float, ...] = ()
-    replans_blocked: int = 0
-    replans_stalled: int = 0
-    failure: str | None = None
 
 
 class GuidedFabric:
@@ -216,13 +187,7 @@ class GuidedFabric:
         sample) to the goal, else zeros (module docstring)."""
         if not self._approaching:
             return np.zeros(len(self._static))
-        start, end = self._segment[0], self._segment[-1]
-        direction = end - start
-        reached = float(np.clip(np.dot(self._q - start, direction) / max(float(np.dot(direction, direction)), 1e-12),
-                                0.0, 1.0))
-        count = len(self._segment)
-        first = max(0, int(np.floor(reached * (count - 1))) - 1)
-        return self._table[first:].max(axis=0)
+        return allowances_ahead(self._segment, self._table, self._q)
 
     def set_goal(self, goal: GoalTargets, t: float, q: NDArray[np.float64],
                  moving: Sequence[PlacedObstacle] = ()) -> None:
@@ -351,7 +316,7 @@ class GuidedFabric:
 
     def _receive(self, t: float, q: NDArray[np.float64], moving: Sequence[PlacedObstacle]) -> bool:
         """Apply the plan asked for if it has arrived at time ``t`` [s], joined where the
-        robot is now (``q``: :meth:`_join_time`); whether one arrived (made or failed)."""
+        robot is now (``q``: :func:`~dynfab.motion.plan_joining.join_time`); whether one arrived (made or failed)."""
         pending = self._pending
         if pending is None or not pending.ready(t):
             return False
@@ -380,27 +345,11 @@ class GuidedFabric:
         self._close = request.after == "short"
         self._approaching = False
         self._segment, self._table = outcome.segment, outcome.table
-        self._tau = self._join_time(plan, np.asarray(q, dtype=float), request.static + tuple(moving))
+        self._joining.set_obstacles(request.static + tuple(moving))
+        self._tau = join_time(plan, np.asarray(q, dtype=float), self._joining, self._settings.path.resolution)
         self._last_t = t
         self._write(self._tau, 1.0)
         return True
-
-    def _join_time(self, plan: Plan, q: NDArray[np.float64], obstacles: tuple[PlacedObstacle, ...]) -> float:
-        """Where on ``plan``'s clock [s] the robot at ``q`` joins it (it moved while the plan
-        was made): of the reference's points before any approach, sampled every
-        :data:`JOIN_SAMPLE_PERIOD`, the nearest to ``q`` whose straight segment from ``q``
-        touches none of ``obstacles`` (the nearest of all if none is free; the fabric's
-        leaves then keep the robot clear and the clock waits for it)."""
-        end = min(plan.approach_start, plan.trajectory.duration)
-        times = np.linspace(0.0, end, max(2, int(np.ceil(end / JOIN_SAMPLE_PERIOD)) + 1))
-        positions = plan.trajectory.sample(times)[0]
-        order = np.argsort(np.linalg.norm(positions - q, axis=1), kind="stable")
-        self._joining.set_obstacles(obstacles)
-        resolution = self._settings.path.resolution
-        for k in order[:JOIN_CANDIDATES]:
-            if self._joining.motion_free(q, positions[k], resolution, 0.0, -np.inf)[0]:
-                return float(times[k])
-        return float(times[order[0]])
 
     def _head_for_goal(self, t: float, q: NDArray[np.float64]) -> None:
         """While the first plan is made: once the goal configuration is known, the straight
@@ -419,20 +368,14 @@ class GuidedFabric:
             self._interim = (t, motion)
         began, motion = self._interim
         point = motion.evaluate(t - began)
-        params = self.fabric.parameters
-        params.goal_position[0][:] = point.position
-        params.goal_velocity[0][:] = point.velocity
-        params.goal_acceleration[0][:] = point.acceleration
+        self._set_reference(point.position, point.velocity, point.acceleration)
 
     def _write(self, tau: float, rate: float) -> None:
         """Write the reference at its time ``tau`` [s], its clock running at ``rate`` [-],
         into the fabric's first goal: ``q_r(τ), ρ q̇_r(τ), ρ² q̈_r(τ)``."""
         assert self._plan is not None
         point = self._plan.trajectory.evaluate(tau)
-        params = self.fabric.parameters
-        params.goal_position[0][:] = point.position
-        params.goal_velocity[0][:] = rate * point.velocity
-        params.goal_acceleration[0][:] = rate**2 * point.acceleration
+        self._set_reference(point.position, rate * point.velocity, rate**2 * point.acceleration)
 
     def _buffers(self) -> list[float]:
         """Per static obstacle, the clearance its fabric leaves keep (their barrier's offset) [m]."""
@@ -443,7 +386,12 @@ class GuidedFabric:
 
     def _hold(self, q: NDArray[np.float64]) -> None:
         """Write the reference ``q`` at rest into the fabric's first goal."""
+        self._set_reference(q, 0.0, 0.0)
+
+    def _set_reference(self, position: NDArray[np.float64], velocity: NDArray[np.float64] | float,
+                       acceleration: NDArray[np.float64] | float) -> None:
+        """Write ``q_r, q̇_r, q̈_r`` [rad, rad/s, rad/s²] into the fabric's first goal."""
         params = self.fabric.parameters
-        params.goal_position[0][:] = q
-        params.goal_velocity[0][:] = 0.0
-        params.goal_acceleration[0][:] = 0.0
+        params.goal_position[0][:] = position
+        params.goal_velocity[0][:] = velocity
+        params.goal_acceleration[0][:] = acceleration

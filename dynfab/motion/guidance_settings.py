@@ -1,0 +1,117 @@
+"""The settings of global joint-space guidance (:mod:`dynfab.motion.guidance`): how it plans,
+times its reference and how the guided fabric follows it (:mod:`dynfab.motion.guided_fabric`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from dynfab.motion.inverse_kinematics import IkSettings
+from dynfab.motion.joint_planning import JointPlannerSettings
+from dynfab.motion.joint_trajectory import TimingSettings
+
+__all__ = ["GuidanceSettings"]
+
+
+@dataclass(frozen=True)
+class GuidanceSettings:
+    """How guidance plans and how its reference is followed.
+
+    Attributes:
+        path: the joint-space planner (OMPL planner, time limit, resolution, margins).
+        ik: inverse kinematics of task goals.
+        ik_retry: the second inverse kinematics search when ``ik`` finds no solution
+            clear of obstacles by the planner's margin: with these settings (more seeds:
+            a 6-joint arm has few discrete solutions, most blocked near a grasp) and
+            margin 0, the spheres merely clear (a grasp pose closer than the margin; the
+            planner then escapes it and approaches it as a blocked joint goal); for a robot
+            with collision meshes a solution the spheres refuse is also kept if it is free
+            on the meshes by ``mesh_margin`` (:mod:`dynfab.motion.mesh_goal_check`).
+        mesh_margin: clearance [m] a goal solution checked on the robot's meshes keeps
+            from the exact obstacles.
+        timing: how the path is timed.
+        speed: fraction of the velocity limits the reference uses [-].
+        acceleration: fraction of the acceleration limits the reference uses [-]: the
+            fabric tracks it with a lag that grows with it, and a lag as it brakes at a
+            grasp's approach overshoots into the object.
+        attempts: plans tried per request, each with the next seed and twice the previous
+            one's time limit (1, 2, 4 s by default) [-].
+        replans: plans at most in one run after the first [-]. 10: with 4 (the value
+            before), all 8 failures of training moving-sphere problems 10-16 had used them
+            all.
+        blocked_interval: least time between a replan for a blocked reference and the
+            next check of what moves against the new one [s]: checking at once replanned
+            4 times in 0.13 s on training moving-sphere bookshelf_tall/0014 as the sphere
+            kept moving onto each new reference (the fabric avoids it meanwhile).
+        lag_slow: tracking error ``‖q − q_r‖`` at which the reference clock starts to slow [rad].
+        lag_stop: tracking error at which it stops (the reference waits for the robot) [rad].
+        check_period: how often the reference ahead is checked against what moves [s].
+        check_horizon: how far ahead it is checked [s].
+        stall_window: time without progress after which the run has stalled [s].
+        stall_rate: least mean rate of the reference's clock over ``stall_window`` while it
+            runs [-].
+        stall_progress: progress expected within ``stall_window``, as a fraction of the
+            goal's initial joint-space distance (at least ``stall_floor``) [-].
+        stall_floor: smallest progress expected within ``stall_window`` [rad].
+        stall_lag_time: time the robot may stay more than ``lag_slow`` behind the running
+            reference (outside an approach) before the run counts as stalled [s]: held by
+            the obstacle leaves in a tight passage, the reference's clock still creeps for
+            seconds before ``stall_rate`` notices (chosen on training problems 10-16).
+        stall_margin: planning margin [m] a replan after a stall on the way tries first (one attempt
+            of ``stall_margin_time``), before ``path.margin``: a path that keeps more
+            clearance where the stalled one went through a tight passage (chosen on
+            training problems 10-16).
+        stall_margin_time: time limit of that attempt [s].
+        goal_clearance: clearance [m] the fabric's obstacle leaves should still see at a
+            goal closer to an obstacle than the planner's margin (a grasp: the spheres,
+            which bulge out of the meshes, overlap what the meshes clear); the obstacle
+            gets that much allowance near the goal (:meth:`JointGuidance.allowances`).
+        approach_speed: fraction of the velocity and acceleration limits the approach
+            (that last segment, a phase of its own after a stop) uses [-].
+        approach_lag_slow, approach_lag_stop: ``lag_slow`` and ``lag_stop`` during the
+            approach: it is followed closely, so that the robot does not cut into what
+            the goal is close to [rad].
+        approach_hold_time: time the robot may stay more than ``approach_lag_stop`` from
+            the reference waiting at the approach's start before the approach starts
+            from where the robot is (:meth:`JointGuidance.approach_from`) [s]: the
+            obstacle leaves can hold it 0.05-0.15 rad short of a start the planner put
+            at its 1 cm margin (problems 21-28, as posed: 7 of 9 failures stalled so).
+        close_lag_slow, close_lag_stop: ``lag_slow`` and ``lag_stop`` on the way of a plan
+            made after the robot was held short of an approach, when the straight
+            approach from where it was is blocked: it had cut a corner on the way there,
+            so the new way is followed more closely [rad] (chosen on problems 21-28, as
+            posed: with the approach's 0.01 and 0.03 the way crawled and stalled).
+        close_time: the way's last this many seconds before a grasp's approach are
+            followed as closely (``close_lag_slow``, ``close_lag_stop``): where the robot
+            enters the approach's start it must not cut the corner [s] (chosen on problems
+            21-28, as posed: bookshelf_small/0021, 0022 and 0025).
+    """
+
+    path: JointPlannerSettings = field(default_factory=JointPlannerSettings)
+    ik: IkSettings = field(default_factory=IkSettings)
+    ik_retry: IkSettings = field(default_factory=lambda: IkSettings(seeds=240, time_limit=2.0))
+    mesh_margin: float = 0.003
+    timing: TimingSettings = field(default_factory=TimingSettings)
+    speed: float = 0.5
+    acceleration: float = 0.25
+    attempts: int = 3
+    replans: int = 10
+    blocked_interval: float = 0.5
+    lag_slow: float = 0.1
+    lag_stop: float = 0.3
+    check_period: float = 0.1
+    check_horizon: float = 1.0
+    stall_window: float = 2.0
+    stall_rate: float = 0.25
+    stall_progress: float = 0.05
+    stall_floor: float = 0.02
+    stall_lag_time: float = 1.0
+    stall_margin: float = 0.03
+    stall_margin_time: float = 0.5
+    goal_clearance: float = 0.015
+    approach_speed: float = 0.1
+    approach_lag_slow: float = 0.01
+    approach_lag_stop: float = 0.03
+    approach_hold_time: float = 1.0
+    close_lag_slow: float = 0.03
+    close_lag_stop: float = 0.1
+    close_time: float = 1.0
