@@ -36,15 +36,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dynfab.benchmarks.mbm.franka import franka
-from dynfab.benchmarks.mbm.moveit import ProblemError
-from dynfab.benchmarks.mbm.problems import PROBLEM_TYPES, load_problems
-from dynfab.benchmarks.mbm.variants import prepare_case
 from dynfab.fabric.backends import series_backend
 from dynfab.scenario.guided_controller import GuidedController, make_scenario_controller
 from dynfab.scenario.references import scenario_references
 from dynfab.scenario.runner import robot_for
 from dynfab.scenario.schema import Scenario, scenario_from_dict, validate_for_robot
+
+from bench_guidance import valid_cases  # noqa: E402  (bench/ is the script's folder)
 
 #: longest a loop waits for a plan [s]
 PATIENCE = 15.0
@@ -62,22 +60,10 @@ class LoopTimes:
 
 
 def load_scenarios(per_type: int) -> list[tuple[str, Scenario]]:
-    """The first ``per_type`` valid object-removed cases of each type, as scenarios."""
-    robot = franka()
-    scenarios = []
-    for problem_type in PROBLEM_TYPES:
-        kept = 0
-        for problem in load_problems([problem_type]):
-            if kept == per_type:
-                break
-            try:
-                case = prepare_case(problem, "object-removed", robot)
-            except ProblemError:
-                continue
-            if case.invalid is None:   # the benchmark's backend: no compile per scene
-                scenarios.append((problem.name, scenario_from_dict({"backend": series_backend(), **case.mapping})))
-                kept += 1
-    return scenarios
+    """The first ``per_type`` valid object-removed cases of each type, as scenarios (on the
+    benchmark's backend: no compile per scene)."""
+    cases, _ = valid_cases(per_type, "object-removed")
+    return [(name, scenario_from_dict({"backend": series_backend(), **case.mapping})) for name, case in cases]
 
 
 def control_loop(scenario: Scenario, plan_latency: float | None, after_ticks: int = 20) -> LoopTimes:

@@ -49,7 +49,7 @@ import numpy as np
 from dynfab.benchmarks.mbm.franka import franka
 from dynfab.benchmarks.mbm.moveit import ProblemError
 from dynfab.benchmarks.mbm.problems import PROBLEM_TYPES, load_problems
-from dynfab.benchmarks.mbm.variants import prepare_case
+from dynfab.benchmarks.mbm.variants import Case, prepare_case
 from dynfab.geometry.shapes import Box, Cylinder, Placement
 from dynfab.motion import configuration_checker
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
@@ -71,11 +71,11 @@ class BenchProblem:
     obstacles: tuple[PlacedObstacle, ...]
 
 
-def load_cases(per_type: int, variant: str) -> tuple[list[BenchProblem], list[str]]:
-    """The first ``per_type`` valid cases of each type in ``variant``, and the names of the
-    invalid ones skipped on the way."""
+def valid_cases(per_type: int, variant: str) -> tuple[list[tuple[str, Case]], list[str]]:
+    """The first ``per_type`` valid cases of each type in ``variant`` (name, case), and the
+    names of the invalid ones skipped on the way."""
     robot = franka()
-    problems, skipped = [], []
+    cases, skipped = [], []
     for problem_type in PROBLEM_TYPES:
         kept = 0
         for problem in load_problems([problem_type]):
@@ -89,11 +89,17 @@ def load_cases(per_type: int, variant: str) -> tuple[list[BenchProblem], list[st
             if case.invalid is not None:
                 skipped.append(problem.name)
                 continue
-            mapping = case.mapping
-            problems.append(BenchProblem(problem.name, np.array(mapping["initial_state"]["q"], dtype=float),
-                                         np.array(mapping["goal"][0]["position"], dtype=float),
-                                         tuple(_placed(o) for o in mapping["obstacles"])))
+            cases.append((problem.name, case))
             kept += 1
+    return cases, skipped
+
+
+def load_cases(per_type: int, variant: str) -> tuple[list[BenchProblem], list[str]]:
+    """:func:`valid_cases` as the planner's problems."""
+    cases, skipped = valid_cases(per_type, variant)
+    problems = [BenchProblem(name, np.array(case.mapping["initial_state"]["q"], dtype=float),
+                             np.array(case.mapping["goal"][0]["position"], dtype=float),
+                             tuple(_placed(o) for o in case.mapping["obstacles"])) for name, case in cases]
     return problems, skipped
 
 
