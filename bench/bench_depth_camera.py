@@ -12,8 +12,10 @@ the robot, bare (only the spheres, the ball and the robot return depth) and on a
 ball are rendered first (30 Hz); per resolution, medians over them of
 
 - render: MuJoCo's offscreen depth render (``update_scene`` + ``render``, far plane → inf);
-- frame: noise, robot filter, back-projection and the arrivals (pixels that came nearer
-  since the previous frame) (:meth:`DepthCamera.frame`), render excluded;
+- noise: the simulated sensor's Gaussian noise (:meth:`DepthCamera.sensed`), what a real
+  sensor's image comes with: not part of the spans below, which start from the noisy image;
+- frame: robot filter, back-projection and the arrivals (pixels that came nearer since the
+  previous frame) (:meth:`DepthCamera.frame`), render and noise excluded;
 - to the planner: the frame's points into the point-cloud feed the planner reads
   (``PointCloudFeed.update_points``: 1 cm voxels, and its KD-tree, built at the first query),
   after the frame;
@@ -159,9 +161,11 @@ def camera_rows(floor: bool, frames: int) -> list[dict]:
         data.qpos[scene.joint_qpos] = q
         mujoco.mj_forward(scene.model, data)
         renderer = MujocoDepthRenderer(scene.model, spec)
-        depths = ball_depths(renderer, scene, data, frames)
+        clean = ball_depths(renderer, scene, data, frames)
         render = timed_ms(lambda: renderer.render(data), frames)
         renderer.close()
+        sensor, depths = DepthCamera(spec, robot), []
+        noise_ms = timed_frames(lambda k: depths.append(sensor.sensed(clean[k])), frames)
         camera = DepthCamera(spec, robot)
         frame_ms = timed_frames(lambda k: camera.frame(times[k], depths[k], q), frames)
         probe = DepthCamera(spec, robot)
@@ -175,7 +179,7 @@ def camera_rows(floor: bool, frames: int) -> list[dict]:
             "resolution": f"{width}x{height}", "floor": floor, "target_ms": target,
             "returns": int(np.isfinite(depths[-1]).sum()), "points": len(seen[-1].points),
             "robot_pixels": seen[-1].robot_points, "arrived": int(statistics.median(f.arrived.sum() for f in seen)),
-            "render_ms": render, "frame_ms": frame_ms,
+            "render_ms": render, "noise_ms": noise_ms, "frame_ms": frame_ms,
             "to_planner_ms": timed_frames(lambda k: (feed.update_points(seen[k].points, None), feed.cloud.tree),
                                           frames),
             "kept": len(feed.cloud.points),
@@ -215,18 +219,18 @@ def main() -> None:
           f"at 0.5 m/s); {result['cores']} cores, load average {load_before[0]:.2f} before, {load_after[0]:.2f} after; "
           f"MUJOCO_GL={result['mujoco_gl']}; medians of {args.frames} frames")
     print(f"primitives' update (4 spheres + goal written, FabricController.retarget): {1e3 * primitives:.1f} µs")
-    print(f"{'image':>8} {'floor':>5} {'points':>7} {'arrived':>7} {'render ms':>13} {'frame ms':>13} "
-          f"{'to planner ms':>13} {'velocities ms':>13} {'every point ms':>14}  (CPU ms: frame, to planner, "
-          f"velocities, every point) ball velocity")
+    print(f"{'image':>8} {'floor':>5} {'points':>7} {'arrived':>7} {'render ms':>13} {'noise ms':>13} "
+          f"{'frame ms':>13} {'to planner ms':>13} {'velocities ms':>13} {'every point ms':>14}  (CPU ms: noise, "
+          f"frame, to planner, velocities, every point) ball velocity")
     for row in rows:
-        keys = ("frame_ms", "to_planner_ms", "velocities_ms", "velocities_all_points_ms")
+        keys = ("noise_ms", "frame_ms", "to_planner_ms", "velocities_ms", "velocities_all_points_ms")
         cells = " ".join(f"{row[key][0]:6.2f} ({row[key][1]:5.2f})" for key in ("render_ms",) + keys)
         cells += "  (" + ", ".join(f"{row[key][2]:.2f}" for key in keys) + ")"
         print(f"{row['resolution']:>8} {'yes' if row['floor'] else 'no':>5} {row['points']:>7} {row['arrived']:>7} "
               f"{cells} {row['ball_velocity']}")
     print()
     print("frame -> representation (frame + update_points + KD-tree) and camera tick (the same + velocities), "
-          "render excluded: wall median (min), CPU median; ratio: wall median over the primitives' update")
+          "render and the simulated noise excluded: wall median (min), CPU median; ratio: wall median over the primitives' update")
     print(f"{'image':>8} {'floor':>5} {'crop':>5} {'points':>7} {'kept':>7} {'span':>14} {'wall ms':>14} "
           f"{'cpu ms':>7} {'target':>7} {'wall':>5} {'cpu':>5} {'ratio':>7}")
     for row in rows:
@@ -238,8 +242,9 @@ def main() -> None:
                       f"{row['points' + suffix]:>7} {row['kept' + suffix]:>7} {span:>14} {wall:6.2f} ({low:5.2f}) "
                       f"{cpu:7.2f} {row['target_ms']:>7.0f} {verdicts[0]:>5} {verdicts[1]:>5} "
                       f"{wall / primitives:>6.0f}x")
-    print("wall median (minimum) per frame, CPU median in brackets. render: MuJoCo offscreen depth; frame: noise "
-          "+ robot filter + back-projection + arrivals (render excluded); to planner: PointCloudFeed.update_points "
+    print("wall median (minimum) per frame, CPU median in brackets. render: MuJoCo offscreen depth; noise: the "
+          "simulated sensor's (excluded from every span: a real sensor's image has it); frame: robot filter + "
+          "back-projection + arrivals (render and noise excluded); to planner: PointCloudFeed.update_points "
           "of the frame's points and its KD-tree; velocities: ClusterTracker.update from the frame's arrivals (the camera feed's); every point: "
           "the same tracker clustering every point of the cloud (no arrivals); ball velocity: the tracker's moving "
           "clusters at the last frame (truth [0, 0.5, 0])")

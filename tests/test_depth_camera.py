@@ -172,14 +172,17 @@ def test_depth_noise_is_gaussian_with_the_given_sigma_and_seeded() -> None:
     robot = load_robot("point")
     spec = CameraSpec(position=(0, 0, 3), look_at=(0, 0, 0), width=200, height=150, noise=0.01)
     depth = Counter(spec, 2.0).image
-    points = DepthCamera(spec, robot, seed=4).frame(0.0, depth, np.zeros(2)).points
+    camera = DepthCamera(spec, robot, seed=4)
+    clean = camera.frame(0.0, depth, np.zeros(2)).points  # a sensor's image is taken as it is
+    np.testing.assert_allclose(3.0 - clean[:, 2], 2.0, atol=1e-6)
+    points = camera.frame(0.0, camera.sensed(depth), np.zeros(2)).points
     measured = 3.0 - points[:, 2]  # the depth along the optical axis (−z)
     assert measured.mean() == pytest.approx(2.0, abs=4 * 0.01 / math.sqrt(measured.size))
     assert measured.std() == pytest.approx(0.01, rel=0.02)
     assert abs(float(np.mean(((measured - 2.0) / 0.01) ** 3))) < 0.05  # symmetric
     assert np.mean(((measured - 2.0) / 0.01) ** 4) == pytest.approx(3.0, abs=0.1)  # Gaussian tails
-    again = DepthCamera(spec, robot, seed=4).frame(0.0, depth, np.zeros(2)).points
-    other = DepthCamera(spec, robot, seed=5).frame(0.0, depth, np.zeros(2)).points
+    again, other = (DepthCamera(spec, robot, seed=seed) for seed in (4, 5))
+    again, other = (camera.frame(0.0, camera.sensed(depth), np.zeros(2)).points for camera in (again, other))
     np.testing.assert_array_equal(points, again)
     assert not np.array_equal(points, other)
 

@@ -111,7 +111,7 @@ def test_a_ball_moving_above_a_floor_is_tracked_from_its_arrivals_alone() -> Non
             centre = np.array([0.5, -0.6, 0.6]) + velocity * t
         data.mocap_pos[scene.mocap[0]] = centre
         mujoco.mj_forward(scene.model, data)
-        frame = camera.frame(t, renderer.render(data), robot.default_q)
+        frame = camera.frame(t, camera.sensed(renderer.render(data)), robot.default_q)
         velocities = tracker.update(t, frame.points, frame.arrived)
         on_ball = np.linalg.norm(frame.points - centre, axis=1) < 0.09
         assert on_ball.sum() > 100 and len(frame.points) > 20 * on_ball.sum()  # the floor dominates

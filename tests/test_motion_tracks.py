@@ -111,7 +111,7 @@ def test_a_ball_moving_in_the_camera_view_gets_its_velocity() -> None:
         centre = np.array([0.6, -0.4, 0.5]) + velocity * t
         data.mocap_pos[scene.mocap[0]] = centre
         mujoco.mj_forward(scene.model, data)
-        frame = camera.frame(t, renderer.render(data), robot.default_q)
+        frame = camera.frame(t, camera.sensed(renderer.render(data)), robot.default_q)
         velocities = tracker.update(t, frame.points)
         on_ball = np.linalg.norm(frame.points - centre, axis=1) < 0.06
         assert on_ball.sum() > 50

@@ -13,7 +13,9 @@ rate is ``rate`` whenever the ticks are faster). A frame is
    once, :meth:`~dynfab.perception.depth_image.DepthProjector.ball_depths`): what no robot
    sphere can come near costs nothing further; none by default;
 1. the rendered depth ``d`` [m] per pixel, plus Gaussian noise ``d + σ ε``, ``ε ~ N(0, 1)``
-   (seeded) on the pixels with a return (and in the workspace);
+   (seeded) on the pixels with a return (and in the workspace): the simulated sensor's noise
+   (:meth:`DepthCamera.sensed`, applied by :meth:`DepthCamera.tick`; :meth:`DepthCamera.frame`
+   takes an image as a sensor gives it, noise included, and does steps 0 and 2-4);
 2. back-projected (:class:`~dynfab.perception.depth_image.DepthProjector`);
 3. without the robot's pixels: those within ``r_i + margin`` of a collision sphere at the
    configuration ``q`` of the frame's time (:func:`~dynfab.perception.self_filter.robot_pixels`);
@@ -114,7 +116,7 @@ class DepthCamera:
             return None
         while self._next <= t + _EPSILON:
             self._next += self.spec.period
-        frame = self.frame(t, render(), q)
+        frame = self.frame(t, self.sensed(render()), q)
         self._buffer.append(frame)
         return frame
 
@@ -125,23 +127,43 @@ class DepthCamera:
             released.append(self._buffer.popleft())
         return released
 
-    def frame(self, t: float, depth: NDArray[np.floating], q: ArrayLike) -> CameraFrame:
-        """Steps 1-4 of the module docstring on one depth image (H, W) [m] taken at ``t``
-        with the robot at ``q``.
+    def sensed(self, depth: NDArray[np.floating]) -> NDArray[np.floating]:
+        """The image a sensor of noise ``σ = spec.noise`` reports for the true depth image
+        (H, W) [m]: ``d + σ ε`` (``ε ~ N(0, 1)``, float32, from this camera's seeded stream) on
+        the pixels with a return in the workspace, the others as they were; ``depth`` itself
+        when ``σ = 0``. The simulation's sensor model (step 1): a real sensor's image already
+        has its noise and goes to :meth:`frame` as it is.
 
         Raises:
             ValueError: ``depth`` is not (height, width).
         """
         depth = np.asarray(depth)
+        if self.spec.noise == 0.0:
+            return depth
+        returns = self._returns(depth)
+        noisy = depth.astype(np.float32, copy=True)
+        noisy[returns] += self._rng.standard_normal(int(returns.sum()), dtype=np.float32) * self.spec.noise
+        return noisy
+
+    def _returns(self, depth: NDArray[np.floating]) -> NDArray[np.bool_]:
+        """Pixels of ``depth`` (checked to be (H, W)) with a return, in the workspace if there is one."""
         self.projector.check(depth)
         returns = DepthProjector.returns(depth)
         if self._depth_range is not None:
             near, far = self._depth_range
             returns &= (depth >= near) & (depth <= far)
-        if self.spec.noise > 0.0:
-            depth = depth.astype(np.float32, copy=True)
-            depth[returns] += self._rng.standard_normal(int(returns.sum()), dtype=np.float32) * self.spec.noise
-            returns &= depth > 0.0
+        return returns
+
+    def frame(self, t: float, depth: NDArray[np.floating], q: ArrayLike) -> CameraFrame:
+        """Steps 0 and 2-4 of the module docstring on one depth image (H, W) [m] as the sensor
+        gives it (its noise included: :meth:`sensed` simulates it), taken at ``t`` with the
+        robot at ``q``.
+
+        Raises:
+            ValueError: ``depth`` is not (height, width).
+        """
+        depth = np.asarray(depth)
+        returns = self._returns(depth)
         configuration = np.array(q, dtype=float).reshape(-1)
         centres = np.asarray(self._centres(configuration), dtype=float).reshape(-1, 3)
         robot = robot_pixels(depth, returns, self.projector, centres, self._radii, self._groups)
