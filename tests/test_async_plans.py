@@ -11,7 +11,7 @@ import time
 import numpy as np
 import pytest
 
-from dynfab.motion.guidance import JointTarget
+from dynfab.motion.guidance import GuidanceError, JointTarget
 from dynfab.robots import load_robot
 from dynfab.scenario.guided_controller import SIMULATED_PLAN_LATENCY, make_scenario_controller
 from dynfab.scenario.references import scenario_references
@@ -130,3 +130,25 @@ def test_while_a_replan_is_made_the_old_reference_stands_still(panda) -> None:
             break
     assert asked_at is not None and guided.status.plans == 2
     assert t == pytest.approx(asked_at + latency)   # the replan arrived after the latency, not before
+
+
+def test_a_replan_that_finds_no_plan_is_counted_as_failed_not_as_a_plan(panda) -> None:
+    """``status.plans`` counts plans made; a replan that found none is in ``failed_plans``
+    and the old reference is kept."""
+    guided = _controller(panda, plan_latency=0.2).guided
+    guided.set_goal(JointTarget(tuple(GOAL)), 0.0, START)
+
+    def no_path(*args, **kwargs):
+        raise GuidanceError("no_path", "no path within the planning budget (test)")
+
+    step = 1
+    while guided.plan is None:
+        guided.update(step * DT, START)
+        step += 1
+    first = guided.plan
+    guided.guidance.plan = no_path
+    while guided.status.failed_plans == 0 and step < 1000:   # the robot never moves: it stalls, a replan fails
+        guided.update(step * DT, START)
+        step += 1
+    assert guided.status.failed_plans == 1 and guided.status.plans == 1 and guided.status.replans_stalled == 1
+    assert guided.status.failure == "no_path" and guided.plan is first

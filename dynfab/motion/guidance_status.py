@@ -14,7 +14,8 @@ class GuidanceStatus:
 
     Attributes:
         guided: a plan was made and is being followed.
-        plans: plans made (the first included) [-].
+        plans: plans made (the first included; an attempt that found none is not one) [-].
+        failed_plans: plans asked for that found none (the first or a replan) [-].
         plan_time_ms: wall time of the first plan [ms]; None before it.
         plan_times_ms: wall time of every plan [ms].
         replans_blocked: replans because the reference ahead was blocked [-].
@@ -25,6 +26,7 @@ class GuidanceStatus:
 
     guided: bool = False
     plans: int = 0
+    failed_plans: int = 0
     plan_time_ms: float | None = None
     plan_times_ms: tuple[float, ...] = ()
     replans_blocked: int = 0

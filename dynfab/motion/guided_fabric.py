@@ -218,7 +218,7 @@ class GuidedFabric:
         params = self.fabric.parameters
         self._q = np.array(q, dtype=float)
         lag = float(np.linalg.norm(q - params.goal_position[0]))   # the reference at τ, written last tick
-        if self._pending is None and self.status.plans <= settings.replans:
+        if self._pending is None and self.status.plans + self.status.failed_plans <= settings.replans:
             reason = self._replan_reason(t, q, lag, moving)
             if reason is not None:
                 self._request(t, q, moving, after=reason)
@@ -325,7 +325,8 @@ class GuidedFabric:
         first = request.previous_goal is None
         status = self.status
         self.status = replace(status, guided=outcome.plan is not None or (status.guided and not first),
-                              plans=status.plans + 1,
+                              plans=status.plans + (outcome.plan is not None),
+                              failed_plans=status.failed_plans + (outcome.plan is None),
                               plan_time_ms=outcome.elapsed_ms if status.plan_time_ms is None else status.plan_time_ms,
                               plan_times_ms=status.plan_times_ms + (outcome.elapsed_ms,), failure=outcome.failure)
         self.failure_message = outcome.message

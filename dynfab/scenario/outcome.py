@@ -7,7 +7,7 @@ Every controller a run can have fills these keys:
 
 | controller | `guided` | `plans` | `recovered` | `fallbacks` |
 |---|---|---|---|---|
-| guided fabric (a path goal: the fabric follows the path, guidance takes over at its end) | true (false once guidance found no plan and the scenario's own fabric took over) | first plan, replans, recovery paths (a first plan that failed is not counted; its wall time is `plan_time_ms`) | replans (blocked, stalled), recovery paths | braking actions, plus 1 if the fabric took over |
+| guided fabric (a path goal: the fabric follows the path, guidance takes over at its end) | true (false once guidance found no plan and the scenario's own fabric took over) | plans made: the first, replans, recovery paths (an attempt that found no plan is not counted; a failed first plan's wall time is `plan_time_ms`) | replans (blocked, stalled), recovery paths | braking actions, plus 1 if the fabric took over |
 | fabric, with or without stall recovery | false | recovery paths | recovery paths | braking actions |
 | MPC | false | 0 | 0 | failed solves (the last plan or braking executed) |
 
@@ -42,9 +42,9 @@ def with_outcome(metrics: Metrics, controller: Controller | None, goal_positions
     if isinstance(controller, GuidedController | PathEndController):   # a path's end: guided after its time
         status = controller.status
         recoveries = len(controller.recovery_times)
-        fell_back = controller.fallback is not None   # the first plan failed: it is in status.plans
+        fell_back = controller.fallback is not None   # the first plan failed
         outcome.update(guided=status.guided and not fell_back,
-                       plans=status.plans - fell_back + recoveries, plan_time_ms=status.plan_time_ms,
+                       plans=status.plans + recoveries, plan_time_ms=status.plan_time_ms,
                        recovered=status.replans_blocked + status.replans_stalled + recoveries,
                        fallbacks=controller.fallback_count + fell_back)
         if fell_back and not metrics.success:
