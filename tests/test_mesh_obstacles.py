@@ -61,6 +61,22 @@ def test_a_urdf_scene_becomes_its_collision_geometry_placed(files: Path) -> None
     assert shelf.mesh.watertight  # three closed boards: solid once the STL's repeated vertices are merged
 
 
+def test_an_obstacle_after_a_urdf_scene_is_named_by_its_entry_in_the_file(files: Path) -> None:
+    """A URDF scene's two geometries are two obstacles but one entry: the moving sphere after
+    it is ``obstacles[1]`` in messages and contacts, not the third obstacle."""
+    from dynfab.robots import load_robot
+    from dynfab.scenario.references import scenario_references
+
+    ball = {"type": "sphere", "radius": 0.05, "trajectory": {"type": "linear", "start": [1.0, 1.0],
+                                                              "velocity": [0.0, 0.1]}}
+    scenario = scenario_from_dict(_scenario([{"type": "urdf", "file": "scene.urdf", "position": [0.75, 0.0, 0.25]},
+                                             ball]), files)
+    assert [o.name(k) for k, o in enumerate(scenario.obstacles)] == ["obstacles[0]", "obstacles[0]", "obstacles[1]"]
+    with pytest.raises(ScenarioError) as error:
+        scenario_references(scenario, load_robot("panda"))
+    assert error.value.field == "obstacles[1].trajectory" and "expected 3 coordinates, got 2" in error.value.problem
+
+
 @pytest.mark.parametrize(("entry", "field", "problem"), [
     ({"type": "mesh", "file": "nowhere.stl", "position": [0, 0, 0]}, "obstacles[0].file", "file not found"),
     ({"type": "mesh", "file": "points.ply", "position": [0, 0, 0]}, "obstacles[0].file", "no triangles"),

@@ -258,7 +258,7 @@ def make_mpc_controller(scenario: Scenario, robot: Robot, references: References
     """
     for k, obstacle in enumerate(scenario.obstacles):
         if obstacle.type != "sphere":
-            raise ScenarioError(f"obstacles[{k}].type", f"the mpc planner avoids spheres only, got {obstacle.type!r}; "
+            raise ScenarioError(f"{obstacle.name(k)}.type", f"the mpc planner avoids spheres only, got {obstacle.type!r}; "
                                 "use static-fabric or dynamic-fabric")
     goals = tuple(term for goal in scenario.goals for term in _goal_terms(goal, robot))
     problem = MpcProblem(robot, goals, len(scenario.obstacles), config or MpcConfig())

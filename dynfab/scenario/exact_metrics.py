@@ -66,7 +66,7 @@ def obstacle_shapes(obstacles: Sequence[ObstacleSpec], centers: NDArray[np.float
     shapes = []
     for k, obstacle in enumerate(obstacles):
         track = centers[:1, k] if obstacle.trajectory is None else centers[:, k]
-        shapes.append(PlacedShape(f"obstacles[{k}]", obstacle.shape,
+        shapes.append(PlacedShape(obstacle.name(k), obstacle.shape,
                                   tuple(Placement(tuple(c), obstacle.orientation) for c in track)))
     return shapes
 

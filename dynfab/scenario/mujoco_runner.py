@@ -76,8 +76,8 @@ def run_mujoco(scenario: Scenario, robot: Robot, controller: Controller, centres
         raise ScenarioError("dt", f"under MuJoCo must be a whole number of {PHYSICS_TIMESTEP * 1e3:g} ms physics "
                             f"steps, got {scenario.dt:g}")
     start = centres(np.zeros(1))[0]
-    obstacles = [SceneObstacle(o.shape, tuple(float(x) for x in start[k]), o.orientation, o.trajectory is not None)
-                 for k, o in enumerate(scenario.obstacles)]
+    obstacles = [SceneObstacle(o.shape, tuple(float(x) for x in start[k]), o.orientation, o.trajectory is not None,
+                               o.name(k)) for k, o in enumerate(scenario.obstacles)]
     pairs = () if mesh_model is None else tuple((mesh_model.links[i], mesh_model.links[j])
                                                 for i, j in mesh_model.pairs)
     # the base's drive stops its set-point where the planner plans to (less the headroom), as

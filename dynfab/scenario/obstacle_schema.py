@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Annotated, Any, Literal
 
 from pydantic import model_validator
@@ -59,6 +59,9 @@ class ObstacleSpec:
         mesh: A mesh's triangles in its frame (scaled); None for other shapes.
         cloud: A point cloud's kept points (world frame; ``position`` the origin); None for
             other shapes.
+        source: The scenario file's entry it came from, e.g. ``obstacles[2]`` (a URDF scene's
+            geometries all name their entry; a cloud without points has no obstacle, so entries
+            and obstacles need not match one to one); empty when made in code: see :meth:`name`.
     """
 
     type: ObstacleType
@@ -71,6 +74,12 @@ class ObstacleSpec:
     normal: tuple[float, float, float] | None = None
     mesh: Mesh | None = None
     cloud: PointCloud | None = None
+    source: str = field(default="", compare=False)
+
+    def name(self, k: int) -> str:
+        """How messages and contacts name the scenario's ``k``-th obstacle: its entry in the
+        file (:attr:`source`), or ``obstacles[k]`` when it has none."""
+        return self.source or f"obstacles[{k}]"
 
     @property
     def shape(self) -> Shape:

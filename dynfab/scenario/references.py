@@ -56,15 +56,15 @@ def scenario_references(scenario: Scenario, robot: Robot) -> References:
         if obstacle.trajectory is None:
             obstacles.append(StaticPoint(tuple(obstacle.position)))
             continue
-        trajectory = _from_mapping(obstacle.trajectory, f"obstacles[{k}].trajectory")
+        trajectory = _from_mapping(obstacle.trajectory, f"{obstacle.name(k)}.trajectory")
         allowed = (2, 3) if robot.planar else (3,)
         if trajectory.dimension not in allowed:
-            raise ScenarioError(f"obstacles[{k}].trajectory", f"expected {' or '.join(map(str, allowed))} "
+            raise ScenarioError(f"{obstacle.name(k)}.trajectory", f"expected {' or '.join(map(str, allowed))} "
                                 f"coordinates, got {trajectory.dimension}")
         obstacles.append(trajectory)
     orientations = tuple(_orientation_reference(goal) for goal in scenario.goals)
     named = [(f"goal[{i}].trajectory", t) for i, t in enumerate(goals)]
-    named += [(f"obstacles[{k}].trajectory", t) for k, t in enumerate(obstacles)]
+    named += [(f"{o.name(k)}.trajectory", t) for k, (o, t) in enumerate(zip(scenario.obstacles, obstacles))]
     named += [(f"goal[{i}].angular_velocity", t) for i, t in enumerate(orientations) if t is not None]
     for field, trajectory in named:
         _check_finite_over_run(trajectory, field, scenario)

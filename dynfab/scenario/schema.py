@@ -210,7 +210,9 @@ class ScenarioDocument(ScenarioModel):
             ScenarioError: The URDF file is not found, a mesh or scene file is bad, or MuJoCo
                 cannot simulate an obstacle (:mod:`dynfab.scenario.mujoco_obstacles`).
         """
-        entries = [obstacle_specs(obstacle, base_dir, f"obstacles[{k}]") for k, obstacle in enumerate(self.obstacles)]
+        entries = [tuple(dataclasses.replace(spec, source=f"obstacles[{k}]")
+                         for spec in obstacle_specs(obstacle, base_dir, f"obstacles[{k}]"))
+                   for k, obstacle in enumerate(self.obstacles)]
         if self.simulator == "mujoco":
             check_mujoco_obstacles(entries, self.perception)
         return Scenario(
@@ -319,15 +321,16 @@ def validate_for_robot(scenario: Scenario, robot: Robot) -> Scenario:
     )
     obstacle_lengths = (2, 3) if robot.planar else (3,)
     for i, obstacle in enumerate(scenario.obstacles):
+        name = obstacle.name(i)
         if obstacle.position is not None:
             key = "point" if obstacle.type == "plane" else "position"
-            fields.check_length(obstacle.position, f"obstacles[{i}].{key}", obstacle_lengths)
+            fields.check_length(obstacle.position, f"{name}.{key}", obstacle_lengths)
         if robot.planar and obstacle.type in ("mesh", "points"):
-            raise ScenarioError(f"obstacles[{i}].type", f"a planar robot moves in the xy-plane; {obstacle.type} obstacles "
+            raise ScenarioError(f"{name}.type", f"a planar robot moves in the xy-plane; {obstacle.type} obstacles "
                                 "are 3-D "
                                 "(use spheres, boxes, cylinders or planes)")
         if robot.planar and obstacle.normal is not None and math.hypot(*obstacle.normal[:2]) < 1e-9:
-            raise ScenarioError(f"obstacles[{i}].normal", "a planar robot moves in the xy-plane, which a "
+            raise ScenarioError(f"{name}.normal", "a planar robot moves in the xy-plane, which a "
                                 f"horizontal plane never bounds; use a wall (normal with an x or y part), "
                                 f"got {list(obstacle.normal)}")
     if scenario.camera_workspace_margin is not None:

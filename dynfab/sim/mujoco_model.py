@@ -135,7 +135,8 @@ def _scene(model: mujoco.MjModel, robot: Robot, obstacles: Sequence[SceneObstacl
                        base_dof=None if base is None else int(base.dofadr[0]),
                        wheel_actuators=wheels, base=robot.base,
                        base_speed_limit=None if base is None else np.array(robot.limits.velocity[:2], dtype=float),
-                       mocap=mocap, robot_bodies=robot_bodies, obstacle_of_geom=geoms)
+                       mocap=mocap, robot_bodies=robot_bodies, obstacle_of_geom=geoms,
+                       obstacle_names=tuple(o.name or f"obstacles[{k}]" for k, o in enumerate(obstacles)))
 
 
 def _mesh_geom(link: str, k: int) -> str:

@@ -27,12 +27,15 @@ class SceneObstacle:
         position: Centre (a plane: its point) at t = 0 [m].
         orientation: Unit quaternion (w, x, y, z) of its frame.
         moving: True if its centre follows a trajectory (a mocap body).
+        name: How contacts name it (the scenario file's entry, e.g. ``obstacles[2]``); empty:
+            ``obstacles[k]`` by its index ``k`` in the scene.
     """
 
     shape: Shape
     position: tuple[float, float, float]
     orientation: tuple[float, float, float, float]
     moving: bool
+    name: str = ""
 
 
 @dataclass(frozen=True, eq=False)
@@ -58,6 +61,7 @@ class MujocoScene:
         mocap: Mocap index of each obstacle (None for a static one).
         robot_bodies: Body ids of the robot.
         obstacle_of_geom: Obstacle index of each obstacle geom id.
+        obstacle_names: How contacts name each obstacle (:attr:`SceneObstacle.name`).
     """
 
     model: mujoco.MjModel
@@ -75,3 +79,4 @@ class MujocoScene:
     mocap: tuple[int | None, ...]
     robot_bodies: frozenset[int]
     obstacle_of_geom: dict[int, int]
+    obstacle_names: tuple[str, ...] = ()

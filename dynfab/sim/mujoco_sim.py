@@ -280,7 +280,7 @@ class _Loop:
 
     def _name(self, geom: int) -> str:
         if self.kinds[geom] == 2:
-            return f"obstacles[{self.scene.obstacle_of_geom[geom]}]"
+            return self.scene.obstacle_names[self.scene.obstacle_of_geom[geom]]
         return self.model.body(int(self.model.geom_bodyid[geom])).name
 
     def _place_obstacles(self, times: NDArray[np.float64]) -> None:
