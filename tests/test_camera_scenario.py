@@ -142,3 +142,19 @@ def test_space_behind_seen_surfaces_is_extended_along_the_rays() -> None:
     np.testing.assert_allclose(solid[solid[:, 0] == 0.0][:, 2].max(), 1.3)
     with pytest.raises(ValueError, match="step > 0"):
         behind_surfaces(points, (0.0, 0.0, 0.0), thickness=0.3, step=0.0)
+
+
+def test_the_camera_feed_is_evaluated_on_the_scenarios_backend(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``backend: vm`` reaches the per-tick nearest-point writer too: nothing is compiled,
+    even where the library's default is the compiled backend."""
+    from dynfab.fabric import c_backend
+    from dynfab.scenario.camera_controller import make_camera_controller
+
+    monkeypatch.setenv("DYNFAB_BACKEND", "c")
+    monkeypatch.setattr(c_backend, "find_compiler", lambda *args, **kwargs: pytest.fail("the feed was compiled"))
+    robot = load_robot("panda")
+    scenario = validate_for_robot(scenario_from_dict(with_camera(backend="vm", planner="dynamic-fabric")), robot)
+    controller = make_camera_controller(scenario, robot)
+    q = np.array(BASE["initial_state"]["q"])
+    assert np.all(controller(0.0, q, np.zeros(7)) == 0.0)   # no frame yet: at rest
+    assert controller.feed.cloud is not None   # the feed was attached, on the VM

@@ -43,10 +43,15 @@ class CameraFeed:
         tracker: The velocity estimator of the kept points.
         frames: Frames received so far.
         latest: The newest frame received, or None.
+
+    ``backend``: how the per-tick nearest-point writer is evaluated (``"c"`` or ``"vm"``, as
+    the planner it feeds; default :func:`~dynfab.fabric.backends.default_backend`).
     """
 
-    def __init__(self, robot: Robot, camera: DepthCamera, tracker: ClusterTracker | None = None) -> None:
+    def __init__(self, robot: Robot, camera: DepthCamera, tracker: ClusterTracker | None = None,
+                 backend: str | None = None) -> None:
         self.camera = camera
+        self._backend = backend
         self.tracker = tracker or ClusterTracker()
         self.frames = 0
         self.latest: CameraFrame | None = None
@@ -66,7 +71,7 @@ class CameraFeed:
         if leaf is self._leaf and views is self._views:
             return
         self._leaf, self._views = leaf, views
-        self._feed = PointCloudFeed(self._robot, leaf, views)
+        self._feed = PointCloudFeed(self._robot, leaf, views, backend=self._backend)
         if self.latest is not None:
             self._feed.update_points(self.latest.points, None)
 

@@ -147,4 +147,4 @@ def make_camera_controller(scenario: Scenario, robot: Robot, seed: int = 0) -> C
     margin = scenario.camera_workspace_margin
     workspace = None if margin is None else robot_workspace(robot, margin)
     camera = DepthCamera(scenario.camera, robot, seed=seed, workspace=workspace)
-    return CameraController(inner, CameraFeed(robot, camera))
+    return CameraController(inner, CameraFeed(robot, camera, backend=scenario.backend))
