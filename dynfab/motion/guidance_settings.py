@@ -3,13 +3,20 @@ times its reference and how the guided fabric follows it (:mod:`dynfab.motion.gu
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from dynfab.motion.inverse_kinematics import IkSettings
-from dynfab.motion.joint_planning import JointPlannerSettings
+from dynfab.motion.joint_planning import WALL_FACTOR, JointPlannerSettings
 from dynfab.motion.joint_trajectory import TimingSettings
 
-__all__ = ["GuidanceSettings"]
+__all__ = ["SIMULATION_CHECK_RATE", "GuidanceSettings", "counted_checks"]
+
+#: The check rate [configurations/s] that turns planning times into budgets of checks in the
+#: simulators (:func:`counted_checks`): below what this project's 2-core machine checks
+#: (about 480 000/s over the plans of MBM problems 9-10 of each type at load 3.5, compiled
+#: checker, 2026-11-26), so a budget takes less wall time than the limit it replaces there;
+#: not chosen on any benchmark's results.
+SIMULATION_CHECK_RATE = 300_000.0
 
 
 @dataclass(frozen=True)
@@ -115,3 +122,13 @@ class GuidanceSettings:
     close_lag_slow: float = 0.03
     close_lag_stop: float = 0.1
     close_time: float = 1.0
+
+
+def counted_checks(settings: GuidanceSettings, rate: float = SIMULATION_CHECK_RATE) -> GuidanceSettings:
+    """``settings`` whose searches are bounded by checks, not wall time (``path.check_rate``
+    ``= rate``; inverse kinematics given :data:`~dynfab.motion.joint_planning.WALL_FACTOR`
+    times its time, so its seeds bound it): the plans, and a simulated run, are the same at
+    any load. The simulators plan this way; a robot in real time keeps wall times."""
+    return replace(settings, path=replace(settings.path, check_rate=rate),
+                   ik=replace(settings.ik, time_limit=settings.ik.time_limit * WALL_FACTOR),
+                   ik_retry=replace(settings.ik_retry, time_limit=settings.ik_retry.time_limit * WALL_FACTOR))

@@ -44,10 +44,10 @@ from ompl import base as ob
 from ompl import geometric as og
 from ompl import util as ou
 
-from dynfab.motion.ompl_problem import solve_in_box
+from dynfab.motion.ompl_problem import CheckBudget, solve_in_box
 from dynfab.motion.configuration_checker import ConfigurationChecker
 
-__all__ = ["JointPath", "JointPlannerSettings", "NoPathError", "approach_clear", "plan_joint_path"]
+__all__ = ["WALL_FACTOR", "JointPath", "JointPlannerSettings", "NoPathError", "approach_clear", "plan_joint_path"]
 
 PlannerName = Literal["RRTConnect", "RRT", "KPIECE1", "BKPIECE1", "PRM"]
 _PLANNERS: dict[str, type] = {"RRTConnect": og.RRTConnect, "RRT": og.RRT, "KPIECE1": og.KPIECE1,
@@ -86,6 +86,13 @@ class JointPlannerSettings:
             planners without one ignore it) [rad]. OMPL's default, a fifth of the joint
             space's diagonal (1.9 rad on the Panda), failed 5 of 9 plans into MBM's cage
             (problems 9-11, 3 seeds, 1 s each); 0.7 failed none, with a mean of 0.2 s.
+        check_rate: None: ``time_limit`` and ``simplify_time`` are wall times. A rate
+            [configurations/s]: they are budgets of checks instead, ``round(t · check_rate)``
+            for a time ``t`` (the search and the simplifier stop at their budget; a search
+            then depends on its seed only, not on the machine's load), with
+            :data:`WALL_FACTOR` ``· t`` of wall time as a safety net (a machine that checks
+            more than ten times slower than the rate, e.g. without a C compiler, stops by
+            time). The simulators plan this way (:func:`counted_checks`).
     """
 
     planner: PlannerName = "RRTConnect"
@@ -100,6 +107,12 @@ class JointPlannerSettings:
     escape_slack: float = 0.002
     step: float = 0.7
     self_tolerance: float = 0.01
+    check_rate: float | None = None
+
+
+#: With a ``check_rate``, the wall time a search or a simplification is given, as a multiple
+#: of the time its budget of checks stands for [-].
+WALL_FACTOR = 10.0
 
 
 @dataclass(frozen=True)
@@ -285,13 +298,18 @@ def _ompl_path(validity: _Validity, start: NDArray[np.float64], goal: NDArray[np
     ou.setLogLevel(ou.LOG_NONE)  # reseeding after the first sample logs an error; the seed still takes
     try:
         ou.RNG.setSeed(seed % _MAX_SEED + 1)
+        rate, wall = settings.check_rate, (1.0 if settings.check_rate is None else WALL_FACTOR)
+        budget = None if rate is None else CheckBudget(lambda: validity.count, round(settings.time_limit * rate),
+                                                       round(settings.simplify_time * rate))
         waypoints, status = solve_in_box(validity, start, goal, lower, upper, settings.resolution / extent,
-                                         partial(_planner, settings.planner, settings.step), settings.time_limit,
-                                         settings.simplify_time,
-                                         validity.motion if validity.motion_check else None)
+                                         partial(_planner, settings.planner, settings.step), wall * settings.time_limit,
+                                         wall * settings.simplify_time,
+                                         validity.motion if validity.motion_check else None, budget)
     finally:
         ou.setLogLevel(previous_log_level)
     if waypoints is None:
-        raise NoPathError("no_path", f"no collision-free joint-space path found within {settings.time_limit} s "
+        limit = (f"{settings.time_limit} s" if settings.check_rate is None
+                 else f"{round(settings.time_limit * settings.check_rate)} checks")
+        raise NoPathError("no_path", f"no collision-free joint-space path found within {limit} "
                                      f"({settings.planner}: {status}, {validity.count} configurations checked)")
     return waypoints

@@ -41,6 +41,7 @@ from dynfab.geometry.shapes import quaternion_matrix
 from dynfab.motion.configuration_checker import PlacedObstacle
 from dynfab.motion.guidance import GoalTargets, GuidanceSettings, JointTarget
 from dynfab.motion.guided_fabric import GuidanceStatus, GuidedFabric, guided_goal_config
+from dynfab.motion.guidance_settings import counted_checks
 from dynfab.motion.inverse_kinematics import AxisTarget, PointTarget
 from dynfab.motion.references import References
 from dynfab.motion.trajectories import StaticPoint
@@ -258,8 +259,10 @@ def make_scenario_controller(scenario: Scenario, robot: Robot, references: Refer
                              plan_latency: float | None = SIMULATED_PLAN_LATENCY) -> Controller:
     """The controller of a run: guided (module docstring) where guidance applies, else the
     scenario's planner (fabrics with stall recovery). ``plan_latency``: simulated time [s]
-    between asking for a plan and applying it (:data:`SIMULATED_PLAN_LATENCY`); None makes
-    plans on a worker thread in real time (a loop on a real robot's clock)."""
+    between asking for a plan and applying it (:data:`SIMULATED_PLAN_LATENCY`), the plan's
+    searches bounded by checks, not wall time (:func:`~dynfab.motion.guidance_settings.counted_checks`:
+    a run is the same at any load); None makes plans on a worker thread in real time (a loop on
+    a real robot's clock), bounded by wall time."""
 
     def plain() -> Controller:
         controller = make_controller(scenario, robot, references)
@@ -289,7 +292,7 @@ def _guided_controller(scenario: Scenario, robot: Robot, references: References,
     surfaces = mesh_obstacles(fabric, planning_robot, scenario.obstacles)
     inner = FabricController(fabric, References((StaticPoint(tuple(scenario.initial_state.q)),), references.obstacles),
                              (), moving_indices, slots, surfaces)
-    guided = GuidedFabric(fabric, settings, plan_latency)
+    guided = GuidedFabric(fabric, settings if plan_latency is None else counted_checks(settings), plan_latency)
     guided.set_obstacles(_placed(scenario, references, 0.0, static=True))
     # one per obstacle: a slot's, or a mesh's or a point cloud's entry of the nearest-point feed
     allowance_slots = [SurfaceAllowance(surfaces, surfaces.surface_of(k)) if slot is None and surfaces is not None
