@@ -80,7 +80,10 @@ GUIDED_OBSTACLE_ENERGY = 0.02
 #: tight passages: held-out table_bars/0008, 0011, 0013 stall with it (and with 0.05) and are
 #: reached at 17-18 s of 20 with 0.02 (docs/results.md). A range of 0.2 m also cleared
 #: kitchen/0014 but doubles the spheres the feed queries.
-GUIDED_SURFACE_ENERGY = 0.1
+GUIDED_SURFACE_ENERGY = 0.02
+#: ``a_b`` of the guided fabric's obstacle leaves [m/s²]: they act on the clearance left after a
+#: stop at this deceleration (:class:`~dynfab.fabric.leaves.barrier.Barrier`, braking)
+GUIDED_BRAKING_DECELERATION = 4.0
 #: clearance the guided fabric's obstacle leaves keep as a buffer [m]: the built-in Panda's
 #: spheres leave up to 5 mm of its meshes outside
 GUIDED_OBSTACLE_BUFFER = 0.005
@@ -313,7 +316,7 @@ def guided_planner_config(robot: Robot, scenario: Scenario) -> PlannerConfig:
     ``fabric:`` block applies on top (not to the nearest-point leaf, whose barrier is fixed
     here)."""
     barrier = Barrier(geometry_gain=5.0, energy_gain=GUIDED_OBSTACLE_ENERGY, horizon=GUIDED_OBSTACLE_RANGE,
-                      offset=GUIDED_OBSTACLE_BUFFER)
+                      offset=GUIDED_OBSTACLE_BUFFER, braking=GUIDED_BRAKING_DECELERATION)
     spheres = sum(obstacle.type == "sphere" for obstacle in scenario.obstacles)
     attractor = GoalAttractor(gain=GUIDED_GOAL_GAIN, sharpness=GUIDED_GOAL_SHARPNESS)
     leaf = surface_leaf(robot, scenario.obstacles, replace(barrier, energy_gain=GUIDED_SURFACE_ENERGY),
