@@ -78,19 +78,22 @@ def test_braking_barrier_is_the_euler_lagrange_spec_with_its_stopping_distance_h
             assert float(a) == pytest.approx(float(b), rel=1e-9, abs=1e-9)
 
 
-def test_a_braking_barrier_acts_on_the_clearance_left_after_a_stop() -> None:
+def test_a_braking_barrier_weights_the_clearance_left_after_a_stop() -> None:
     def evaluate(barrier: Barrier, x: float, xdot: float) -> list[float]:
         spec = barrier.weighted_geometry()
-        leaf = ca.Function("leaf", [spec.x, spec.xdot], [spec.M, spec.f_geometry, spec.f_energy])
+        leaf = ca.Function("leaf", [spec.x, spec.xdot], [spec.M, spec.f_geometry / spec.M, spec.f_energy])
         return [float(v) for v in leaf(x, xdot)]
 
     plain, braking = Barrier(energy_gain=0.5, horizon=0.2), Barrier(energy_gain=0.5, horizon=0.2, braking=4.0)
-    # approaching at 0.8 m/s: a stop at 4 m/s² takes 0.08 m, so 0.15 m is 0.07 m for the braking leaf
-    np.testing.assert_allclose(evaluate(braking, 0.15, -0.8), evaluate(plain, 0.07, -0.8), rtol=1e-12)
-    assert evaluate(braking, 0.15, -0.8)[0] > 2 * evaluate(plain, 0.15, -0.8)[0]
+    # approaching at 0.8 m/s: a stop at 4 m/s² takes 0.08 m; the energy sees 0.15 m as 0.07 m
+    metric, h, f_energy = evaluate(braking, 0.15, -0.8)
+    plain_metric, _, plain_f_energy = evaluate(plain, 0.07, -0.8)
+    assert (metric, f_energy) == (pytest.approx(plain_metric, rel=1e-12), pytest.approx(plain_f_energy, rel=1e-12))
+    assert metric > 10 * evaluate(plain, 0.15, -0.8)[0]
+    assert h == pytest.approx(evaluate(plain, 0.15, -0.8)[1], rel=1e-12)   # the geometry is the paper's
     # moving away (and at rest) nothing is taken off
-    np.testing.assert_allclose(evaluate(braking, 0.05, 0.8), evaluate(plain, 0.05, 0.8), rtol=1e-12)
-    np.testing.assert_allclose(evaluate(braking, 0.05, 0.0), evaluate(plain, 0.05, 0.0), rtol=1e-12)
+    np.testing.assert_allclose(evaluate(braking, 0.05, 0.8)[::2], evaluate(plain, 0.05, 0.8)[::2], rtol=1e-12)
+    np.testing.assert_allclose(evaluate(braking, 0.05, -1e-9), evaluate(plain, 0.05, -1e-9), rtol=1e-9)
     # a stop that no longer fits: clamped, finite
     assert all(np.isfinite(evaluate(braking, 0.01, -3.0)))
 

@@ -18,27 +18,33 @@ With an ``offset`` ``δ`` the leaf acts on ``x − δ`` in place of ``x``: it ke
 clearance as a buffer (collision spheres that leave up to ``δ`` of a robot's meshes outside
 them then keep the meshes clear).
 
-**Braking** (optional, off by default): with a deceleration ``a_b`` the leaf acts on the
-clearance left once the robot has braked, ``x_b = x − δ − min(ẋ, 0)² / (2 a_b)`` (the
-stopping distance at ``a_b`` taken off while the clearance shrinks), in ``h`` and in
-``L_e`` alike. The default barrier's peak deceleration, ``k ẋ²/x`` near contact, grows
-without bound, and the planner's last stage (:mod:`dynfab.fabric.command_bounds`) scales
-the command into the joints' acceleration limits: an approach that is fast near contact
-then brakes too late. On ``x_b`` the leaf's geometry and metric take over while a stop at
-``a_b`` still fits: ``x_b`` stays constant along a stop at exactly ``a_b``
-(``ẋ_b = ẋ (1 − ẍ/a_b)``) and grows under a harder one. What it keeps and gives up:
+**Braking** (optional, off by default): with a deceleration ``a_b`` the leaf's energy acts on
+the clearance left once the robot has braked, ``x_b = x − δ − min(ẋ, 0)² / (2 a_b)`` (the
+stopping distance at ``a_b`` taken off while the clearance shrinks):
+``L_e = λ (1 − H(ẋ)) ẋ² (1/x_b − 1/r)₊²``. The default barrier's metric outweighs the
+other leaves only within a few cm of contact, where the deceleration it then asks exceeds
+the joints' acceleration limits; the planner's last stage
+(:mod:`dynfab.fabric.command_bounds`) scales the command into them and a fast approach
+brakes too late. On ``x_b`` the metric grows as soon as a stop at ``a_b`` barely fits,
+``x_b`` stays constant along a stop at exactly ``a_b`` (``ẋ_b = ẋ (1 − ẍ/a_b)``), and the
+clamp at ``min_clearance`` (the leaf's largest weight) is reached when it no longer fits.
+What it keeps and gives up:
 
-- the energy keeps its form ``λ (1 − H) ẋ² (1/x_b − 1/r)₊²`` with the stopping distance
-  held as a parameter of the current speed (its Euler-Lagrange spec is taken with ``x_b``'s
-  speed term fixed, then evaluated at the current ``ẋ``): the metric stays positive
-  semi-definite, the root still energizes with it (``α_le``), but it is no longer
-  homogeneous of degree 2 in ``ẋ``, so it is not a Finsler energy and the fabric's
-  energy is conserved only while the speed is constant (exactly when moving away, where
-  ``x_b = x − δ``);
-- the geometry ``h = −k ẋ²/x_b`` is no longer homogeneous of degree 2 in ``ẋ``: its
-  paths depend on the speed (it bends a fast approach earlier), which is the point.
+- the geometry ``h = −k ẋ²/(x − δ)`` is the paper's, homogeneous of degree 2 in ``ẋ``: the
+  paths the leaf asks for do not depend on the speed, only how strongly it asks;
+- the energy is no longer homogeneous of degree 2 in ``ẋ`` (``x_b`` depends on the speed),
+  so it is not a Finsler energy: its spec is the Euler-Lagrange one with the stopping
+  distance held fixed, then evaluated at the current ``ẋ`` (the metric stays positive
+  semi-definite and the root energizes with it, ``α_le``, but the sum of the leaves'
+  energies is conserved only while the stopping distance does not change). Moving away
+  (``ẋ ≥ 0``) the leaf is the paper's.
 
-Without braking the leaf is the paper's (both properties kept).
+Putting ``x_b`` in the geometry as well (tried) bends a fast approach earlier but, where
+its weight saturates, throws the motion sideways (energization keeps the speed and turns
+it), and on the geometry alone the energization undoes a head-on stop: both measured on
+MBM problems (docs/results.md, "kitchen and table_bars (issue 20)").
+
+Without braking the leaf is the paper's.
 """
 
 from __future__ import annotations
@@ -67,12 +73,11 @@ class Barrier:
         horizon: the range ``r`` beyond which the leaf is inactive [m or rad].
         min_clearance: clamp of ``x`` used inside ``h`` and ``L_e`` [m or rad].
         offset: ``δ``, the clearance kept as a buffer: the leaf acts on ``x − δ`` [m or rad].
-        geometry: optional replacement ``h(x, ẋ)``; receives the clamped ``x`` (``x_b``
-            with braking).
+        geometry: optional replacement ``h(x, ẋ)``; receives the clamped ``x``.
         energy: optional replacement ``L_e(x, ẋ)``; receives the clamped ``x`` (``x_b``
             with braking, its stopping distance held fixed).
         braking: ``a_b`` [m/s² or rad/s²], the deceleration whose stopping distance the
-            leaf takes off an approaching clearance (module docstring); None: none.
+            leaf's energy takes off an approaching clearance (module docstring); None: none.
     """
 
     geometry_gain: float = 0.5
@@ -108,15 +113,16 @@ class Barrier:
         the default energy's spec is written out in closed form (the same result, checked
         in the tests, in half the instructions: this leaf is evaluated for every robot
         sphere and obstacle slot): with ``u = (1/x − 1/r)₊`` and ``s = 1 − H(ẋ)``,
-        ``M_e = 2λ u² s`` and ``f_e = ∂L_e/∂x``-terms ``= −2λ u s ẋ² / x²``; with braking the
-        same with ``x_b`` for ``x`` (the stopping distance held fixed in the derivatives).
+        ``M_e = 2λ u² s`` and ``f_e = ∂L_e/∂x``-terms ``= −2λ u s ẋ² / x²``; with braking ``M_e``
+        and ``f_e`` take ``x_b`` for ``x`` (the stopping distance held fixed in the
+        derivatives), ``h`` keeps ``x``.
         """
         x = ca.SX.sym("x", 1)
         xdot = ca.SX.sym("xdot", 1)
         stopping = self.stopping_distance(xdot)
-        clearance = ca.fmax(x - self.offset - stopping, self.min_clearance)
         geometry = self.geometry or _default_geometry(self.geometry_gain)
-        h = geometry(clearance, xdot)
+        h = geometry(ca.fmax(x - self.offset, self.min_clearance), xdot)
+        clearance = ca.fmax(x - self.offset - stopping, self.min_clearance)
         if self.energy is not None:
             held = ca.SX.sym("stopping", 1)
             spec = self.lagrangian(held).spec()
