@@ -39,10 +39,10 @@ What it keeps and gives up:
   energies is conserved only while the stopping distance does not change). Moving away
   (``ẋ ≥ 0``) the leaf is the paper's.
 
-Putting ``x_b`` in the geometry as well (tried) bends a fast approach earlier but, where
-its weight saturates, throws the motion sideways (energization keeps the speed and turns
-it), and on the geometry alone the energization undoes a head-on stop: both measured on
-MBM problems (docs/results.md, "kitchen and table_bars (issue 20)").
+Tried and not kept (docs/results.md, "kitchen and table_bars (issue 20)"): ``x_b`` in the
+geometry as well, where the saturated leaf throws the motion sideways (energization keeps
+the joint speed and turns it), and in the geometry alone, whose head-on stop the
+energization undoes.
 
 Without braking the leaf is the paper's.
 """
@@ -65,7 +65,7 @@ EnergyFunction = Callable[[ca.SX, ca.SX], ca.SX]
 
 @dataclass(frozen=True)
 class Barrier:
-    """Geometry and Finsler energy of a clearance leaf.
+    """Geometry and energy of a clearance leaf (a Finsler energy unless it brakes).
 
     Attributes:
         geometry_gain: ``k`` in ``h = −k ẋ²/x`` [-].
@@ -122,12 +122,12 @@ class Barrier:
         stopping = self.stopping_distance(xdot)
         geometry = self.geometry or _default_geometry(self.geometry_gain)
         h = geometry(ca.fmax(x - self.offset, self.min_clearance), xdot)
-        clearance = ca.fmax(x - self.offset - stopping, self.min_clearance)
         if self.energy is not None:
             held = ca.SX.sym("stopping", 1)
             spec = self.lagrangian(held).spec()
             M, f_energy = ca.substitute([spec.M, spec.f], [spec.x, spec.xdot, held], [x, xdot, stopping])
             return WeightedGeometry(M, ca.mtimes(M, h), f_energy, x, xdot)
+        clearance = ca.fmax(x - self.offset - stopping, self.min_clearance)
         inverse = 1 / clearance
         reach = ca.fmax(0, inverse - 1 / self.horizon)
         gate = 1 - ca.heaviside(xdot)
