@@ -69,19 +69,23 @@ GUIDED_GOAL_SHARPNESS = 10.0
 GUIDED_OBSTACLE_RANGE = 0.1
 #: ``λ`` of the guided fabric's obstacle leaves [m²]
 GUIDED_OBSTACLE_ENERGY = 0.02
-#: ``λ`` of the guided fabric's nearest-point leaf (meshes, point clouds) [m²]: five times the
-#: shape leaves'. With theirs, held-out MBM kitchen/0014 (seed 0) took a fingertip sphere at
-#: 0.6-0.8 m/s onto a counter edge the reference passes 12 mm from (its tracking lag of 4 cm
-#: cuts the corner): the barrier's metric ``2λ(1/x − 1/r)²`` outweighed the attractor only
-#: within 1-2 cm, where the deceleration it asked exceeded the joints' acceleration limits
-#: (bounded command at 100 % from 5.46 s), and the sphere went 14.8 mm in. At 0.1 it brakes
-#: from farther out (kitchen/0014: 18.7 mm clear on the meshes; 0.05: 12.8 mm). Chosen on that
-#: held-out problem while finding the cause (so it is no longer held out for this value), then
-#: checked on training kitchen/table_bars problems 1-4 of seed 0 (8/8, 0 collisions). It costs
-#: tight passages: held-out table_bars/0008, 0011, 0013 stall with it (and with 0.05) and are
-#: reached at 17-18 s of 20 with 0.02 (docs/results.md). A range of 0.2 m also cleared
-#: kitchen/0014 but doubles the spheres the feed queries.
-GUIDED_SURFACE_ENERGY = 0.1
+#: ``λ`` of the guided fabric's nearest-point leaf (meshes, point clouds) [m²]: the shape leaves'.
+#: It was 0.1 for a while: with 0.02 and no braking, held-out MBM kitchen/0014 (seed 0) took a
+#: fingertip sphere at 0.6-0.8 m/s onto a counter edge the reference passes 12 mm from, the
+#: leaf outweighing the attractor only where the deceleration it asked exceeded the joints'
+#: acceleration limits (14.8 mm in); 0.1, chosen on that held-out problem, made table_bars/0008,
+#: 0011, 0013 stall. The braking below clears kitchen/0014 with 0.02 (18.7 mm; docs/results.md).
+GUIDED_SURFACE_ENERGY = 0.02
+#: ``a_b`` of the guided fabric's obstacle and nearest-point leaves [m/s²]: their energy weights
+#: the clearance left after a stop at this deceleration (:class:`~dynfab.fabric.leaves.barrier.Barrier`,
+#: ``braking``), so a fast approach is outweighed before a stop no longer fits in the joints'
+#: acceleration limits. A conservative constant, not one per sphere from its Jacobian (the
+#: bounded command is shared with the attractor and the other leaves): Franka's weakest joint
+#: (joint 2, 7.5 rad/s²) moves the hand, 0.5-0.8 m from its axis, at 3.75-6 m/s². Set from that
+#: before measuring; checked on training MBM kitchen/table_bars problems 1-4 of seed 0 (8/8,
+#: 0 collisions, as without braking). The joint-limit leaves do not brake (the command bounds
+#: keep the joints' positions viable).
+GUIDED_BRAKING_DECELERATION = 4.0
 #: clearance the guided fabric's obstacle leaves keep as a buffer [m]: the built-in Panda's
 #: spheres leave up to 5 mm of its meshes outside
 GUIDED_OBSTACLE_BUFFER = 0.005
@@ -311,12 +315,13 @@ def _guided_controller(scenario: Scenario, robot: Robot, references: References,
 def guided_planner_config(robot: Robot, scenario: Scenario) -> PlannerConfig:
     """The guided fabric of a scenario: dynamic, its first goal the joint-space reference
     (attractor gain :data:`GUIDED_GOAL_GAIN`), obstacle leaves of range
-    :data:`GUIDED_OBSTACLE_RANGE`, the scenario's obstacle slots and, with meshes, the
+    :data:`GUIDED_OBSTACLE_RANGE` braking at :data:`GUIDED_BRAKING_DECELERATION`, the
+    scenario's obstacle slots and, with meshes, the
     nearest-point leaf with the same barrier but the energy :data:`GUIDED_SURFACE_ENERGY`; the
     ``fabric:`` block applies on top (not to the nearest-point leaf, whose barrier is fixed
     here)."""
     barrier = Barrier(geometry_gain=5.0, energy_gain=GUIDED_OBSTACLE_ENERGY, horizon=GUIDED_OBSTACLE_RANGE,
-                      offset=GUIDED_OBSTACLE_BUFFER)
+                      offset=GUIDED_OBSTACLE_BUFFER, braking=GUIDED_BRAKING_DECELERATION)
     spheres = sum(obstacle.type == "sphere" for obstacle in scenario.obstacles)
     attractor = GoalAttractor(gain=GUIDED_GOAL_GAIN, sharpness=GUIDED_GOAL_SHARPNESS)
     leaf = surface_leaf(robot, scenario.obstacles, replace(barrier, energy_gain=GUIDED_SURFACE_ENERGY),
