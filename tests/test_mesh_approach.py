@@ -69,7 +69,8 @@ def test_a_goal_free_on_the_meshes_is_approached_clear_of_them(panda, grasp) -> 
     assert plan.approach > 0.0
     approach = plan.trajectory.phases[-1].waypoints
     line = approach[0] + np.linspace(0.0, 1.0, 101)[:, None] * (approach[-1] - approach[0])
-    assert meshes.clearance(line)[0] >= meshes.margin - 1e-9
+    floor = min(guidance.settings.approach_clearance, at_goal)
+    assert meshes.clearance(line)[0] >= floor - 1e-4   # checked every path.resolution / 2, here every 1 % of it
 
 
 def test_the_meshes_decide_the_approach_of_a_goal_they_find_free(panda, grasp, monkeypatch) -> None:

@@ -294,7 +294,7 @@ class JointGuidance:
         free_on_meshes = obstacle >= meshes.margin and itself > 0.0
         if not (free_on_meshes or surfaces):
             return None
-        floor = min(meshes.margin, obstacle)
+        floor = min(self.settings.approach_clearance if free_on_meshes and not surfaces else meshes.margin, obstacle)
         step = path.resolution / 2
         return ApproachTest(lambda free, end: meshes.segment_free(free, end, step, floor),
                             instead_of_spheres=free_on_meshes and not surfaces)

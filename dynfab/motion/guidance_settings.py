@@ -28,6 +28,9 @@ class GuidanceSettings:
             on the meshes by ``mesh_margin`` (:mod:`dynfab.motion.mesh_goal_check`).
         mesh_margin: clearance [m] a goal solution checked on the robot's meshes keeps
             from the exact obstacles.
+        approach_clearance: clearance [m] on the robot's meshes that the approach to a goal
+            free on them keeps where the goal is farther (the goal's own where it is nearer;
+            :meth:`JointGuidance._goal_approach`).
         timing: how the path is timed.
         speed: fraction of the velocity limits the reference uses [-].
         acceleration: fraction of the acceleration limits the reference uses [-]: the
@@ -90,6 +93,7 @@ class GuidanceSettings:
     ik: IkSettings = field(default_factory=IkSettings)
     ik_retry: IkSettings = field(default_factory=lambda: IkSettings(seeds=240, time_limit=2.0))
     mesh_margin: float = 0.003
+    approach_clearance: float = 0.005
     timing: TimingSettings = field(default_factory=TimingSettings)
     speed: float = 0.5
     acceleration: float = 0.25
