@@ -9,7 +9,7 @@ import pytest
 
 from dynfab.geometry.shapes import Box, Placement
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
-from dynfab.motion.guidance import GuidanceError, JointGuidance, JointTarget
+from dynfab.motion.guidance import GuidanceError, JointGuidance, JointTarget, robot_mesh_model
 from dynfab.motion.joint_planning import ApproachTest, JointPlannerSettings, NoPathError, plan_joint_path
 from dynfab.motion.mesh_goal_check import MeshGoalCheck
 from dynfab.robots import load_robot
@@ -78,3 +78,11 @@ def test_the_meshes_decide_the_approach_of_a_goal_they_find_free(panda, grasp, m
     with pytest.raises(GuidanceError) as refused:
         JointGuidance(panda).plan(START, JointTarget(tuple(grasp)), [WALL])
     assert refused.value.reason == "goal_in_collision"
+
+
+def test_guidance_instances_of_one_robot_share_its_mesh_model(panda) -> None:
+    first, second = JointGuidance(panda), JointGuidance(panda)
+    first.checker.set_obstacles([WALL])
+    second.checker.set_obstacles([WALL])
+    model = robot_mesh_model(panda)
+    assert model is not None and first._meshes().model is model and second._meshes().model is model

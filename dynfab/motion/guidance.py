@@ -21,6 +21,7 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
@@ -33,7 +34,7 @@ from dynfab.motion.mesh_goal_check import MeshGoalCheck
 from dynfab.perception.surfaces import surface_clearance
 from dynfab.robots.builtin_meshes import builtin_collision_meshes
 from dynfab.robots.link_meshes import LinkMeshError
-from dynfab.robots.mesh_collision import mesh_collision_model
+from dynfab.robots.mesh_collision import MeshCollisionModel, mesh_collision_model
 from dynfab.motion.joint_planning import (ApproachTest, JointPath, NoPathError, approach_clear, plan_joint_path,
                                           polyline_samples)
 from dynfab.motion.joint_trajectory import JointTrajectory, TimingError, time_path
@@ -303,11 +304,7 @@ class JointGuidance:
         """The mesh check of goal solutions against the checker's obstacles, made on first
         use; None for a robot without collision meshes (or whose meshes cannot be read)."""
         if self._mesh_check is False:
-            robot = self.robot
-            try:
-                model = mesh_collision_model(robot.kinematics, robot.default_q, builtin_collision_meshes(robot))
-            except LinkMeshError:
-                model = None
+            model = robot_mesh_model(self.robot)
             self._mesh_check = None if model is None else MeshGoalCheck(model, self.settings.mesh_margin)
         if isinstance(self._mesh_check, MeshGoalCheck):
             self._mesh_check.set_obstacles(self.checker.obstacles)
@@ -328,3 +325,15 @@ def allowances_ahead(segment: NDArray[np.float64], table: NDArray[np.float64],
     reached = float(np.clip(np.dot(q - start, direction) / max(float(np.dot(direction, direction)), 1e-12), 0.0, 1.0))
     first = max(0, int(np.floor(reached * (len(segment) - 1))) - 1)
     return table[first:].max(axis=0)
+
+
+@lru_cache(maxsize=4)
+def robot_mesh_model(robot: Robot) -> MeshCollisionModel | None:
+    """``robot``'s collision meshes (:func:`~dynfab.robots.mesh_collision.mesh_collision_model`),
+    read once per robot (60-110 ms for the Panda: every run's guidance asks for them at its
+    first blocked goal); None without meshes (or if they cannot be read). Queries leave the
+    model unchanged, so guidance instances and their worker threads share it."""
+    try:
+        return mesh_collision_model(robot.kinematics, robot.default_q, builtin_collision_meshes(robot))
+    except LinkMeshError:
+        return None
