@@ -169,6 +169,8 @@ class JointGuidance:
         error: GuidanceError | None = None
         checks = 0
         path_settings = self.settings.path
+        if approach is not None and approach.instead_of_spheres:
+            path_settings = replace(path_settings, escape_samples=self.settings.mesh_escape_samples)
         tries = [(replace(path_settings, time_limit=path_settings.time_limit * 2**attempt), seed + attempt)
                  for attempt in range(self.settings.attempts)]
         if wide and self.settings.stall_margin > path_settings.margin:
