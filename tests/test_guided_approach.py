@@ -1,16 +1,24 @@
 """A grasp's approach under guidance: started from where the robot is when the obstacle
-leaves hold it short of the planned one, its allowances over the whole segment, and
-progress on it judged on the distance to the goal rather than on the reference's clock."""
+leaves hold it short of the planned one, its allowances over the whole segment, progress
+on it judged on the distance to the goal rather than on the reference's clock, and for a
+goal the spheres refuse and the robot's meshes find free, judged on the meshes instead of
+the spheres (issue 19: such a goal must not be refused, and the spheres accept approaches
+the meshes find inside a board)."""
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from dynfab.geometry.shapes import Box, Placement
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
-from dynfab.motion.guidance import JointGuidance, JointTarget
-from dynfab.motion.joint_planning import JointPlannerSettings, approach_clear, polyline_samples
+import dynfab.motion.guidance as guidance_module
+from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance, JointTarget, robot_mesh_model
+from dynfab.motion.joint_planning import (ApproachTest, JointPlannerSettings, NoPathError, approach_clear,
+                                          plan_joint_path, polyline_samples)
+from dynfab.motion.mesh_goal_check import MeshGoalCheck
 from dynfab.motion.phased_trajectory import PhasedTrajectory
 from dynfab.robots import load_robot
 from dynfab.scenario.guided_controller import make_scenario_controller
@@ -20,6 +28,7 @@ from dynfab.scenario.schema import scenario_from_dict, validate_for_robot
 WALL = PlacedObstacle(Box((0.6, 0.04, 0.7)), Placement((0.45, 0.0, 0.35)))
 START = np.array([-1.3, 0.3, 0.0, -1.8, 0.0, 2.1, 0.8])
 DT = 0.01
+FAST = JointPlannerSettings(time_limit=0.5)
 
 
 @pytest.fixture(scope="module")
@@ -27,17 +36,29 @@ def panda():
     return load_robot("panda")
 
 
-@pytest.fixture(scope="module")
-def grasp(panda) -> np.ndarray:
-    """START turned about joint 1 toward the wall until its spheres are 4 mm from it (the
-    planner's margin is 10 mm): a goal that is escaped and approached."""
+def _toward_wall(panda, clearance: float) -> np.ndarray:
+    """START turned about joint 1 toward the wall until its spheres are ``clearance`` [m] from it."""
     checker = ConfigurationChecker(panda, [WALL])
     goal = START.copy()
     for q1 in np.linspace(-1.3, 0.0, 1301):
         goal[0] = q1
-        if checker.clearances(goal)[0] < 0.004:
+        if checker.clearances(goal)[0] < clearance:
             return goal
     raise AssertionError("the wall is never that close")
+
+
+@pytest.fixture(scope="module")
+def grasp(panda) -> np.ndarray:
+    """The spheres 4 mm from the wall (the planner's margin is 10 mm): a goal that is
+    escaped and approached."""
+    return _toward_wall(panda, 0.004)
+
+
+@pytest.fixture(scope="module")
+def touching(panda) -> np.ndarray:
+    """The spheres touching the wall; the meshes are farther (a goal the spheres refuse and
+    the meshes find free)."""
+    return _toward_wall(panda, 0.0)
 
 
 def _turned(q: np.ndarray, by: float) -> np.ndarray:
@@ -162,3 +183,71 @@ def test_on_the_approach_a_robot_closing_in_slowly_does_not_stall_and_one_that_s
     # within stall_window of the last stall_floor of progress, which came at most
     # stall_floor / speed before the robot stopped
     assert stopped + settings.stall_window - settings.stall_floor / speed - DT <= t <= stopped + settings.stall_window + DT
+
+
+def _plan(panda, touching, approach: ApproachTest | None):
+    checker = ConfigurationChecker(panda, [WALL])
+    kin = panda.kinematics
+    return plan_joint_path(checker, START, touching, kin.lower, kin.upper, FAST, 0, approach)
+
+
+def test_an_approach_test_instead_of_the_spheres_decides_alone(panda, touching) -> None:
+    assert _plan(panda, touching, None).escaped_goal   # the spheres accept an approach
+    with pytest.raises(NoPathError) as refused:
+        _plan(panda, touching, ApproachTest(lambda free, goal: False, instead_of_spheres=True))
+    assert refused.value.reason == "goal_in_collision"
+    asked = []
+    path = _plan(panda, touching, ApproachTest(lambda free, goal: asked.append(free) is None, instead_of_spheres=True))
+    np.testing.assert_array_equal(path.waypoints[-2], asked[0])   # the first it was asked about
+
+
+def test_an_approach_test_beside_the_spheres_needs_both(panda, touching) -> None:
+    with pytest.raises(NoPathError):
+        _plan(panda, touching, ApproachTest(lambda free, goal: False))
+    assert _plan(panda, touching, ApproachTest(lambda free, goal: True)).escaped_goal
+
+
+def test_a_goal_free_on_the_meshes_is_approached_clear_of_them(panda, touching) -> None:
+    guidance = JointGuidance(panda)
+    plan = guidance.plan(START, JointTarget(tuple(touching)), [WALL])
+    meshes = guidance._meshes()
+    assert meshes is not None
+    at_goal = meshes.clearance(touching)[0]
+    assert at_goal >= meshes.margin and guidance.checker.clearances(touching)[0] < 0.0   # refused by the spheres alone
+    assert plan.approach > 0.0
+    approach = plan.trajectory.phases[-1].waypoints
+    line = approach[0] + np.linspace(0.0, 1.0, 101)[:, None] * (approach[-1] - approach[0])
+    floor = min(guidance.settings.approach_clearance, at_goal)
+    assert meshes.clearance(line)[0] >= floor - 1e-4   # checked every path.resolution / 2, here every 1 % of it
+
+
+def test_the_meshes_decide_the_approach_of_a_goal_they_find_free(panda, touching, monkeypatch) -> None:
+    monkeypatch.setattr(MeshGoalCheck, "segment_free", lambda self, a, b, step, floor=None: False)
+    with pytest.raises(GuidanceError) as refused:
+        JointGuidance(panda).plan(START, JointTarget(tuple(touching)), [WALL])
+    assert refused.value.reason == "goal_in_collision"
+
+
+def test_guidance_instances_of_one_robot_share_its_mesh_model(panda) -> None:
+    first, second = JointGuidance(panda), JointGuidance(panda)
+    first.checker.set_obstacles([WALL])
+    second.checker.set_obstacles([WALL])
+    model = robot_mesh_model(panda)
+    assert model is not None and first._meshes().model is model and second._meshes().model is model
+
+
+def test_a_goal_the_meshes_judge_is_escaped_with_mesh_escape_samples(panda, touching, monkeypatch) -> None:
+    used = []
+
+    def recording(checker, start, goal, lower, upper, settings, seed, approach):
+        used.append(settings.escape_samples)
+        return plan_joint_path(checker, start, goal, lower, upper, settings, seed, approach)
+
+    monkeypatch.setattr(guidance_module, "plan_joint_path", recording)
+    guidance = JointGuidance(panda, replace(GuidanceSettings(), mesh_escape_samples=777))
+    guidance.plan(START, JointTarget(tuple(touching)), [WALL])   # free on the meshes: judged there
+    assert used == [777]
+    deep = _toward_wall(panda, -0.03)   # the meshes within mesh_margin too: the spheres judge it
+    assert guidance._meshes().clearance(deep)[0] < guidance.settings.mesh_margin
+    guidance.plan(START, JointTarget(tuple(deep)), [WALL])
+    assert used[-1] == guidance.settings.path.escape_samples

@@ -35,6 +35,15 @@ class GuidanceSettings:
             on the meshes by ``mesh_margin`` (:mod:`dynfab.motion.mesh_goal_check`).
         mesh_margin: clearance [m] a goal solution checked on the robot's meshes keeps
             from the exact obstacles.
+        approach_clearance: clearance [m] on the robot's meshes that the approach to a goal
+            free on them keeps where the goal is farther (the goal's own where it is nearer;
+            :meth:`JointGuidance._goal_approach`).
+        mesh_escape_samples: ``path.escape_samples`` for a goal whose approach the meshes
+            judge (:meth:`JointGuidance._goal_approach`) [-]: 400 found no escape for as-posed
+            table_pick/0032 (problems 29-32, which chose it), its hand between a table and a cube
+            where the spheres bulge into both; 1000 found approaches of 0.3-0.6 rad (3 seeds)
+            in 0.07-0.6 s. The mesh test keeps the nearer escapes this finds from cutting
+            into the object (with the spheres' test, 2000 did: docs/results.md).
         timing: how the path is timed.
         speed: fraction of the velocity limits the reference uses [-].
         acceleration: fraction of the acceleration limits the reference uses [-]: the
@@ -97,6 +106,8 @@ class GuidanceSettings:
     ik: IkSettings = field(default_factory=IkSettings)
     ik_retry: IkSettings = field(default_factory=lambda: IkSettings(seeds=240, time_limit=2.0))
     mesh_margin: float = 0.003
+    approach_clearance: float = 0.005
+    mesh_escape_samples: int = 1000
     timing: TimingSettings = field(default_factory=TimingSettings)
     speed: float = 0.5
     acceleration: float = 0.25

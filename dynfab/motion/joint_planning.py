@@ -15,9 +15,12 @@ handled as manipulation planners handle grasps: the nearest free configuration w
 ``escape_far_radius``) from which the straight segment to
 the real endpoint goes no deeper into obstacles (and into the robot itself) than the
 endpoint does, ``escape_slack`` aside, becomes the planned endpoint; the segment is
-appended, and the fabric tracks it. A caller may ask more of the goal's segment
-(``goal_approach``: guidance checks it on the robot's meshes for a goal it found free only
-there, :mod:`dynfab.motion.mesh_goal_check`).
+appended, and the fabric tracks it. A caller may ask more of the goal's segment, or
+judge it otherwise (:class:`ApproachTest`: guidance checks it on the robot's meshes,
+:mod:`dynfab.motion.mesh_goal_check`; for a goal free on the meshes that test replaces the
+spheres', which read the segment from their bulges, 1-2 cm out of the meshes at the hand:
+they refuse segments into a grasp that the meshes clear, and accept some that the meshes
+find millimetres inside a board).
 
 An endpoint whose own self-collision spheres overlap (``c_self < self_margin`` at it: the
 spheres of a folded wrist overlap where the meshes are apart) lowers ``self_margin`` for
@@ -47,7 +50,8 @@ from ompl import util as ou
 from dynfab.motion.ompl_problem import CheckBudget, solve_in_box
 from dynfab.motion.configuration_checker import ConfigurationChecker
 
-__all__ = ["WALL_FACTOR", "JointPath", "JointPlannerSettings", "NoPathError", "approach_clear", "plan_joint_path"]
+__all__ = ["WALL_FACTOR", "ApproachTest", "JointPath", "JointPlannerSettings", "NoPathError", "approach_clear",
+           "plan_joint_path"]
 
 PlannerName = Literal["RRTConnect", "RRT", "KPIECE1", "BKPIECE1", "PRM"]
 _PLANNERS: dict[str, type] = {"RRTConnect": og.RRTConnect, "RRT": og.RRT, "KPIECE1": og.KPIECE1,
@@ -134,6 +138,22 @@ class JointPath:
     escaped_goal: bool
 
 
+@dataclass(frozen=True)
+class ApproachTest:
+    """A caller's test of a blocked goal's approach: the straight segment from a free
+    configuration to the goal.
+
+    Attributes:
+        accepts: ``(free, goal) ↦`` whether the segment may be the approach.
+        instead_of_spheres: whether ``accepts`` replaces the spheres' test (the segment goes
+            no deeper into the checker's obstacles than the goal, module docstring) rather
+            than adding to it.
+    """
+
+    accepts: Callable[[NDArray[np.float64], NDArray[np.float64]], bool]
+    instead_of_spheres: bool = False
+
+
 class NoPathError(RuntimeError):
     """No path was found; ``reason`` is ``start_in_collision``, ``goal_in_collision`` or
     ``no_path``."""
@@ -178,8 +198,7 @@ class _Validity:
 def plan_joint_path(checker: ConfigurationChecker, start: NDArray[np.float64], goal: NDArray[np.float64],
                     lower: NDArray[np.float64], upper: NDArray[np.float64],
                     settings: JointPlannerSettings = JointPlannerSettings(), seed: int = 0,
-                    goal_approach: Callable[[NDArray[np.float64], NDArray[np.float64]], bool] | None = None
-                    ) -> JointPath:
+                    goal_approach: ApproachTest | None = None) -> JointPath:
     """A free polyline from ``start`` to ``goal`` (module docstring).
 
     Args:
@@ -190,8 +209,8 @@ def plan_joint_path(checker: ConfigurationChecker, start: NDArray[np.float64], g
         upper: upper joint bounds (n,) [rad].
         settings: planner, time limit, resolution, margins.
         seed: random seed (OMPL's sampler and the endpoint escape).
-        goal_approach: ``(free, goal) ↦`` whether a blocked goal's escape ``free`` may be
-            approached from; None: any the spheres allow.
+        goal_approach: the caller's test of a blocked goal's approach, beside or instead of
+            the spheres' (:class:`ApproachTest`); None: the spheres' alone.
 
     Raises:
         NoPathError: an endpoint is blocked with no free configuration near it, or no
@@ -239,11 +258,11 @@ def polyline_samples(waypoints: NDArray[np.float64], step: float) -> NDArray[np.
 def _free_near(q: NDArray[np.float64], validity: _Validity, checker: ConfigurationChecker,
                lower: NDArray[np.float64], upper: NDArray[np.float64], settings: JointPlannerSettings,
                rng: np.random.Generator, name: str,
-               approach: Callable[[NDArray[np.float64], NDArray[np.float64]], bool] | None = None
-               ) -> NDArray[np.float64]:
+               approach: ApproachTest | None = None) -> NDArray[np.float64]:
     """``q`` itself if free, else the free sample nearest it within ``escape_radius`` (else
     ``escape_far_radius``) whose straight segment to ``q`` goes no deeper than ``q`` (and that
-    ``approach`` accepts, if given; module docstring)."""
+    ``approach`` accepts, if given), or that ``approach`` alone accepts if it replaces that
+    test (module docstring)."""
     if validity.free(q):
         return q
     count = settings.escape_samples
@@ -255,12 +274,22 @@ def _free_near(q: NDArray[np.float64], validity: _Validity, checker: Configurati
         directions = rng.normal(size=(count, q.size))
         directions /= np.linalg.norm(directions, axis=1, keepdims=True)
         for candidate in np.clip(q + radii[:, None] * directions, lower, upper):
-            if (validity.free(candidate) and _no_deeper(checker, candidate, q, settings)
-                    and (approach is None or approach(candidate, q))):
+            if validity.free(candidate) and _segment_accepted(checker, candidate, q, settings, approach):
                 return candidate
     reason = f"{name}_in_collision"
     raise NoPathError(reason, f"the {name} is in collision on the collision spheres and no free configuration "
                               f"lies within {far} rad of it")
+
+
+def _segment_accepted(checker: ConfigurationChecker, free: NDArray[np.float64], end: NDArray[np.float64],
+                      settings: JointPlannerSettings, approach: ApproachTest | None) -> bool:
+    """Whether the straight segment from ``free`` to the blocked ``end`` may be its approach:
+    the spheres' test and ``approach``'s, or ``approach``'s alone (:class:`ApproachTest`)."""
+    if approach is None:
+        return _no_deeper(checker, free, end, settings)
+    if approach.instead_of_spheres:
+        return approach.accepts(free, end)
+    return _no_deeper(checker, free, end, settings) and approach.accepts(free, end)
 
 
 def approach_clear(checker: ConfigurationChecker, q: NDArray[np.float64], goal: NDArray[np.float64],
