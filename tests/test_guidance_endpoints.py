@@ -74,3 +74,24 @@ def test_a_goal_with_no_escape_within_the_radius_is_escaped_farther_out(panda, g
     assert settings.escape_radius < reach <= settings.escape_far_radius
     approach = checker.batch(polyline_samples(path.waypoints[-2:], settings.resolution / 2))
     assert approach[:, 1].min() >= overlap - settings.escape_slack - 1e-9   # never deeper than the goal's own
+
+
+def test_a_blocked_goal_without_an_escape_is_tried_again_with_the_next_seed(panda, monkeypatch) -> None:
+    """The escape's samples are random: an attempt that found no escape for a blocked goal
+    does not end the request; the next attempt draws others (its seed + 1)."""
+    from dynfab.motion import guidance as guidance_module
+    from dynfab.motion.guidance import JointGuidance, JointTarget
+
+    seeds = []
+    real = guidance_module.plan_joint_path
+
+    def first_escape_fails(*args, **kwargs):
+        seeds.append(args[6])
+        if len(seeds) == 1:
+            raise NoPathError("goal_in_collision", "no escape among this seed's samples (test)")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(guidance_module, "plan_joint_path", first_escape_fails)
+    start = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.785])
+    plan = JointGuidance(panda).plan(start, JointTarget(tuple(start + 0.2)), [], seed=5)
+    assert seeds == [5, 6] and np.allclose(plan.goal, start + 0.2)

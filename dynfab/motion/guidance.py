@@ -180,10 +180,8 @@ class JointGuidance:
             try:
                 path = plan_joint_path(self.checker, start, target, self._lower, self._upper, settings, attempt_seed,
                                        approach)
-            except NoPathError as failure:
+            except NoPathError as failure:   # the next attempt: a longer search, and other escape samples
                 error = GuidanceError(failure.reason, str(failure))
-                if failure.reason != "no_path" and settings.margin == path_settings.margin:
-                    break
                 continue
             checks += path.checks
             try:

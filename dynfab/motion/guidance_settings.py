@@ -50,7 +50,8 @@ class GuidanceSettings:
             fabric tracks it with a lag that grows with it, and a lag as it brakes at a
             grasp's approach overshoots into the object.
         attempts: plans tried per request, each with the next seed and twice the previous
-            one's time limit (1, 2, 4 s by default) [-].
+            one's time limit (1, 2, 4 s by default) [-]; a blocked start or goal with no escape
+            is tried again too (the next seed draws other escape samples).
         replans: plans at most in one run after the first [-]. 10: with 4 (the value
             before), all 8 failures of training moving-sphere problems 10-16 had used them
             all.
