@@ -8,7 +8,8 @@ A goal is a configuration (:class:`JointTarget`) or task targets
 kinematics turns into the configuration nearest the current one (free on the spheres, else,
 for goals millimetres from the scene, free on the robot's meshes:
 :mod:`dynfab.motion.mesh_goal_check`). The path is planned
-with OMPL among the obstacles given (:mod:`dynfab.motion.joint_planning`), against the
+with OMPL among the obstacles given (:mod:`dynfab.motion.joint_planning`; a point cloud's
+points around the robot at the goal read on a finer grid, :mod:`dynfab.motion.cloud_focus`), against the
 same spheres, shapes and self-collision pairs the fabric avoids, and timed within
 ``speed`` times the robot's velocity and acceleration limits
 (:mod:`dynfab.motion.joint_trajectory`): the rest of the limits is the fabric's, to track
@@ -27,6 +28,7 @@ from numpy.typing import NDArray
 
 from dynfab.fabric.leaves.surface_points import moving_spheres
 from dynfab.geometry.shapes import Mesh, PointCloud
+from dynfab.motion.cloud_focus import focused_obstacles
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.inverse_kinematics import AxisTarget, IkSettings, PointTarget, solve_ik
 from dynfab.motion.mesh_goal_check import MeshGoalCheck
@@ -110,6 +112,7 @@ class JointGuidance:
         self._single = ConfigurationChecker(robot)  # one obstacle at a time (allowances)
         self._ahead = ConfigurationChecker(robot)   # what moves (blocked_ahead)
         self._mesh_check: MeshGoalCheck | None | bool = False  # made on first use; None: no meshes
+        self._focus: tuple[tuple[PlacedObstacle, ...], bytes, tuple[PlacedObstacle, ...]] | None = None  # the last
         self._leaf_spheres = list(moving_spheres(robot))  # those a nearest-point leaf acts on
         self._leaf_radii = np.asarray(robot.sphere_radii, dtype=float)[self._leaf_spheres]
         kin = robot.kinematics
@@ -163,6 +166,7 @@ class JointGuidance:
         self.checker.set_obstacles(obstacles)
         start = np.clip(np.asarray(q, dtype=float), self._lower, self._upper)
         target = self.goal_configuration(goal, start, seed)
+        self.checker.set_obstacles(self._focused(obstacles, target))
         approach = self._mesh_approach()
         error: GuidanceError | None = None
         checks = 0
@@ -271,6 +275,25 @@ class JointGuidance:
         limits, settings = self.robot.limits, self.settings
         return time_path(segment, settings.approach_speed * limits.velocity,
                          settings.approach_speed * limits.acceleration, settings.timing)
+
+    def _focused(self, obstacles: Sequence[PlacedObstacle], target: NDArray[np.float64]) -> tuple[PlacedObstacle, ...]:
+        """``obstacles`` with their point clouds focused around the robot at ``target``
+        (:mod:`dynfab.motion.cloud_focus`; the last result reused for the same obstacles and
+        goal: a replan builds no new grids)."""
+        focus = self.settings.cloud_focus
+        if focus is None or not any(isinstance(o.shape, PointCloud) for o in obstacles):
+            return tuple(obstacles)
+        key = target.tobytes()
+        last = self._focus
+        if (last is not None and last[1] == key and len(last[0]) == len(obstacles)
+                and all(a.shape is b.shape and np.array_equal(a.placement.position, b.placement.position)
+                        and np.array_equal(a.placement.orientation, b.placement.orientation)
+                        for a, b in zip(last[0], obstacles))):
+            return last[2]
+        centres = np.asarray(self.robot.sphere_centers(target), dtype=float)
+        focused = focused_obstacles(obstacles, centres, np.asarray(self.robot.sphere_radii, dtype=float), focus)
+        self._focus = (tuple(obstacles), key, focused)
+        return focused
 
     def _mesh_approach(self) -> Callable[[NDArray[np.float64], NDArray[np.float64]], bool] | None:
         """Among meshes or point clouds, the check of an escaped goal's approach on the robot's

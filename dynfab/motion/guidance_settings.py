@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from dynfab.motion.cloud_focus import CloudFocus
 from dynfab.motion.inverse_kinematics import IkSettings
 from dynfab.motion.joint_planning import JointPlannerSettings
 from dynfab.motion.joint_trajectory import TimingSettings
@@ -28,6 +29,8 @@ class GuidanceSettings:
             on the meshes by ``mesh_margin`` (:mod:`dynfab.motion.mesh_goal_check`).
         mesh_margin: clearance [m] a goal solution checked on the robot's meshes keeps
             from the exact obstacles.
+        cloud_focus: how the planner reads point clouds around the robot at its goal
+            (:mod:`dynfab.motion.cloud_focus`); None: as everywhere else.
         timing: how the path is timed.
         speed: fraction of the velocity limits the reference uses [-].
         acceleration: fraction of the acceleration limits the reference uses [-]: the
@@ -90,6 +93,7 @@ class GuidanceSettings:
     ik: IkSettings = field(default_factory=IkSettings)
     ik_retry: IkSettings = field(default_factory=lambda: IkSettings(seeds=240, time_limit=2.0))
     mesh_margin: float = 0.003
+    cloud_focus: CloudFocus | None = CloudFocus()
     timing: TimingSettings = field(default_factory=TimingSettings)
     speed: float = 0.5
     acceleration: float = 0.25
