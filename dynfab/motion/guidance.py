@@ -8,8 +8,9 @@ A goal is a configuration (:class:`JointTarget`) or task targets
 kinematics turns into the configuration nearest the current one (free on the spheres, else,
 for goals millimetres from the scene, free on the robot's meshes:
 :mod:`dynfab.motion.mesh_goal_check`). The path is planned
-with OMPL among the obstacles given (:mod:`dynfab.motion.joint_planning`; a point cloud's
-points around the robot at the goal read on a finer grid, :mod:`dynfab.motion.cloud_focus`), against the
+with OMPL among the obstacles given (:mod:`dynfab.motion.joint_planning`; where that finds
+no plan, again with a point cloud's points around the robot at the goal on a finer grid,
+:mod:`dynfab.motion.cloud_focus`), against the
 same spheres, shapes and self-collision pairs the fabric avoids, and timed within
 ``speed`` times the robot's velocity and acceleration limits
 (:mod:`dynfab.motion.joint_trajectory`): the rest of the limits is the fabric's, to track
@@ -48,6 +49,8 @@ __all__ = ["GuidanceError", "GuidanceSettings", "JointGuidance", "JointTarget", 
 LIMIT_SLACK = 1e-6
 #: an approach shorter than this is none: the robot is at the goal [rad]
 SHORTEST_APPROACH = 1e-6
+#: failures a plan among point clouds makes again with the clouds focused around its goal
+_FOCUS_HELPS = frozenset({"start_in_collision", "goal_in_collision", "no_path"})
 
 
 @dataclass(frozen=True)
@@ -157,7 +160,10 @@ class JointGuidance:
     def plan(self, q: NDArray[np.float64], goal: GoalTargets, obstacles: Sequence[PlacedObstacle],
              seed: int = 0, wide: bool = False) -> Plan:
         """A timed free reference from ``q`` (at rest) to ``goal`` among ``obstacles``; if
-        ``wide``, the first attempt keeps ``stall_margin`` (a replan after a stall).
+        ``wide``, the first attempt keeps ``stall_margin`` (a replan after a stall). Where
+        no attempt finds a path (or escapes a blocked endpoint) among point clouds, the
+        attempts are made again with the clouds focused around the goal
+        (:mod:`dynfab.motion.cloud_focus`).
 
         Raises:
             GuidanceError: if every attempt failed (the last one's reason).
@@ -166,7 +172,21 @@ class JointGuidance:
         self.checker.set_obstacles(obstacles)
         start = np.clip(np.asarray(q, dtype=float), self._lower, self._upper)
         target = self.goal_configuration(goal, start, seed)
-        self.checker.set_obstacles(self._focused(obstacles, target))
+        focused = self._focused(obstacles, target)
+        views = (tuple(obstacles),) if focused is None else (tuple(obstacles), focused)
+        for view in views:
+            self.checker.set_obstacles(view)
+            try:
+                return self._attempts(start, target, seed, wide, began)
+            except GuidanceError as failure:
+                if view is views[-1] or failure.reason not in _FOCUS_HELPS:
+                    raise
+        raise AssertionError("unreachable: the last view raises")
+
+    def _attempts(self, start: NDArray[np.float64], target: NDArray[np.float64], seed: int, wide: bool,
+                  began: float) -> Plan:
+        """The plan from ``start`` to ``target`` among the checker's obstacles: each attempt
+        with the next seed and twice the time limit, a ``wide`` one first (:meth:`plan`)."""
         approach = self._mesh_approach()
         error: GuidanceError | None = None
         checks = 0
@@ -191,8 +211,8 @@ class JointGuidance:
             except TimingError as failure:
                 raise GuidanceError("timing", str(failure)) from None
             if isinstance(trajectory, PhasedTrajectory):
-                approach = float(np.linalg.norm(path.waypoints[-1] - path.waypoints[-2]))
-                return Plan(trajectory, target, time.perf_counter() - began, checks, approach,
+                length = float(np.linalg.norm(path.waypoints[-1] - path.waypoints[-2]))
+                return Plan(trajectory, target, time.perf_counter() - began, checks, length,
                             float(trajectory.starts[-1]))
             return Plan(trajectory, target, time.perf_counter() - began, checks, 0.0, trajectory.duration)
         assert error is not None
@@ -276,13 +296,14 @@ class JointGuidance:
         return time_path(segment, settings.approach_speed * limits.velocity,
                          settings.approach_speed * limits.acceleration, settings.timing)
 
-    def _focused(self, obstacles: Sequence[PlacedObstacle], target: NDArray[np.float64]) -> tuple[PlacedObstacle, ...]:
+    def _focused(self, obstacles: Sequence[PlacedObstacle],
+                 target: NDArray[np.float64]) -> tuple[PlacedObstacle, ...] | None:
         """``obstacles`` with their point clouds focused around the robot at ``target``
-        (:mod:`dynfab.motion.cloud_focus`; the last result reused for the same obstacles and
-        goal: a replan builds no new grids)."""
+        (:mod:`dynfab.motion.cloud_focus`), None without clouds or focus; the last result
+        reused for the same obstacles and goal (a replan builds no new grids)."""
         focus = self.settings.cloud_focus
         if focus is None or not any(isinstance(o.shape, PointCloud) for o in obstacles):
-            return tuple(obstacles)
+            return None
         key = target.tobytes()
         last = self._focus
         if (last is not None and last[1] == key and len(last[0]) == len(obstacles)

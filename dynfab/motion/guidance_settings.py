@@ -29,8 +29,9 @@ class GuidanceSettings:
             on the meshes by ``mesh_margin`` (:mod:`dynfab.motion.mesh_goal_check`).
         mesh_margin: clearance [m] a goal solution checked on the robot's meshes keeps
             from the exact obstacles.
-        cloud_focus: how the planner reads point clouds around the robot at its goal
-            (:mod:`dynfab.motion.cloud_focus`); None: as everywhere else.
+        cloud_focus: how the planner reads point clouds around the robot at its goal when
+            it finds no plan on the whole clouds' grids (:mod:`dynfab.motion.cloud_focus`);
+            None: it does not try.
         timing: how the path is timed.
         speed: fraction of the velocity limits the reference uses [-].
         acceleration: fraction of the acceleration limits the reference uses [-]: the
