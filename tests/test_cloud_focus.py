@@ -1,7 +1,8 @@
 """The planner's focus on a point cloud near its goal: the split of the kept points, the
 focused obstacles around the robot's spheres, the compiled checker's bound on them (never
 above the distance to a measured point, closer to it than the whole cloud's grid near the
-goal), guidance using it, bad settings refused."""
+goal), guidance using it only where the whole cloud gives no plan (a cage grasp), bad
+settings refused."""
 
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ from dynfab.geometry.point_cloud import PointCloud
 from dynfab.geometry.shapes import Box, Placement
 from dynfab.motion.cloud_focus import CloudFocus, focused_obstacles
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
-from dynfab.motion.guidance import JointGuidance, JointTarget
+from dynfab.motion.guidance import GuidanceError, JointGuidance, JointTarget
 from dynfab.motion.guidance_settings import GuidanceSettings
 from dynfab.robots.builtin import load_robot
 
@@ -114,17 +115,39 @@ def test_the_checker_reads_the_focused_cloud_below_the_measured_distance_and_clo
     assert np.median(shortfall) < np.median(whole_shortfall) - 0.002
 
 
-def test_guidance_plans_on_the_focused_cloud_and_reuses_it_for_the_same_goal() -> None:
+def test_guidance_focuses_the_cloud_only_where_the_whole_cloud_gives_no_plan() -> None:
     robot = load_robot("panda")
     cloud = PointCloud.from_points(_wall(np.random.default_rng(7)), voxel=0.01)
     obstacles = [PlacedObstacle(cloud, ORIGIN)]
-    goal = JointTarget((0.3, -0.3, 0.0, -2.0, 0.0, 1.8, 0.785))
     guidance = JointGuidance(robot)
-    plan = guidance.plan(START, goal, obstacles)
+    guidance.plan(START, JointTarget((0.3, -0.3, 0.0, -2.0, 0.0, 1.8, 0.785)), obstacles)
+    assert guidance.checker.obstacles == tuple(obstacles)  # planned on the whole cloud
+
+
+def _cage_problem() -> tuple[list[PlacedObstacle], np.ndarray, JointTarget]:
+    """Training problem cage/0011 as a point cloud: its grasp goal reads in collision on the
+    whole cloud's grid with no escape."""
+    from dynfab.benchmarks.mbm.franka import franka
+    from dynfab.benchmarks.mbm.problems import load_problems
+    from dynfab.benchmarks.mbm.variants import prepare_case
+    from dynfab.scenario.schema import scenario_from_dict
+
+    problem = load_problems(("cage",), 1, skip=2)[0]
+    assert problem.name == "cage/0011"
+    scenario = scenario_from_dict(prepare_case(problem, "points", franka()).mapping)
+    obstacles = [PlacedObstacle(o.shape, Placement(tuple(o.position), o.orientation)) for o in scenario.obstacles]
+    return obstacles, np.asarray(scenario.initial_state.q), JointTarget(tuple(scenario.goals[0].position))
+
+
+def test_a_cage_goal_blocked_on_the_whole_cloud_is_planned_on_the_focused_one_and_reused() -> None:
+    robot = load_robot("panda")
+    obstacles, start, goal = _cage_problem()
+    with pytest.raises(GuidanceError) as failure:
+        JointGuidance(robot, GuidanceSettings(cloud_focus=None)).plan(start, goal, obstacles)
+    assert failure.value.reason == "goal_in_collision"
+    guidance = JointGuidance(robot)
+    plan = guidance.plan(start, goal, obstacles)
     used = guidance.checker.obstacles
-    assert any(isinstance(o.shape, FocusedCloud) for o in used) and plan.trajectory.duration > 0.0
-    guidance.plan(START, goal, obstacles, seed=1)
+    assert any(isinstance(o.shape, FocusedCloud) for o in used) and plan.approach > 0.0
+    guidance.plan(start, goal, obstacles, seed=1)
     assert guidance.checker.obstacles is used
-    plain = JointGuidance(robot, GuidanceSettings(cloud_focus=None))
-    plain.plan(START, goal, obstacles)
-    assert plain.checker.obstacles == tuple(obstacles)
