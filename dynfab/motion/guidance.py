@@ -115,7 +115,8 @@ class JointGuidance:
         self._single = ConfigurationChecker(robot)  # one obstacle at a time (allowances)
         self._ahead = ConfigurationChecker(robot)   # what moves (blocked_ahead)
         self._mesh_check: MeshGoalCheck | None | bool = False  # made on first use; None: no meshes
-        self._focus: tuple[tuple[PlacedObstacle, ...], bytes, tuple[PlacedObstacle, ...]] | None = None  # the last
+        # the last focus made: the obstacles, the goal's bytes and the focused obstacles
+        self._focus: tuple[tuple[PlacedObstacle, ...], bytes, tuple[PlacedObstacle, ...]] | None = None
         self._leaf_spheres = list(moving_spheres(robot))  # those a nearest-point leaf acts on
         self._leaf_radii = np.asarray(robot.sphere_radii, dtype=float)[self._leaf_spheres]
         kin = robot.kinematics
@@ -172,16 +173,14 @@ class JointGuidance:
         self.checker.set_obstacles(obstacles)
         start = np.clip(np.asarray(q, dtype=float), self._lower, self._upper)
         target = self.goal_configuration(goal, start, seed)
-        focused = self._focused(obstacles, target)
-        views = (tuple(obstacles),) if focused is None else (tuple(obstacles), focused)
-        for view in views:
-            self.checker.set_obstacles(view)
-            try:
-                return self._attempts(start, target, seed, wide, began)
-            except GuidanceError as failure:
-                if view is views[-1] or failure.reason not in _FOCUS_HELPS:
-                    raise
-        raise AssertionError("unreachable: the last view raises")
+        try:
+            return self._attempts(start, target, seed, wide, began)
+        except GuidanceError as failure:
+            focused = self._focused(obstacles, target) if failure.reason in _FOCUS_HELPS else None
+            if focused is None:
+                raise
+        self.checker.set_obstacles(focused)
+        return self._attempts(start, target, seed, wide, began)
 
     def _attempts(self, start: NDArray[np.float64], target: NDArray[np.float64], seed: int, wide: bool,
                   began: float) -> Plan:
