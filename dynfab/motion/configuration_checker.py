@@ -12,7 +12,8 @@ plane in its own frame, :mod:`dynfab.geometry.distance`; for a mesh, compiled, a
 of it from a grid, :mod:`dynfab.geometry.distance_grid`, at most ``h√3`` = 1.7 cm below it
 within 4 cm of the surface; for a point cloud, compiled, the grid of
 :mod:`dynfab.geometry.cloud_grid`, interpreted, the KD-tree distance less the voxel
-half-diagonal) and the robot's self-collision
+half-diagonal; the part of a cloud near a goal, :mod:`dynfab.geometry.focused_cloud`, on a
+finer grid) and the robot's self-collision
 pairs: the same spheres, shapes and pairs the fabric's leaves avoid, so a path the
 checker accepts is one the fabric can follow. ``inf`` where there is nothing to check.
 
@@ -38,8 +39,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dynfab.geometry.distance import placed_distance
-from dynfab.geometry.distance_grid import distance_grid
+from dynfab.geometry.distance_grid import DistanceGrid, distance_grid
 from dynfab.geometry.cloud_grid import cloud_distance_grid
+from dynfab.geometry.focused_cloud import FocusedCloud
 from dynfab.geometry.shapes import Box, Capsule, Cylinder, Mesh, Placement, Plane, PointCloud, Shape, Sphere
 from dynfab.motion.checker_library import as_pointer, load_checker_library
 from dynfab.robots.collision_model import cache_dir
@@ -47,7 +49,8 @@ from dynfab.robots.robot import Robot
 
 __all__ = ["ConfigurationChecker", "PlacedObstacle"]
 
-_KIND: dict[type, int] = {Sphere: 0, Box: 1, Cylinder: 2, Capsule: 3, Plane: 4, Mesh: 5, PointCloud: 6}
+_KIND: dict[type, int] = {Sphere: 0, Box: 1, Cylinder: 2, Capsule: 3, Plane: 4, Mesh: 5, PointCloud: 6,
+                          FocusedCloud: 6}
 _ROW = 17
 _ONE = ctypes.c_int(1)
 
@@ -193,11 +196,18 @@ def _buffer(obstacles: Sequence[PlacedObstacle]) -> NDArray[np.float64]:
         if isinstance(obstacle.shape, Mesh | PointCloud):
             shape = obstacle.shape
             grid = (distance_grid(shape, cache=cache_dir() / "distance-grids") if isinstance(shape, Mesh)
-                    else cloud_distance_grid(shape)).packed()
+                    else _cloud_grid(shape)).packed()
             rows[k, 13] = end - _ROW * k
             grids.append(grid)
             end += grid.size
     return np.ascontiguousarray(np.concatenate([rows.reshape(-1), *grids]))
+
+
+def _cloud_grid(cloud: PointCloud) -> DistanceGrid:
+    """A cloud's grid: a focused cloud's at its pitch (:mod:`dynfab.geometry.focused_cloud`)."""
+    if isinstance(cloud, FocusedCloud):
+        return cloud_distance_grid(cloud, pitch=cloud.pitch)
+    return cloud_distance_grid(cloud)
 
 
 def _row(obstacle: PlacedObstacle) -> NDArray[np.float64]:

@@ -8,7 +8,9 @@ A goal is a configuration (:class:`JointTarget`) or task targets
 kinematics turns into the configuration nearest the current one (free on the spheres, else,
 for goals millimetres from the scene, free on the robot's meshes:
 :mod:`dynfab.motion.mesh_goal_check`). The path is planned
-with OMPL among the obstacles given (:mod:`dynfab.motion.joint_planning`), against the
+with OMPL among the obstacles given (:mod:`dynfab.motion.joint_planning`; where that finds
+no plan, again with a point cloud's points around the robot at the goal on a finer grid,
+:mod:`dynfab.motion.cloud_focus`), against the
 same spheres, shapes and self-collision pairs the fabric avoids, and timed within
 ``speed`` times the robot's velocity and acceleration limits
 (:mod:`dynfab.motion.joint_trajectory`): the rest of the limits is the fabric's, to track
@@ -28,6 +30,7 @@ from numpy.typing import NDArray
 
 from dynfab.fabric.leaves.surface_points import moving_spheres
 from dynfab.geometry.shapes import Mesh, PointCloud
+from dynfab.motion.cloud_focus import focused_obstacles
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.inverse_kinematics import AxisTarget, IkSettings, PointTarget, solve_ik
 from dynfab.motion.mesh_goal_check import MeshGoalCheck
@@ -48,6 +51,8 @@ __all__ = ["GuidanceError", "GuidanceSettings", "JointGuidance", "JointTarget", 
 LIMIT_SLACK = 1e-6
 #: an approach shorter than this is none: the robot is at the goal [rad]
 SHORTEST_APPROACH = 1e-6
+#: failures a plan among point clouds makes again with the clouds focused around its goal
+_FOCUS_HELPS = frozenset({"start_in_collision", "goal_in_collision", "no_path"})
 
 
 @dataclass(frozen=True)
@@ -112,6 +117,8 @@ class JointGuidance:
         self._single = ConfigurationChecker(robot)  # one obstacle at a time (allowances)
         self._ahead = ConfigurationChecker(robot)   # what moves (blocked_ahead)
         self._mesh_check: MeshGoalCheck | None | bool = False  # made on first use; None: no meshes
+        # the last focus made: the obstacles, the goal's bytes and the focused obstacles
+        self._focus: tuple[tuple[PlacedObstacle, ...], bytes, tuple[PlacedObstacle, ...]] | None = None
         self._leaf_spheres = list(moving_spheres(robot))  # those a nearest-point leaf acts on
         self._leaf_radii = np.asarray(robot.sphere_radii, dtype=float)[self._leaf_spheres]
         kin = robot.kinematics
@@ -156,7 +163,10 @@ class JointGuidance:
     def plan(self, q: NDArray[np.float64], goal: GoalTargets, obstacles: Sequence[PlacedObstacle],
              seed: int = 0, wide: bool = False) -> Plan:
         """A timed free reference from ``q`` (at rest) to ``goal`` among ``obstacles``; if
-        ``wide``, the first attempt keeps ``stall_margin`` (a replan after a stall).
+        ``wide``, the first attempt keeps ``stall_margin`` (a replan after a stall). Where
+        no attempt finds a path (or escapes a blocked endpoint) among point clouds, the
+        attempts are made again with the clouds focused around the goal
+        (:mod:`dynfab.motion.cloud_focus`).
 
         Raises:
             GuidanceError: if every attempt failed (the last one's reason).
@@ -165,6 +175,19 @@ class JointGuidance:
         self.checker.set_obstacles(obstacles)
         start = np.clip(np.asarray(q, dtype=float), self._lower, self._upper)
         target = self.goal_configuration(goal, start, seed)
+        try:
+            return self._attempts(start, target, seed, wide, began)
+        except GuidanceError as failure:
+            focused = self._focused(obstacles, target) if failure.reason in _FOCUS_HELPS else None
+            if focused is None:
+                raise
+        self.checker.set_obstacles(focused)
+        return self._attempts(start, target, seed, wide, began)
+
+    def _attempts(self, start: NDArray[np.float64], target: NDArray[np.float64], seed: int, wide: bool,
+                  began: float) -> Plan:
+        """The plan from ``start`` to ``target`` among the checker's obstacles: each attempt
+        with the next seed and twice the time limit, a ``wide`` one first (:meth:`plan`)."""
         approach = self._goal_approach(target)
         error: GuidanceError | None = None
         checks = 0
@@ -189,8 +212,8 @@ class JointGuidance:
             except TimingError as failure:
                 raise GuidanceError("timing", str(failure)) from None
             if isinstance(trajectory, PhasedTrajectory):
-                approach = float(np.linalg.norm(path.waypoints[-1] - path.waypoints[-2]))
-                return Plan(trajectory, target, time.perf_counter() - began, checks, approach,
+                length = float(np.linalg.norm(path.waypoints[-1] - path.waypoints[-2]))
+                return Plan(trajectory, target, time.perf_counter() - began, checks, length,
                             float(trajectory.starts[-1]))
             return Plan(trajectory, target, time.perf_counter() - began, checks, 0.0, trajectory.duration)
         assert error is not None
@@ -274,16 +297,36 @@ class JointGuidance:
         return time_path(segment, settings.approach_speed * limits.velocity,
                          settings.approach_speed * limits.acceleration, settings.timing)
 
+    def _focused(self, obstacles: Sequence[PlacedObstacle],
+                 target: NDArray[np.float64]) -> tuple[PlacedObstacle, ...] | None:
+        """``obstacles`` with their point clouds focused around the robot at ``target``
+        (:mod:`dynfab.motion.cloud_focus`), None without clouds or focus; the last result
+        reused for the same obstacles and goal (a replan builds no new grids)."""
+        focus = self.settings.cloud_focus
+        if focus is None or not any(isinstance(o.shape, PointCloud) for o in obstacles):
+            return None
+        key = target.tobytes()
+        last = self._focus
+        if (last is not None and last[1] == key and len(last[0]) == len(obstacles)
+                and all(a.shape is b.shape and np.array_equal(a.placement.position, b.placement.position)
+                        and np.array_equal(a.placement.orientation, b.placement.orientation)
+                        for a, b in zip(last[0], obstacles))):
+            return last[2]
+        centres = np.asarray(self.robot.sphere_centers(target), dtype=float)
+        focused = focused_obstacles(obstacles, centres, np.asarray(self.robot.sphere_radii, dtype=float), focus)
+        self._focus = (tuple(obstacles), key, focused)
+        return focused
+
     def _goal_approach(self, goal: NDArray[np.float64]) -> ApproachTest | None:
         """The test of a blocked ``goal``'s approach on the robot's meshes
         (:meth:`MeshGoalCheck.segment_free`, every half ``path.resolution``): no deeper than
-        the goal is on them, nor closer than ``mesh_margin`` where it is farther. For a goal the meshes find free by ``mesh_margin`` among
-        boxes, cylinders, spheres and planes it replaces the spheres' test, which refuses
-        approaches into a grasp the meshes clear (issue 19, as posed: bookshelf_small/0032
-        found no escape with it) and accepts some the meshes find inside a board
-        (bookshelf_small/0019, seed 3: 5 mm); among meshes or point clouds both must pass,
-        as before. None for
-        a goal free on the spheres (no approach), or a robot without meshes."""
+        the goal is on them, nor closer than ``mesh_margin`` where it is farther. For a goal
+        the meshes find free by ``mesh_margin`` among boxes, cylinders, spheres and planes it
+        replaces the spheres' test, which refuses approaches into a grasp the meshes clear
+        (issue 19, as posed: bookshelf_small/0032 found no escape with it) and accepts some
+        the meshes find inside a board (bookshelf_small/0019, seed 3: 5 mm); among meshes or
+        point clouds both must pass, as before. None for a goal free on the spheres (no
+        approach), or a robot without meshes."""
         path = self.settings.path
         if self.checker.free(goal, path.margin, path.self_margin):
             return None

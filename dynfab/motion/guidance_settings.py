@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
+from dynfab.motion.cloud_focus import CloudFocus
 from dynfab.motion.inverse_kinematics import IkSettings
 from dynfab.motion.joint_planning import WALL_FACTOR, JointPlannerSettings
 from dynfab.motion.joint_trajectory import TimingSettings
@@ -44,6 +45,9 @@ class GuidanceSettings:
             where the spheres bulge into both; 1000 found approaches of 0.3-0.6 rad (3 seeds)
             in 0.07-0.6 s. The mesh test keeps the nearer escapes this finds from cutting
             into the object (with the spheres' test, 2000 did: docs/results.md).
+        cloud_focus: how the planner reads point clouds around the robot at its goal when
+            it finds no plan on the whole clouds' grids (:mod:`dynfab.motion.cloud_focus`);
+            None: it does not try.
         timing: how the path is timed.
         speed: fraction of the velocity limits the reference uses [-].
         acceleration: fraction of the acceleration limits the reference uses [-]: the
@@ -109,6 +113,7 @@ class GuidanceSettings:
     mesh_margin: float = 0.003
     approach_clearance: float = 0.005
     mesh_escape_samples: int = 1000
+    cloud_focus: CloudFocus | None = CloudFocus()
     timing: TimingSettings = field(default_factory=TimingSettings)
     speed: float = 0.5
     acceleration: float = 0.25
