@@ -17,9 +17,8 @@ from dynfab.scenario.guided_controller import SIMULATED_PLAN_LATENCY, make_scena
 from dynfab.scenario.references import scenario_references
 from dynfab.scenario.runner import run_scenario
 from dynfab.scenario.schema import scenario_from_dict, validate_for_robot
+from wall_scene import GOAL, START, WALL_ENTRY
 
-START = np.array([1.0, 0.3, 0.0, -1.8, 0.0, 2.1, 0.8])
-GOAL = np.array([-1.0, 0.3, 0.0, -1.8, 0.0, 2.1, 0.8])   # START turned about joint 1, behind the wall
 DT = 0.01
 
 
@@ -31,7 +30,7 @@ def panda():
 def _scenario(duration: float = 5.0) -> dict:
     return {"robot": "panda", "planner": "dynamic-fabric", "dt": DT, "duration": duration,
             "initial_state": {"q": START.tolist()}, "goal": [{"type": "joint", "position": GOAL.tolist()}],
-            "obstacles": [{"type": "box", "position": [0.45, 0.0, 0.35], "size": [0.6, 0.04, 0.7]}]}
+            "obstacles": [WALL_ENTRY]}
 
 
 def _controller(panda, plan_latency: float | None):

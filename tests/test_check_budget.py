@@ -11,15 +11,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from dynfab.geometry.shapes import Box, Placement
 from dynfab.motion import ompl_problem
-from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
+from dynfab.motion.configuration_checker import ConfigurationChecker
 from dynfab.motion.guidance_settings import GuidanceSettings, counted_checks
 from dynfab.motion.joint_planning import WALL_FACTOR, JointPlannerSettings, NoPathError, plan_joint_path
 from dynfab.robots import load_robot
+from wall_scene import START, WALL
 
-WALL = PlacedObstacle(Box((0.6, 0.04, 0.7)), Placement((0.45, 0.0, 0.35)))
-START = np.array([1.0, 0.3, 0.0, -1.8, 0.0, 2.1, 0.8])
 GOAL = np.array([-1.3, 0.3, 0.0, -1.8, 0.0, 2.1, 0.8])   # behind the wall: a search, not a straight line
 
 

@@ -17,10 +17,8 @@ from dynfab.motion.phased_trajectory import PhasedTrajectory
 from dynfab.robots import load_robot
 from dynfab.scenario.runner import run_scenario
 from dynfab.scenario.schema import scenario_from_dict
+from wall_scene import START, WALL, goal_near_the_wall
 
-#: a wall between the Panda's start (hand in front, at +y) and a goal behind it (-y)
-WALL = PlacedObstacle(Box((0.6, 0.04, 0.7)), Placement((0.45, 0.0, 0.35)))
-START = np.array([1.0, 0.3, 0.0, -1.8, 0.0, 2.1, 0.8])
 
 
 @pytest.fixture(scope="module")
@@ -160,19 +158,8 @@ def test_a_goal_guidance_cannot_reach_falls_back_to_the_fabric_and_says_why() ->
     assert metrics.final_distance > 0.3
 
 
-def _goal_near_the_wall(panda, clearance: float) -> np.ndarray:
-    """START turned about joint 1 toward the wall until its spheres are ``clearance`` from it."""
-    checker = ConfigurationChecker(panda, [WALL])
-    goal = START.copy()
-    for q1 in np.linspace(-1.3, 0.0, 1301):
-        goal[0] = q1
-        if checker.clearances(goal)[0] < clearance:
-            return goal
-    raise AssertionError("the wall is never that close")
-
-
 def test_a_goal_closer_to_an_obstacle_than_the_margin_is_reached_with_an_allowance_near_it(panda) -> None:
-    goal = _goal_near_the_wall(panda, 0.004)   # a grasp: the spheres 4 mm from the wall, the margin 10 mm
+    goal = goal_near_the_wall(panda, 0.004)   # a grasp: the spheres 4 mm from the wall, the margin 10 mm
     guidance = JointGuidance(panda)
     plan = guidance.plan(START, JointTarget(tuple(goal)), [WALL])
     assert plan.approach > 0.0
@@ -194,7 +181,7 @@ def test_a_goal_closer_to_an_obstacle_than_the_margin_is_reached_with_an_allowan
 
 
 def test_an_escaped_goal_is_approached_slowly_in_a_phase_of_its_own_after_a_stop(panda) -> None:
-    goal = _goal_near_the_wall(panda, 0.004)
+    goal = goal_near_the_wall(panda, 0.004)
     guidance = JointGuidance(panda)
     plan = guidance.plan(START, JointTarget(tuple(goal)), [WALL])
     trajectory = plan.trajectory

@@ -17,15 +17,15 @@ from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObst
 import dynfab.motion.guidance as guidance_module
 from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance, JointTarget, robot_mesh_model
 from dynfab.motion.joint_planning import (ApproachTest, JointPlannerSettings, NoPathError, approach_clear,
-                                          plan_joint_path, polyline_samples)
+                                          plan_joint_path)
 from dynfab.motion.mesh_goal_check import MeshGoalCheck
 from dynfab.motion.phased_trajectory import PhasedTrajectory
 from dynfab.robots import load_robot
 from dynfab.scenario.guided_controller import make_scenario_controller
 from dynfab.scenario.references import scenario_references
 from dynfab.scenario.schema import scenario_from_dict, validate_for_robot
+from wall_scene import WALL, goal_near_the_wall
 
-WALL = PlacedObstacle(Box((0.6, 0.04, 0.7)), Placement((0.45, 0.0, 0.35)))
 START = np.array([-1.3, 0.3, 0.0, -1.8, 0.0, 2.1, 0.8])
 DT = 0.01
 FAST = JointPlannerSettings(time_limit=0.5)
@@ -36,29 +36,18 @@ def panda():
     return load_robot("panda")
 
 
-def _toward_wall(panda, clearance: float) -> np.ndarray:
-    """START turned about joint 1 toward the wall until its spheres are ``clearance`` [m] from it."""
-    checker = ConfigurationChecker(panda, [WALL])
-    goal = START.copy()
-    for q1 in np.linspace(-1.3, 0.0, 1301):
-        goal[0] = q1
-        if checker.clearances(goal)[0] < clearance:
-            return goal
-    raise AssertionError("the wall is never that close")
-
-
 @pytest.fixture(scope="module")
 def grasp(panda) -> np.ndarray:
     """The spheres 4 mm from the wall (the planner's margin is 10 mm): a goal that is
     escaped and approached."""
-    return _toward_wall(panda, 0.004)
+    return goal_near_the_wall(panda, 0.004)
 
 
 @pytest.fixture(scope="module")
 def touching(panda) -> np.ndarray:
     """The spheres touching the wall; the meshes are farther (a goal the spheres refuse and
     the meshes find free)."""
-    return _toward_wall(panda, 0.0)
+    return goal_near_the_wall(panda, 0.0)
 
 
 def _turned(q: np.ndarray, by: float) -> np.ndarray:
@@ -247,7 +236,7 @@ def test_a_goal_the_meshes_judge_is_escaped_with_mesh_escape_samples(panda, touc
     guidance = JointGuidance(panda, replace(GuidanceSettings(), mesh_escape_samples=777))
     guidance.plan(START, JointTarget(tuple(touching)), [WALL])   # free on the meshes: judged there
     assert used == [777]
-    deep = _toward_wall(panda, -0.03)   # the meshes within mesh_margin too: the spheres judge it
+    deep = goal_near_the_wall(panda, -0.03)   # the meshes within mesh_margin too: the spheres judge it
     assert guidance._meshes().clearance(deep)[0] < guidance.settings.mesh_margin
     guidance.plan(START, JointTarget(tuple(deep)), [WALL])
     assert used[-1] == guidance.settings.path.escape_samples

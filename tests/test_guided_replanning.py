@@ -14,9 +14,8 @@ from dynfab.robots import load_robot
 from dynfab.scenario.guided_controller import GUIDED_MOVING_MARGIN, SIMULATED_PLAN_LATENCY, make_scenario_controller
 from dynfab.scenario.references import scenario_references
 from dynfab.scenario.schema import scenario_from_dict, validate_for_robot
+from wall_scene import GOAL, START, WALL_ENTRY
 
-START = np.array([1.0, 0.3, 0.0, -1.8, 0.0, 2.1, 0.8])
-GOAL = np.array([-1.0, 0.3, 0.0, -1.8, 0.0, 2.1, 0.8])   # START turned about joint 1, behind the wall
 DT = 0.01
 
 
@@ -26,7 +25,7 @@ def panda():
 
 
 def _controller(panda, moving_sphere: dict | None = None, plan_latency: float = SIMULATED_PLAN_LATENCY):
-    obstacles = [{"type": "box", "position": [0.45, 0.0, 0.35], "size": [0.6, 0.04, 0.7]}]
+    obstacles = [WALL_ENTRY]
     if moving_sphere is not None:
         obstacles.append(moving_sphere)
     data = {"robot": "panda", "planner": "dynamic-fabric", "dt": DT, "duration": 5.0,
