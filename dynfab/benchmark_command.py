@@ -44,6 +44,10 @@ def add_benchmark_parser(commands: Any) -> None:
     parser.add_argument("--problems", type=at_least_one, metavar="N", help="the first N problems of each type")
     parser.add_argument("--first", type=at_least_one, metavar="K", default=1,
                         help="start at each type's K-th problem (default 1; the shared set numbers them from 9)")
+    parser.add_argument("--archive", type=Path, metavar="PATH",
+                        help="read the problems from this archive in VAMP's format (e.g. VAMP's "
+                             "resources/panda/problems.tar.bz2, with the problems 1-8 the bundled one leaves out) "
+                             "instead of the bundled one")
     parser.add_argument("--planner", choices=[p for p in PLANNERS if p != "mpc"], default="dynamic-fabric",
                         help="the scenarios' planner (default dynamic-fabric)")
     parser.add_argument("--guidance", action=argparse.BooleanOptionalAction,
@@ -69,7 +73,7 @@ def benchmark_command(args: argparse.Namespace) -> int:
         print(f"dynfab: error: --robot ur5 runs the object-removed variant only, not {variant}", file=sys.stderr)
         return 2
     settings = BenchmarkSettings(variant, args.types, args.problems, args.planner, args.guidance, args.seed,
-                                 args.first - 1, args.robot)
+                                 args.first - 1, args.robot, args.archive)
     out = args.out or Path("dynfab-benchmarks") / f"mbm-{settings.label}"
     records = reported(lambda: run_benchmark(settings, out, args.jobs, requested_cluster(args.workers, args.scheduler),
                                              sys.stderr),

@@ -69,6 +69,8 @@ class BenchmarkSettings:
         guidance: The scenario's ``guidance`` key; None leaves it out (the schema's default).
         seed: Seed of the moving spheres and of the mesh scenes' problems.
         skip: Problems of each type skipped before the first ``per_type`` (in number order).
+        archive: A problems archive in VAMP's format to read instead of the bundled one
+            (:func:`~dynfab.benchmarks.mbm.problems.load_problems`); None: the bundled one.
     """
 
     variant: str = "as-posed"
@@ -79,6 +81,7 @@ class BenchmarkSettings:
     seed: int = 0
     skip: int = 0
     robot: str = "panda"
+    archive: Path | None = None
 
     @property
     def label(self) -> str:
@@ -133,7 +136,7 @@ def _cases(settings: BenchmarkSettings) -> list[Case]:
     """
     scenes = tuple(t for t in settings.types if t in SCENE_TYPES)
     problems = load_problems(tuple(t for t in settings.types if t not in SCENE_TYPES), settings.per_type,
-                             skip=settings.skip) if len(scenes) < len(settings.types) else ()
+                             archive=settings.archive, skip=settings.skip) if len(scenes) < len(settings.types) else ()
     if scenes and (settings.robot, settings.variant) != ("panda", SCENE_VARIANT):
         raise ValueError(f"the mesh scenes ({', '.join(scenes)}) run the Panda {SCENE_VARIANT} only (their queries "
                          f"name no object to remove)")

@@ -66,23 +66,34 @@ def load_problems(types: Sequence[str] = PROBLEM_TYPES, per_type: int | None = N
     """The problems of ``types`` (in that order, by number), the first ``per_type`` of each
     after the first ``skip``.
 
+    ``archive``: a problems archive in VAMP's format (``problems/<type>_panda/scene<NNNN>.yaml``
+    and ``request<NNNN>.yaml`` in a ``.tar.bz2``, e.g. VAMP's own
+    ``resources/panda/problems.tar.bz2`` with the problems the bundled one leaves out); None:
+    the bundled one.
+
     Raises:
         ValueError: An unknown type.
-        ProblemError: A malformed problem file, or a scene without its request.
+        ProblemError: A malformed problem file, a scene without its request, or an archive
+            that is missing or not a ``.tar.bz2``.
     """
     unknown = [t for t in types if t not in PROBLEM_TYPES]
     if unknown:
         raise ValueError(f"unknown problem type {unknown[0]!r} (expected one of {', '.join(PROBLEM_TYPES)})")
     texts: dict[tuple[str, int], dict[str, str]] = {}
-    path = bundled_archive() if archive is None else archive
-    with tarfile.open(path, "r:bz2") as tar:
-        for member in tar:
-            match = _MEMBER.fullmatch(member.name)
-            if match is None or match["type"] not in types or not member.isfile():
-                continue
-            handle = tar.extractfile(member)
-            assert handle is not None  # a regular file
-            texts.setdefault((match["type"], int(match["number"])), {})[match["kind"]] = handle.read().decode()
+    path = bundled_archive() if archive is None else Path(archive)
+    if not path.is_file():
+        raise ProblemError(str(path), "archive", "no such file")
+    try:
+        with tarfile.open(path, "r:bz2") as tar:
+            for member in tar:
+                match = _MEMBER.fullmatch(member.name)
+                if match is None or match["type"] not in types or not member.isfile():
+                    continue
+                handle = tar.extractfile(member)
+                assert handle is not None  # a regular file
+                texts.setdefault((match["type"], int(match["number"])), {})[match["kind"]] = handle.read().decode()
+    except (tarfile.TarError, EOFError, OSError) as error:
+        raise ProblemError(str(path), "archive", f"not a readable .tar.bz2 ({error})") from None
     problems = []
     for problem_type in types:
         numbers = sorted(number for t, number in texts if t == problem_type)
