@@ -176,9 +176,10 @@ def _free_port() -> int:
 
 def test_the_live_view_holds_the_mesh_the_cloud_and_the_frustum(scene_files: Path,
                                                                 capsys: pytest.CaptureFixture[str]) -> None:
-    """The nodes' geometry is the scenario's; the camera's points lie on the mesh, which
-    MuJoCo renders."""
+    """The nodes' geometry is the scenario's; the view's camera renders the mesh (MuJoCo
+    holds it), and the points of its image drawn lie on the mesh."""
     viser = pytest.importorskip("viser")
+    from dynfab.perception.depth_camera import DepthCamera
     from dynfab.viz.robot_visuals import robot_look
     from dynfab.viz.view_camera import CameraView
     from dynfab.viz.view_scene import ViewScene
@@ -186,9 +187,9 @@ def test_the_live_view_holds_the_mesh_the_cloud_and_the_frustum(scene_files: Pat
 
     world = ViewWorld(load_scenario(scene_files / "camera.yaml"))
     server = viser.ViserServer(host="127.0.0.1", port=_free_port(), verbose=False)
+    camera_view = CameraView(world)
     try:
-        scene = ViewScene(server, world, robot_look(world.robot), obstacle_dragged=lambda k, p: None,
-                          camera_view=CameraView(world))
+        scene = ViewScene(server, world, robot_look(world.robot), obstacle_dragged=lambda k, p: None)
         mesh_node, cloud_node = scene.obstacle_shapes
         mesh, cloud = world.scenario.obstacles[0].mesh, world.scenario.obstacles[1].cloud
         np.testing.assert_allclose(mesh_node.vertices, mesh.vertices, atol=1e-6)
@@ -203,13 +204,15 @@ def test_the_live_view_holds_the_mesh_the_cloud_and_the_frustum(scene_files: Pat
         assert frustum.aspect == pytest.approx(320 / 240)
         np.testing.assert_allclose(frustum.position, CAMERA.position)
         np.testing.assert_allclose(_browser_corners(frustum), frustum_corners(CAMERA), atol=1e-9)
-        for t in (0.0, 1.0):
-            scene.show_camera_points(world.state(t, np.array(START)))
-        assert scene.camera_points is not None and "not shown" not in capsys.readouterr().err
+        assert world.scenario.camera is not None
+        depth = camera_view.depth(world.state(0.0, np.array(START)))
+        scene.show_camera_points(DepthCamera(world.scenario.camera, world.robot).frame(0.0, depth, START).points)
+        assert scene.camera_points is not None
         # MuJoCo holds the mesh (the cloud is no solid, nothing renders it): every point is on the shelf
         local = (np.asarray(scene.camera_points.points, dtype=float) - (0.95, 0.0, 0.25)) @ quaternion_matrix(TURN)
         assert len(local) > 100 and nearest_on_mesh(mesh, local).distances.max() < 5e-3
     finally:
+        camera_view.close()
         server.stop()
 
 
@@ -226,18 +229,17 @@ def _browser_corners(frustum: object) -> np.ndarray:
     return local @ quaternion_matrix((w, *vector)).T + np.asarray(frustum.position)
 
 
-def test_the_live_view_shows_what_the_camera_sees_where_the_obstacles_are(tmp_path: Path) -> None:
-    """With ``perception: camera`` the view renders the camera's frames from its own state:
-    the points lie on the sphere in view (none on the robot), a frame comes once per period,
-    a sphere moved (as a drag does) is seen where it was moved to, and the running live view
-    shows them."""
+def test_the_live_views_planner_knows_the_scene_only_through_its_camera(tmp_path: Path) -> None:
+    """With ``perception: camera`` the view's planner is fed by the camera rendered from the
+    view's state, as in a run: the robot holds still until the first frame reaches the
+    planner ``delay`` later, the points it has lie on the sphere in view (none on the robot),
+    a sphere moved (as a drag does) is known where it was moved to only once a later frame
+    has arrived, and the running live view shows the planner's points."""
     viser = pytest.importorskip("viser")
     from dynfab.viz.robot_visuals import robot_look
     from dynfab.viz.view_camera import CameraView
-    from dynfab.viz.view_scene import ViewScene
     from dynfab.viz.view_server import LiveView
     from dynfab.viz.view_session import ViewSession
-    from dynfab.viz.view_world import ViewWorld
 
     ball = np.array([0.5, -0.4, 0.5])
     scenario = {"robot": "panda", "planner": "dynamic-fabric", "dt": 0.01, "duration": 1.0, "simulator": "mujoco",
@@ -245,27 +247,36 @@ def test_the_live_view_shows_what_the_camera_sees_where_the_obstacles_are(tmp_pa
                 "goal": [{"type": "position", "link": "panda_hand", "position": [0.45, 0.0, 0.4], "tolerance": 0.05}],
                 "obstacles": [{"type": "sphere", "radius": 0.1, "position": ball.tolist()}],
                 "camera": {"position": [1.6, -1.4, 1.4], "look_at": [0.3, -0.2, 0.45], "width": 160, "height": 120,
-                           "fov": 60, "rate": 10}}
+                           "fov": 60, "rate": 10, "delay": 0.05}}
     (tmp_path / "camera.yaml").write_text(json.dumps(scenario))
-    world = ViewWorld(load_scenario(tmp_path / "camera.yaml"))
-    server = viser.ViserServer(host="127.0.0.1", port=_free_port(), verbose=False)
-    scene = ViewScene(server, world, robot_look(world.robot), camera_view=CameraView(world))
+    session = ViewSession(load_scenario(tmp_path / "camera.yaml"))
+    assert session.planners == ("dynamic-fabric", "static-fabric")  # the MPC would know the sphere exactly
+    camera_view = CameraView(session.world)
+    session.sensor = camera_view.depth
     try:
-        state = world.state(0.0, np.array(START))
-        scene.show_camera_points(state)
-        first = np.array(scene.camera_points.points, dtype=float)
-        on_ball = np.abs(np.linalg.norm(first - ball, axis=1) - 0.1)
-        assert len(first) > 100 and on_ball.max() < 0.005
-        scene.show_camera_points(world.state(0.05, np.array(START)))  # within the 0.1 s period
-        np.testing.assert_array_equal(scene.camera_points.points, first.astype(np.float32))
-        moved = dataclasses.replace(world.state(0.1, np.array(START)), obstacle_centres=np.array([ball + [0, 0.1, 0]]))
-        scene.show_camera_points(moved)
-        later = np.array(scene.camera_points.points, dtype=float)
-        assert np.abs(np.linalg.norm(later - (ball + [0, 0.1, 0]), axis=1) - 0.1).max() < 0.005
+        while session.t < 0.045:  # the first frame (t = 0) reaches the planner at 0.05 s
+            assert session.step()
+        assert session.perceived_points() is None
+        np.testing.assert_array_equal(session.q, START)
+        while session.t < 0.095:
+            assert session.step()
+        seen = session.perceived_points()
+        assert seen is not None and len(seen) > 100
+        assert np.abs(np.linalg.norm(seen - ball, axis=1) - 0.1).max() < 0.005
+        assert np.linalg.norm(session.q - START) > 0.0  # it moves once it knows its scene
+        moved = ball + [0.0, 0.1, 0.0]
+        session.move_obstacle(0, moved)  # there one period later: seen at 0.2 s, known at 0.25 s
+        while session.t < 0.245:
+            assert session.step()
+        assert np.abs(np.linalg.norm(session.perceived_points() - ball, axis=1) - 0.1).max() < 0.005
+        while session.t < 0.255:
+            assert session.step()
+        assert np.abs(np.linalg.norm(session.perceived_points() - moved, axis=1) - 0.1).max() < 0.005
     finally:
-        scene.close()
-        server.stop()
+        camera_view.close()
+    world = session.world
     live = LiveView(ViewSession(world.scenario), robot_look(world.robot), _free_port())
+    assert live.session.sensor is not None
     live.start()  # frames are rendered in the loop's thread, where MuJoCo's context lives
     try:
         for _ in range(600):

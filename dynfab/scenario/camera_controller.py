@@ -52,7 +52,8 @@ from dynfab.scenario.fabric_schema import BarrierSpec
 from dynfab.scenario.obstacle_schema import ObstacleSpec
 from dynfab.scenario.schema import Scenario
 
-__all__ = ["BEHIND", "GUIDANCE_PERIOD", "MIN_SPEED", "TRACKED_BARRIER", "TRACKED_SLOTS", "CameraController", "make_camera_controller"]
+__all__ = ["BEHIND", "GUIDANCE_PERIOD", "MIN_SPEED", "TRACKED_BARRIER", "TRACKED_SLOTS", "CameraController", "blind_scenario",
+           "camera_feed", "make_camera_controller"]
 
 #: How far behind the seen surfaces the global planner takes space as solid [m] (the
 #: diameter of Experiment 1's spheres), and the step of that extension [m].
@@ -137,14 +138,27 @@ class CameraController:
 
 def make_camera_controller(scenario: Scenario, robot: Robot, seed: int = 0) -> CameraController:
     """The controller of a ``perception: camera`` scenario (validated for ``robot``)."""
-    assert scenario.camera is not None
+    blind = blind_scenario(scenario)
+    inner = make_scenario_controller(blind, robot, scenario_references(blind, robot))
+    return CameraController(inner, camera_feed(scenario, robot, seed))
+
+
+def blind_scenario(scenario: Scenario) -> Scenario:
+    """What the inner controller of a ``perception: camera`` scenario is built from: no
+    obstacles but the :data:`TRACKED_SLOTS` sphere slots, whose barrier is the scenario's
+    ``fabric.obstacle`` with :data:`TRACKED_BARRIER` where it leaves a value unset."""
     barrier = scenario.fabric.obstacle
     tracked = BarrierSpec(gain=barrier.gain, energy_gain=TRACKED_BARRIER.energy_gain if barrier.energy_gain is None
                           else barrier.energy_gain, range=TRACKED_BARRIER.range if barrier.range is None else barrier.range)
-    blind = dataclasses.replace(scenario, obstacles=(_SLOT,) * TRACKED_SLOTS,
-                                fabric=dataclasses.replace(scenario.fabric, obstacle=tracked))
-    inner = make_scenario_controller(blind, robot, scenario_references(blind, robot))
+    return dataclasses.replace(scenario, obstacles=(_SLOT,) * TRACKED_SLOTS,
+                               fabric=dataclasses.replace(scenario.fabric, obstacle=tracked))
+
+
+def camera_feed(scenario: Scenario, robot: Robot, seed: int = 0) -> CameraFeed:
+    """The scenario's camera (its noise drawn from ``seed``) and what writes its clouds into
+    a planner."""
+    assert scenario.camera is not None
     margin = scenario.camera_workspace_margin
     workspace = None if margin is None else robot_workspace(robot, margin)
     camera = DepthCamera(scenario.camera, robot, seed=seed, workspace=workspace)
-    return CameraController(inner, CameraFeed(robot, camera, backend=scenario.backend))
+    return CameraFeed(robot, camera, backend=scenario.backend)

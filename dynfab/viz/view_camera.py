@@ -1,14 +1,13 @@
-"""What the scenario's depth camera sees, for the live view: its frames rendered by MuJoCo
-from the view's own state.
+"""The live view's depth camera: the scenario's camera images rendered by MuJoCo from the
+view's own state.
 
-The view simulates kinematically; to show the camera's points it keeps a MuJoCo model of
-the robot and the obstacles (every obstacle a mocap body, so that dragged ones move in the
-camera's image too) and, whenever a frame is due at the camera's ``rate`` of the view's
-time, puts the robot at ``q`` and the obstacles where the view has them, renders the depth
-image and turns it into points as the planner's camera does
-(:class:`~dynfab.perception.depth_camera.DepthCamera`: noise, the robot's pixels removed).
-The points shown are the frame's, without its ``delay``; the view's planner is not fed them.
-When the view's time goes back (a reset), the camera's schedule starts again.
+The view simulates kinematically; for ``perception: camera`` it keeps a MuJoCo model of the
+robot and the obstacles (every obstacle a mocap body, so that dragged ones move in the
+camera's image too) and, when the planner's camera takes a frame
+(:attr:`dynfab.viz.view_session.ViewSession.sensor`), puts the robot at ``q`` and the
+obstacles where the view has them and renders the depth image. The planner's camera turns it
+into points as in ``dynfab run`` (noise, the robot's pixels removed, ``delay``), and the view
+shows the points the planner has.
 
 MuJoCo is imported, and its OpenGL context made (``MUJOCO_GL=egl`` unless set), on the first
 frame, in the thread that draws the view. A scene MuJoCo cannot hold (a mesh of more than
@@ -23,7 +22,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from dynfab.perception.depth_camera import DepthCamera
 from dynfab.viz.view_world import SceneState, ViewWorld
 
 if TYPE_CHECKING:
@@ -38,11 +36,7 @@ class CameraViewError(RuntimeError):
 
 
 class CameraView:
-    """Frames of the scenario's camera taken from the view's state (module docstring).
-
-    Attributes:
-        camera: The frames' camera (its rate, noise and robot filter).
-    """
+    """Depth images of the scenario's camera rendered from the view's state (module docstring)."""
 
     def __init__(self, world: ViewWorld) -> None:
         """Raises:
@@ -51,23 +45,17 @@ class CameraView:
         if world.scenario.camera is None:
             raise ValueError("the scenario has no camera: block")
         self._world = world
-        self.camera = DepthCamera(world.scenario.camera, world.robot)
         self._renderer: MujocoDepthRenderer | None = None
         self._state: RobotState | None = None
         self._mocap: tuple[int | None, ...] = ()
-        self._last = -np.inf
 
-    def points(self, state: SceneState) -> NDArray[np.float64] | None:
-        """The points (N, 3) [m] of a frame taken at ``state.t`` if one is due, else None.
+    def depth(self, state: SceneState) -> NDArray[np.floating]:
+        """The camera's depth image (height, width) [m] of ``state`` (robot at ``state.q``,
+        obstacles at ``state.obstacle_centres``); call it from one thread only.
 
         Raises:
             CameraViewError: MuJoCo cannot build the scene or render it here.
         """
-        if state.t < self._last:  # the view was reset: frames are due from its new time on
-            self.camera = DepthCamera(self.camera.spec, self._world.robot)
-        self._last = state.t
-        if not self.camera.due(state.t):
-            return None
         if self._renderer is None:
             self._open()
         assert self._state is not None and self._renderer is not None
@@ -79,9 +67,7 @@ class CameraView:
         import mujoco
 
         mujoco.mj_forward(self._state.scene.model, data)
-        renderer = self._renderer
-        frame = self.camera.tick(state.t, lambda: renderer.render(data), state.q)
-        return None if frame is None else np.asarray(frame.points)
+        return self._renderer.render(data)
 
     def close(self) -> None:
         """Free the OpenGL context (if one was made)."""

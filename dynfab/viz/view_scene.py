@@ -8,24 +8,22 @@ child ``/obstacles/k/shape``, so that the browser moves the shape with the handl
 a mesh's triangles and a point cloud's points as :mod:`dynfab.viz.view_sensing` bounds
 them; a cloud, static for the planner, gets no handle); ``/paths/...`` the reference paths
 of path goals and moving obstacles over the scenario's duration; ``/camera`` the depth
-camera's frustum (with ``/camera_axis`` its optical axis) and, given a
-:class:`~dynfab.viz.view_camera.CameraView`, ``/camera_points`` the points of its latest
-frame.
+camera's frustum (with ``/camera_axis`` its optical axis) and ``/camera_points`` the points
+of the planner's latest camera frame (:meth:`ViewScene.show_camera_points`).
 """
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import NDArray
 
 from dynfab.geometry.mesh_shape import Mesh
 from dynfab.geometry.point_cloud import PointCloud
 from dynfab.viz.robot_visuals import LinkPoses, RobotLook
 from dynfab.viz.shape_meshes import shape_mesh
-from dynfab.viz.view_camera import CameraView, CameraViewError
 from dynfab.viz.view_sensing import CAMERA_POINTS_COLOR, MIN_POINT_SIZE, add_camera, add_cloud, add_mesh
 from dynfab.viz.view_world import SceneState, ViewWorld
 
@@ -59,11 +57,9 @@ class ViewScene:
     """
 
     def __init__(self, server: viser.ViserServer, world: ViewWorld, look: RobotLook,
-                 goal_dragged: Dragged | None = None, obstacle_dragged: Dragged | None = None,
-                 camera_view: CameraView | None = None) -> None:
+                 goal_dragged: Dragged | None = None, obstacle_dragged: Dragged | None = None) -> None:
         """Add everything to ``server``'s scene; handles call ``goal_dragged`` /
-        ``obstacle_dragged`` (without them: no handles, as in a replay); ``camera_view``
-        takes the frames whose points :meth:`show_camera_points` shows."""
+        ``obstacle_dragged`` (without them: no handles, as in a replay)."""
         self._server = server
         self._world = world
         scene = server.scene
@@ -84,7 +80,6 @@ class ViewScene:
         camera = world.scenario.camera
         self.camera = None if camera is None else add_camera(scene, "/camera", camera)
         self.camera_points: viser.PointCloudHandle | None = None
-        self._camera_view = camera_view
         self._goal_nodes = {k: self._add_goal(k, goal_dragged) for k in range(len(world.scenario.goals))
                             if world.draggable_goal(k)}
         self.draw_paths()
@@ -124,23 +119,9 @@ class ViewScene:
                 if point is not None and (not moving_only or self._world.goal_moves(k)):
                     node.position = point
 
-    def close(self) -> None:
-        """Free what the camera view holds (call it from the thread that showed its points)."""
-        if self._camera_view is not None:
-            self._camera_view.close()
-
-    def show_camera_points(self, state: SceneState) -> None:
-        """The points of the camera's frame if one is due at ``state.t``; a camera that
-        cannot render here is said once on stderr and left out. Call it from one thread
-        only (MuJoCo's OpenGL context stays current in the thread that made it)."""
-        if self._camera_view is None:
-            return
-        try:
-            points = self._camera_view.points(state)
-        except CameraViewError as error:
-            print(f"dynfab: the camera's points are not shown: {error}", file=sys.stderr)
-            self._camera_view = None
-            return
+    def show_camera_points(self, points: NDArray[np.float64] | None) -> None:
+        """Show ``points`` (N, 3) [m] as the camera's (the planner's latest frame); None keeps
+        what is shown."""
         if points is None:
             return
         drawn = points.astype(np.float32).reshape(-1, 3)

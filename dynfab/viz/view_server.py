@@ -6,8 +6,9 @@ the session by the wall time since the last frame and redraws the scene; the pan
 numbers are refreshed :data:`PANEL_RATE` times a second. GUI and drag callbacks (viser's
 threads) and the loop share the session under one lock. Closing the browser tab only
 disconnects a client; the server runs until :meth:`View.stop`. With ``perception: camera``
-the live view also shows the points the camera sees (:mod:`dynfab.viz.view_camera`,
-rendered in the loop's thread); a replay shows its frustum only.
+the live view's planner knows the scene through the camera, whose images are rendered in the
+loop's thread (:mod:`dynfab.viz.view_camera`), and the view shows the points the planner has;
+a replay shows the frustum only.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import contextlib
 import io
 import math
 import socket
+import sys
 import threading
 import time
 from typing import TYPE_CHECKING
@@ -25,9 +27,10 @@ import numpy as np
 from dynfab.scenario.schema import ScenarioError
 from dynfab.viz.replay_session import ReplaySession
 from dynfab.viz.robot_visuals import RobotLook
-from dynfab.viz.view_camera import CameraView
+from dynfab.viz.view_camera import CameraView, CameraViewError
 from dynfab.viz.view_scene import ViewScene
 from dynfab.viz.view_session import ViewSession
+from dynfab.viz.view_world import SceneState
 
 if TYPE_CHECKING:
     import viser
@@ -109,7 +112,7 @@ class View:
         if self._thread.is_alive():
             self._thread.join(timeout=5.0)
         elif self._thread.ident is None:  # the loop never ran: anything rendered, rendered here
-            self._scene.close()
+            self._close()
         self.server.stop()
 
     def _loop(self) -> None:
@@ -126,7 +129,10 @@ class View:
                 last = now
                 self._stop.wait(max(0.0, 1.0 / FRAME_RATE - (time.perf_counter() - now)))
         finally:
-            self._scene.close()  # MuJoCo's OpenGL context is freed in the thread it is current in
+            self._close()  # MuJoCo's OpenGL context is freed in the thread it is current in
+
+    def _close(self) -> None:
+        """Free what the loop's thread holds (nothing here)."""
 
     def _frame(self, wall_seconds: float) -> None:
         raise NotImplementedError
@@ -142,8 +148,9 @@ class LiveView(View):
     def __init__(self, session: ViewSession, look: RobotLook, port: int) -> None:
         super().__init__(port, f"dynfab view: {session.scenario.path.name if session.scenario.path else 'scenario'}")
         self.session = session
-        camera = CameraView(session.world) if session.scenario.perception == "camera" else None
-        self._scene = ViewScene(self.server, session.world, look, self.drag_goal, self.drag_obstacle, camera)
+        self._camera = CameraView(session.world) if session.scenario.perception == "camera" else None
+        session.sensor = None if self._camera is None else self._sensed
+        self._scene = ViewScene(self.server, session.world, look, self.drag_goal, self.drag_obstacle)
         self._steps = 0
         self._rate = math.nan
         self._rate_clock = (time.perf_counter(), 0.0)
@@ -214,11 +221,28 @@ class LiveView(View):
         with self._lock:
             self.session.time_scale = float(value)
 
+    def _sensed(self, state: SceneState) -> np.ndarray:
+        """The camera's depth image of ``state`` (the session's sensor). A camera that cannot
+        render here stops the simulation with the reason (its planner sees only through it);
+        the frame of that tick has no returns."""
+        assert self._camera is not None
+        try:
+            return self._camera.depth(state)
+        except CameraViewError as error:
+            self.session.message = f"the camera cannot render here ({error}); the planner sees only through it"
+            self.session.sensor = None
+            camera = self.session.scenario.camera
+            assert camera is not None
+            return np.zeros((camera.height, camera.width))
+
+    def _close(self) -> None:
+        if self._camera is not None:
+            self._camera.close()
+
     def _frame(self, wall_seconds: float) -> None:
         self._steps += self.session.advance(wall_seconds)
-        scene = self.session.scene()
-        self._scene.update(scene, moving_only=True)
-        self._scene.show_camera_points(scene)
+        self._scene.update(self.session.scene(), moving_only=True)
+        self._scene.show_camera_points(self.session.perceived_points())
 
     def _panel(self) -> None:
         now = time.perf_counter()

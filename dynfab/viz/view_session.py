@@ -13,6 +13,14 @@ duration until paused; it uses the kinematic simulator whatever the scenario's
 Moving a goal or an obstacle (:meth:`ViewSession.move_goal`) writes the new reference into
 the running planner's parameters at once (:meth:`FabricController.retarget`); the MPC uses
 it from its next solve.
+
+With ``perception: camera`` the planner knows the scene only through the scenario's camera,
+as in ``dynfab run`` (:class:`~dynfab.scenario.camera_controller.CameraController` around the
+view's fabric, without guidance): at the start of every period the camera takes a frame if
+one is due, rendered by :attr:`ViewSession.sensor` from the view's state (the robot at ``q``,
+dragged obstacles where they were dragged to), and its points reach the planner ``delay``
+later. A moved obstacle is therefore known only once the camera has seen it; without a
+sensor the planner sees nothing and holds still. The MPC is not offered.
 """
 
 from __future__ import annotations
@@ -21,16 +29,21 @@ import dataclasses
 import math
 import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
+from numpy.typing import NDArray
+
+from dynfab.motion.references import References
 from dynfab.mpc import MpcController
 from dynfab.robots.robot import Robot
+from dynfab.scenario.camera_controller import CameraController, blind_scenario, camera_feed
 from dynfab.scenario.controllers import Controller, FabricController, make_controller, planner_references
 from dynfab.scenario.metrics import clearance_over_time, shape_clearance_over_time
-from dynfab.scenario.references import goal_axes
+from dynfab.scenario.references import goal_axes, scenario_references
 from dynfab.scenario.runner import BASE_SUBSTEPS
 from dynfab.scenario.schema import Scenario, ScenarioError
 from dynfab.sim import RunStopped, motion_model_for
@@ -79,6 +92,9 @@ class ViewSession:
         steps: control periods run since the start; q, qdot: the robot's state
             (velocity coordinates).
         message: why the simulation stopped ("" while it can run).
+        sensor: ``perception: camera`` only: renders the camera's depth image [m] of a scene
+            state (the live view sets it: :meth:`dynfab.viz.view_camera.CameraView.depth`);
+            None: the planner sees nothing.
     """
 
     def __init__(self, scenario: Scenario, robot: Robot | None = None) -> None:
@@ -92,7 +108,8 @@ class ViewSession:
         self.time_scale = 1.0
         self.playing = True
         self.message = ""
-        self._controllers: dict[str, Controller] = {}
+        self._controllers: dict[str, Controller | CameraController] = {}
+        self.sensor: Callable[[SceneState], NDArray[np.floating]] | None = None
         self._step_times: deque[float] = deque(maxlen=STEP_TIME_WINDOW)
         self._budget = 0.0
         robot = self.world.robot
@@ -117,8 +134,9 @@ class ViewSession:
 
     @property
     def planners(self) -> tuple[str, ...]:
-        """The planners this scenario can use."""
-        spheres_only = all(o.type == "sphere" for o in self.scenario.obstacles)
+        """The planners this scenario can use (the MPC knows its obstacles exactly: not under
+        ``perception: camera``)."""
+        spheres_only = all(o.type == "sphere" for o in self.scenario.obstacles) and self.scenario.perception != "camera"
         return tuple(p for p in VIEW_PLANNERS if p != "mpc" or spheres_only)
 
     def reset(self) -> None:
@@ -134,6 +152,8 @@ class ViewSession:
             if isinstance(controller, MpcController):  # its plan belongs to the old times
                 self._controllers[name] = MpcController(controller.problem, controller.references,
                                                         controller.obstacle_radii, controller.control_period)
+            elif isinstance(controller, CameraController):  # so do its frames
+                self._controllers[name] = CameraController(controller.inner, camera_feed(self.scenario, self.robot))
         self._retarget()
 
     def switch_planner(self, name: str) -> None:
@@ -169,6 +189,9 @@ class ViewSession:
         if self.message:
             return False
         controller = self._controller(self.planner)
+        if isinstance(controller, CameraController) and self.sensor is not None:
+            state, sensor = self.scene(), self.sensor
+            controller.capture(self.t, lambda: sensor(state), self.q.copy())
         start = time.perf_counter()
         try:
             command = np.asarray(controller(self.t, self.q.copy(), self.qdot.copy()), dtype=float)
@@ -202,23 +225,40 @@ class ViewSession:
         """What to draw now."""
         return self.world.state(self.t, self.q)
 
+    def perceived_points(self) -> NDArray[np.float64] | None:
+        """``perception: camera``: the points (N, 3) [m] of the latest frame the planner has
+        (the robot filtered out); None before the first, or without a camera."""
+        controller = self._controllers.get(self.planner)
+        if not isinstance(controller, CameraController) or controller.feed.latest is None:
+            return None
+        return np.asarray(controller.feed.latest.points, dtype=float)
+
     def status(self) -> ViewStatus:
         """The panel's numbers now."""
         step_ms = 1e3 * float(np.mean(self._step_times)) if self._step_times else math.nan
         return ViewStatus(self.t, self.planner, self._measures.clearance(self.q, self.world.obstacle_centres(self.t)),
                           self._measures.goal_distance(self.q, self.t), step_ms, self.message)
 
-    def _controller(self, name: str) -> Controller:
-        """The controller of planner ``name``, built on first use."""
+    def _controller(self, name: str) -> Controller | CameraController:
+        """The controller of planner ``name``, built on first use (module docstring)."""
         if name not in self._controllers:
             scenario = dataclasses.replace(self.scenario, planner=name)
-            self._controllers[name] = make_controller(scenario, self.robot, self.world.references())
+            if scenario.perception == "camera":
+                blind = blind_scenario(scenario)
+                inner = make_controller(blind, self.robot, scenario_references(blind, self.robot))
+                self._controllers[name] = CameraController(inner, camera_feed(scenario, self.robot))
+            else:
+                self._controllers[name] = make_controller(scenario, self.robot, self.world.references())
         return self._controllers[name]
 
     def _retarget(self) -> None:
-        """Hand the current references to the active controller."""
+        """Hand the current references to the active controller (under ``perception:
+        camera`` its goals only: the obstacles it knows are the camera's)."""
         controller = self._controllers.get(self.planner)
         references = planner_references(self.scenario, self.world.references())
+        if isinstance(controller, CameraController):
+            controller = controller.inner
+            references = References(references.goals, ())
         if isinstance(controller, FabricController):
             controller.retarget(references, self.t)
         elif isinstance(controller, MpcController):
