@@ -240,3 +240,39 @@ def test_a_goal_the_meshes_judge_is_escaped_with_mesh_escape_samples(panda, touc
     assert guidance._meshes().clearance(deep)[0] < guidance.settings.mesh_margin
     guidance.plan(START, JointTarget(tuple(deep)), [WALL])
     assert used[-1] == guidance.settings.path.escape_samples
+
+
+@pytest.fixture(scope="module")
+def barely(panda) -> np.ndarray:
+    """The meshes about 1.5 mm from the wall: free on them, by less than ``mesh_margin``."""
+    return goal_near_the_wall(panda, -0.003)
+
+
+def test_a_goal_the_meshes_clear_by_less_than_mesh_margin_is_approached_on_both(panda, barely) -> None:
+    guidance = JointGuidance(panda)
+    guidance.checker.set_obstacles([WALL])
+    meshes = guidance._meshes()
+    assert 0.0 < meshes.clearance(barely)[0] < guidance.settings.mesh_margin
+    test = guidance._goal_approach(barely)
+    assert test is not None and not test.instead_of_spheres   # the meshes' test beside the spheres'
+    assert guidance._goal_approach(goal_near_the_wall(panda, -0.03)) is None   # in collision on the meshes too
+
+
+@pytest.mark.parametrize("meshes_accept", [True, False])
+def test_an_approach_from_where_the_robot_is_passes_the_meshes_test_too(panda, barely, monkeypatch,
+                                                                       meshes_accept: bool) -> None:
+    """The straight approach made when the robot is held short of its plan's (held-out
+    as-posed bookshelf_tall/0046: the spheres' test alone let it 6.9 mm into a can on the
+    meshes) is judged as a plan's approach to that goal is."""
+    guidance = JointGuidance(panda)
+    guidance.checker.set_obstacles([WALL])
+    asked = []
+
+    def judged(self, a, b, step, floor=None):
+        asked.append(floor)
+        return meshes_accept
+
+    monkeypatch.setattr(MeshGoalCheck, "segment_free", judged)
+    plan = guidance.approach_from(_turned(barely, -0.1), barely)
+    assert (plan is not None) == meshes_accept and len(asked) == 1
+    assert asked[0] == pytest.approx(guidance._meshes().clearance(barely)[0])   # no deeper than the goal

@@ -293,12 +293,15 @@ def _segment_accepted(checker: ConfigurationChecker, free: NDArray[np.float64], 
 
 
 def approach_clear(checker: ConfigurationChecker, q: NDArray[np.float64], goal: NDArray[np.float64],
-                   settings: JointPlannerSettings = JointPlannerSettings()) -> bool:
+                   settings: JointPlannerSettings = JointPlannerSettings(),
+                   approach: ApproachTest | None = None) -> bool:
     """Whether the straight segment from ``q`` to a blocked ``goal`` goes no deeper into the
     checker's obstacles (and into the robot) than ``goal`` does, ``escape_slack`` aside: the
     test of an escaped endpoint's segment (module docstring), with ``self_margin`` lowered
-    to the endpoints' own self-overlap as a plan between them would."""
-    return _no_deeper(checker, q, goal, _tolerating_endpoint_overlap(checker, q, goal, settings))
+    to the endpoints' own self-overlap as a plan between them would; with the caller's
+    ``approach`` test as a plan's escaped goal has it (added to the spheres' test, or in its
+    place: :class:`ApproachTest`)."""
+    return _segment_accepted(checker, q, goal, _tolerating_endpoint_overlap(checker, q, goal, settings), approach)
 
 
 def _no_deeper(checker: ConfigurationChecker, q: NDArray[np.float64], end: NDArray[np.float64],
