@@ -15,7 +15,8 @@ import pytest
 from dynfab.geometry.shapes import Box, Placement
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 import dynfab.motion.guidance as guidance_module
-from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance, JointTarget, robot_mesh_model
+from dynfab.motion.guidance import (GuidanceError, GuidanceSettings, JointGuidance, JointTarget, along_segment,
+                                    robot_mesh_model, segment_offset)
 from dynfab.motion.joint_planning import (ApproachTest, JointPlannerSettings, NoPathError, approach_clear,
                                           plan_joint_path)
 from dynfab.motion.mesh_goal_check import MeshGoalCheck
@@ -276,3 +277,39 @@ def test_an_approach_from_where_the_robot_is_passes_the_meshes_test_too(panda, b
     plan = guidance.approach_from(_turned(barely, -0.1), barely)
     assert (plan is not None) == meshes_accept and len(asked) == 1
     assert asked[0] == pytest.approx(guidance._meshes().clearance(barely)[0])   # no deeper than the goal
+
+
+def test_the_offset_from_a_segment_is_the_distance_to_its_nearest_point() -> None:
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        a, b, q = rng.normal(size=(3, 7))
+        segment = a + np.linspace(0.0, 1.0, 9)[:, None] * (b - a)
+        dense = a + np.linspace(0.0, 1.0, 200001)[:, None] * (b - a)
+        assert segment_offset(segment, q) == pytest.approx(np.linalg.norm(dense - q, axis=1).min(), abs=1e-7)
+        s = along_segment(segment, q)
+        assert 0.0 <= s <= 1.0
+        assert np.linalg.norm(a + s * (b - a) - q) == pytest.approx(segment_offset(segment, q), abs=1e-12)
+
+
+@pytest.mark.parametrize("beside", [0.002, 0.0045, 0.008])
+def test_on_the_approach_the_clock_waits_for_a_robot_beside_the_segment(panda, grasp, beside: float) -> None:
+    """Along the approach a lag is harmless; beside its checked segment the clock slows from
+    ``approach_offset_slow`` and stops at ``approach_offset_stop`` (training as-posed
+    box/0015: the robot 0.015-0.02 rad beside it touched the cube), though the lag rule alone
+    would let it run."""
+    guided = _guided(panda, grasp)
+    settings = guided.guidance.settings
+    t, q = _held_short(guided, grasp)   # now on an approach from q
+    plan = guided.plan
+    direction = (grasp - q) / np.linalg.norm(grasp - q)
+    side = np.zeros(7)
+    side[3] = 1.0
+    side -= (side @ direction) * direction
+    side /= np.linalg.norm(side)
+    robot = plan.trajectory.evaluate(guided._tau).position + beside * side
+    assert np.linalg.norm(robot - plan.trajectory.evaluate(guided._tau).position) < settings.approach_lag_slow
+    before = guided._tau
+    guided.update(t + DT, robot)
+    expected = float(np.clip((settings.approach_offset_stop - beside)
+                             / (settings.approach_offset_stop - settings.approach_offset_slow), 0.0, 1.0))
+    assert guided._tau - before == pytest.approx(expected * DT, abs=1e-9)

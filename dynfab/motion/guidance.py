@@ -45,7 +45,8 @@ from dynfab.motion.guidance_settings import GuidanceSettings
 from dynfab.motion.phased_trajectory import PhasedTrajectory
 from dynfab.robots.robot import Robot
 
-__all__ = ["GuidanceError", "GuidanceSettings", "JointGuidance", "JointTarget", "Plan", "allowances_ahead"]
+__all__ = ["GuidanceError", "GuidanceSettings", "JointGuidance", "JointTarget", "Plan", "allowances_ahead",
+           "along_segment", "segment_offset"]
 
 #: a value within this of a joint limit counts as at the limit [rad or m]
 LIMIT_SLACK = 1e-6
@@ -366,21 +367,27 @@ class JointGuidance:
         return replace(self.settings.ik, seed=seed)
 
 
-def allowances_ahead(segment: NDArray[np.float64], table: NDArray[np.float64], q: NDArray[np.float64],
-                     window: float = np.inf) -> NDArray[np.float64]:
+def allowances_ahead(segment: NDArray[np.float64], table: NDArray[np.float64],
+                     q: NDArray[np.float64]) -> NDArray[np.float64]:
     """Per obstacle, the largest allowance [m] of ``table`` (k, m) at the approach's
     configurations ``segment`` (k, n) [rad] from the robot's (``q``'s projection on the
-    segment, less one sample) to ``window`` [rad] of the segment beyond it, at most to the
-    goal (:meth:`JointGuidance.approach_allowances`)."""
-    start, end = segment[0], segment[-1]
-    direction = end - start
-    squared = max(float(np.dot(direction, direction)), 1e-12)
-    reached = float(np.clip(np.dot(q - start, direction) / squared, 0.0, 1.0))
-    samples = len(segment) - 1
-    first = max(0, int(np.floor(reached * samples)) - 1)
-    ahead = reached + window / np.sqrt(squared)
-    last = samples if ahead >= 1.0 else int(np.ceil(ahead * samples))
-    return table[first:last + 1].max(axis=0)
+    segment, less one sample) to the goal (:meth:`JointGuidance.approach_allowances`)."""
+    first = max(0, int(np.floor(along_segment(segment, q) * (len(segment) - 1))) - 1)
+    return table[first:].max(axis=0)
+
+
+def along_segment(segment: NDArray[np.float64], q: NDArray[np.float64]) -> float:
+    """Where ``q`` projects on the straight segment from the first to the last configuration
+    of ``segment`` (k, n) [rad]: 0 at its start, 1 at its end (clipped) [-]."""
+    start, direction = segment[0], segment[-1] - segment[0]
+    return float(np.clip(np.dot(q - start, direction) / max(float(np.dot(direction, direction)), 1e-12), 0.0, 1.0))
+
+
+def segment_offset(segment: NDArray[np.float64], q: NDArray[np.float64]) -> float:
+    """Distance [rad] of ``q`` from the straight segment from the first to the last
+    configuration of ``segment`` (k, n): from its nearest point."""
+    start, direction = segment[0], segment[-1] - segment[0]
+    return float(np.linalg.norm(q - (start + along_segment(segment, q) * direction)))
 
 
 @lru_cache(maxsize=4)

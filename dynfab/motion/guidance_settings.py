@@ -91,6 +91,13 @@ class GuidanceSettings:
         approach_lag_slow, approach_lag_stop: ``lag_slow`` and ``lag_stop`` during the
             approach: it is followed closely, so that the robot does not cut into what
             the goal is close to [rad].
+        approach_offset_slow, approach_offset_stop: distance of the robot from the
+            approach's straight segment (its nearest point) at which the clock starts to
+            slow and stops during the approach, on top of the lag rule [rad]: the segment
+            is what the planner checked, while along it a lag does no harm. With the lag
+            rule alone the robot entered training as-posed box/0015's approach 0.015-0.02 rad
+            beside it, stayed there, and a finger touched the cube it was to grasp (-1.2 mm);
+            chosen on training problems 10-16.
         approach_hold_time: time the robot may stay more than ``approach_lag_stop`` from
             the reference waiting at the approach's start before the approach starts
             from where the robot is (:meth:`JointGuidance.approach_from`) [s]: the
@@ -135,6 +142,8 @@ class GuidanceSettings:
     approach_speed: float = 0.1
     approach_lag_slow: float = 0.01
     approach_lag_stop: float = 0.03
+    approach_offset_slow: float = 0.003
+    approach_offset_stop: float = 0.006
     approach_hold_time: float = 1.0
     close_lag_slow: float = 0.03
     close_lag_stop: float = 0.1

@@ -30,6 +30,11 @@ there cuts the corner into the approach and is held by what it passes):
     ρ = clip((e_stop − e) / (e_stop − e_slow), 0, 1),   e = ‖q − q_r(τ)‖,
     τ ← τ + ρ Δt,   q̇_r ← ρ q̇_r(τ),   q̈_r ← ρ² q̈_r(τ).
 
+In the approach ``ρ`` is also at most ``clip((o_stop − o) / (o_stop − o_slow), 0, 1)``, ``o``
+the robot's distance from the approach's straight segment [rad] (``approach_offset_slow``,
+``approach_offset_stop``): the segment is what the planner checked; along it a lag does no
+harm, beside it the hand nears what it is to grasp.
+
 It asks for a replan from where the robot is (at most ``replans`` times; until the new
 one arrives the old reference's clock stands still outside a grasp's approach, so the
 fabric brakes at its point and keeps avoiding rather than following it into what blocked
@@ -93,7 +98,8 @@ from dynfab.fabric.leaves.goal import GoalAttractor
 from dynfab.fabric.planner import FabricPlanner, GoalConfig
 from dynfab.geometry.shapes import Sphere
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
-from dynfab.motion.guidance import GoalTargets, GuidanceSettings, JointGuidance, Plan, allowances_ahead
+from dynfab.motion.guidance import (GoalTargets, GuidanceSettings, JointGuidance, Plan, allowances_ahead,
+                                    segment_offset)
 from dynfab.motion.guidance_status import GuidanceStatus
 from dynfab.motion.plan_joining import join_time
 from dynfab.motion.plan_requests import PendingPlan, PlanRequest, plan_maker
@@ -232,7 +238,10 @@ class GuidedFabric:
                       else (settings.lag_slow, settings.lag_stop))
         self._approaching = self._approaching or (in_approach and lag <= settings.approach_lag_stop)
         waiting = self._pending is not None and not in_approach
-        rate = 0.0 if waiting else float(np.clip((stop - lag) / (stop - slow), 0.0, 1.0))
+        rate = 0.0 if waiting else _ramp(lag, slow, stop)
+        if in_approach:
+            rate = min(rate, _ramp(segment_offset(self._segment, q), settings.approach_offset_slow,
+                                   settings.approach_offset_stop))
         self._tau += rate * dt
         self._write(self._tau, rate)
 
@@ -396,3 +405,9 @@ class GuidedFabric:
         params.goal_position[0][:] = position
         params.goal_velocity[0][:] = velocity
         params.goal_acceleration[0][:] = acceleration
+
+
+def _ramp(error: float, slow: float, stop: float) -> float:
+    """The clock's rate for ``error``: 1 up to ``slow``, 0 from ``stop`` on, linear between."""
+    return float(np.clip((stop - error) / (stop - slow), 0.0, 1.0))
+
