@@ -97,7 +97,9 @@ class GuidanceSettings:
             is what the planner checked, while along it a lag does no harm. With the lag
             rule alone the robot entered training as-posed box/0015's approach 0.015-0.02 rad
             beside it, stayed there, and a finger touched the cube it was to grasp (-1.2 mm);
-            chosen on training problems 10-16.
+            chosen on training problems 10-16: 3/6 mrad fixed box/0015 but held the robot
+            of table_pick/0011 5-6 mrad beside its segment, the clock nearly stopped, until it
+            stalled; 4/8 mrad reach both (2.4 mm clear of the cube).
         approach_hold_time: time the robot may stay more than ``approach_lag_stop`` from
             the reference waiting at the approach's start before the approach starts
             from where the robot is (:meth:`JointGuidance.approach_from`) [s]: the
@@ -142,8 +144,8 @@ class GuidanceSettings:
     approach_speed: float = 0.1
     approach_lag_slow: float = 0.01
     approach_lag_stop: float = 0.03
-    approach_offset_slow: float = 0.003
-    approach_offset_stop: float = 0.006
+    approach_offset_slow: float = 0.004
+    approach_offset_stop: float = 0.008
     approach_hold_time: float = 1.0
     close_lag_slow: float = 0.03
     close_lag_stop: float = 0.1
