@@ -89,3 +89,44 @@ def _unmerged(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
                             process=False)
     assert not split.is_watertight
     return split
+
+
+def test_a_run_is_measured_less_the_voxel_and_its_start_only_refused_on_a_touch(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from dynfab.robots.builtin import load_robot
+    from dynfab.scenario.exact_metrics import mesh_model_for, obstacle_shapes
+    from dynfab.scenario.schema import ScenarioError, scenario_from_dict
+    from dynfab.scenario.start_state import check_start_collisions
+
+    robot = load_robot("panda")
+    model = mesh_model_for(robot)
+    q = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
+    hand = model.link_poses(q[None])[0, model.links.index("panda_hand_body")]
+    origin = Placement((0.0, 0.0, 0.0))
+    offsets = np.stack(np.meshgrid(*[np.arange(-0.04, 0.05, 0.01)] * 3), axis=-1).reshape(-1, 3)
+    candidates = (np.floor((hand[:3, 3] + 0.1 * hand[:3, 2]) / 0.01) + 0.5) * 0.01 + offsets  # voxel centres
+    gaps = [sweep_clearance(model, q, [PlacedShape("dot", PointCloud(c[None]), (origin,))]) for c in candidates]
+    dot = candidates[int(np.argmin(np.abs(np.array(gaps) - 0.004)))]  # 1-7 mm from the meshes
+    np.save(tmp_path / "dot.npy", dot[None])
+    mapping = {"robot": "panda", "planner": "static-fabric", "dt": 0.01, "duration": 1.0,
+               "initial_state": {"q": q.tolist()},
+               "goal": [{"type": "position", "link": "panda_hand", "position": [0.45, 0.0, 0.4]}],
+               "obstacles": [{"type": "points", "file": "dot.npy", "voxel": 0.01}]}
+    scenario = scenario_from_dict(mapping, tmp_path)
+    cloud = scenario.obstacles[0].shape
+    assert np.allclose(cloud.points, dot[None])
+    centres = np.zeros((1, 1, 3))  # a cloud's frame is the world's
+    plain, lowered = obstacle_shapes(scenario.obstacles, centres), obstacle_shapes(scenario.obstacles, centres, True)
+    gap = sweep_clearance(model, q, plain)
+    assert 0.0 < gap < cloud.lowering  # the voxel's half-diagonal reaches the hand
+    assert sweep_clearance(model, q, lowered) == pytest.approx(gap - cloud.lowering, abs=1e-12)
+    check_start_collisions(q, robot, model, plain)  # not refused: no kept point is touched
+    with pytest.raises(ScenarioError, match="initial_state.q"):
+        check_start_collisions(q, robot, model, lowered)
+
+
+def sweep_clearance(model, q: np.ndarray, shapes) -> float:  # type: ignore[no-untyped-def]
+    from dynfab.robots.mesh_sweep import sweep_meshes
+
+    clearance = sweep_meshes(model, q[None], shapes).clearance
+    assert clearance is not None
+    return clearance

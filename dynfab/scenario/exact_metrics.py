@@ -59,17 +59,21 @@ def mesh_model_for(robot: Robot) -> MeshCollisionModel | None:
         raise ScenarioError("robot.urdf", str(error)) from error
 
 
-def obstacle_shapes(obstacles: Sequence[ObstacleSpec], centers: NDArray[np.float64]) -> list[PlacedShape]:
+def obstacle_shapes(obstacles: Sequence[ObstacleSpec], centers: NDArray[np.float64],
+                    lowered: bool = False) -> list[PlacedShape]:
     """The scenario's obstacles as shapes placed at each sample.
 
     Args:
         obstacles: The scenario's obstacles.
         centers: Their centres (a plane: its point) at each sample, shape (T, m, 3) [m].
+        lowered: a point cloud's distances less its ``δ`` (a run's metrics: a lower bound of
+            the distance to the measured points); else to its kept points (the start
+            check, which refuses only a start that touches one).
     """
     shapes = []
     for k, obstacle in enumerate(obstacles):
         track = centers[:1, k] if obstacle.trajectory is None else centers[:, k]
-        lowering = obstacle.shape.lowering if isinstance(obstacle.shape, PointCloud) else 0.0
+        lowering = obstacle.shape.lowering if lowered and isinstance(obstacle.shape, PointCloud) else 0.0
         shapes.append(PlacedShape(obstacle.name(k), obstacle.shape,
                                   tuple(Placement(tuple(c), obstacle.orientation) for c in track), lowering))
     return shapes
