@@ -6,6 +6,8 @@ half-diagonal in a run's metrics."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import trimesh
@@ -91,7 +93,7 @@ def _unmerged(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
     return split
 
 
-def test_a_run_is_measured_less_the_voxel_and_its_start_only_refused_on_a_touch(tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_a_run_is_measured_less_the_voxel_and_its_start_only_refused_on_a_touch(tmp_path: Path) -> None:
     from dynfab.robots.builtin import load_robot
     from dynfab.scenario.exact_metrics import mesh_model_for, obstacle_shapes
     from dynfab.scenario.schema import ScenarioError, scenario_from_dict

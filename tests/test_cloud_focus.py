@@ -157,7 +157,8 @@ def test_a_cage_goal_blocked_on_the_whole_cloud_is_planned_on_the_focused_one_an
     assert guidance.checker.obstacles is used
 
 
-def test_after_the_first_failed_whole_cloud_attempt_every_attempt_is_on_the_focus(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+def test_after_the_first_failed_whole_cloud_attempt_every_attempt_is_on_the_focus(
+        monkeypatch: pytest.MonkeyPatch) -> None:
     import dynfab.motion.guidance as guidance_module
     from dynfab.motion.joint_planning import NoPathError
 

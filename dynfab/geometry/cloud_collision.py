@@ -48,7 +48,10 @@ from dynfab.geometry.point_cloud import PointCloud
 if TYPE_CHECKING:
     from pykdtree.kdtree import KDTree
 
-__all__ = ["CloudSolid", "LinkSolid", "cloud_distance", "cloud_lower_bound", "closed_solid", "cloud_solid", "hull_planes", "winding_numbers"]
+__all__ = [
+    "CloudSolid", "LinkSolid", "closed_solid", "cloud_distance", "cloud_lower_bound", "cloud_solid", "hull_planes",
+    "winding_numbers",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -131,10 +134,9 @@ def _depth_inside(part: LinkSolid, points: NDArray[np.float64]) -> float:
     if len(in_hull) == 0:
         return 0.0
     inside = in_hull[np.abs(winding_numbers(part.solid, in_hull)) > 0.5]
-    identity = coal.Transform3s()
-    dot = coal.Sphere(1e-9)
-    return max((float(coal.distance(part.mesh, identity, dot, coal.Transform3s(np.eye(3), point), coal.DistanceRequest(),
-                                    coal.DistanceResult())) for point in inside), default=0.0)
+    identity, dot = coal.Transform3s(), coal.Sphere(1e-9)
+    return max((float(coal.distance(part.mesh, identity, dot, coal.Transform3s(np.eye(3), point),
+                                    coal.DistanceRequest(), coal.DistanceResult())) for point in inside), default=0.0)
 
 
 def winding_numbers(mesh: trimesh.Trimesh, points: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -167,7 +169,8 @@ def closed_solid(mesh: trimesh.Trimesh) -> trimesh.Trimesh | None:
     return merged if merged.is_watertight else None
 
 
-def _to_cloud(pose_a: NDArray[np.float64], pose_b: NDArray[np.float64], points: NDArray[np.float64]) -> NDArray[np.float64]:
+def _to_cloud(pose_a: NDArray[np.float64], pose_b: NDArray[np.float64],
+              points: NDArray[np.float64]) -> NDArray[np.float64]:
     """Points (N, 3) of the link frame in the cloud frame."""
     world = points @ np.asarray(pose_a, dtype=float)[:3, :3].T + np.asarray(pose_a, dtype=float)[:3, 3]
     b = np.asarray(pose_b, dtype=float)
