@@ -1,8 +1,8 @@
 """The planner's focus on a point cloud near its goal: the split of the kept points, the
 focused obstacles around the robot's spheres, the compiled checker's bound on them (never
 above the distance to a measured point, closer to it than the whole cloud's grid near the
-goal), guidance using it only where the whole cloud gives no plan (a cage grasp), bad
-settings refused."""
+goal), guidance using it only where the whole cloud gives no plan (a cage grasp) and after
+its first failed attempt there, bad settings refused."""
 
 from __future__ import annotations
 
@@ -64,7 +64,7 @@ def test_a_bad_focus_box_or_pitch_is_refused(low: list, high: list, pitch: float
 
 
 @pytest.mark.parametrize(("field", "value"), [("reach", -0.1), ("reach", math.inf), ("pitch", 0.0),
-                                              ("pitch", math.nan)])
+                                              ("pitch", math.nan), ("whole_attempts", 0)])
 def test_bad_focus_settings_are_refused_naming_the_field(field: str, value: float) -> None:
     with pytest.raises(ValueError, match=f"cloud focus {field}"):
         CloudFocus(**{field: value})
@@ -155,3 +155,33 @@ def test_a_cage_goal_blocked_on_the_whole_cloud_is_planned_on_the_focused_one_an
     assert any(isinstance(o.shape, FocusedCloud) for o in used) and plan.approach > 0.0
     guidance.plan(start, goal, obstacles, seed=1)
     assert guidance.checker.obstacles is used
+
+
+def test_after_the_first_failed_whole_cloud_attempt_every_attempt_is_on_the_focus(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    import dynfab.motion.guidance as guidance_module
+    from dynfab.motion.joint_planning import NoPathError
+
+    robot = load_robot("panda")
+    cloud = PointCloud.from_points(_wall(np.random.default_rng(8)), voxel=0.01)
+    obstacles = [PlacedObstacle(cloud, ORIGIN)]
+    seen: list[tuple[bool, int]] = []
+
+    def no_path(checker, start, goal, lower, upper, settings, seed, approach):  # type: ignore[no-untyped-def]
+        seen.append((any(isinstance(o.shape, FocusedCloud) for o in checker.obstacles), seed))
+        raise NoPathError("no_path", "none")
+
+    monkeypatch.setattr(guidance_module, "plan_joint_path", no_path)
+    goal = JointTarget((0.3, -0.3, 0.0, -2.0, 0.0, 1.8, 0.785))
+    settings = GuidanceSettings(attempts=3)
+    with pytest.raises(GuidanceError):
+        JointGuidance(robot, settings).plan(START, goal, obstacles, seed=5)
+    assert seen == [(False, 5), (True, 5), (True, 6), (True, 7)]
+    seen.clear()
+    with pytest.raises(GuidanceError):
+        JointGuidance(robot, replace(settings, cloud_focus=CloudFocus(whole_attempts=2))).plan(START, goal, obstacles)
+    assert seen == [(False, 0), (False, 1), (True, 0), (True, 1), (True, 2)]
+    seen.clear()
+    with pytest.raises(GuidanceError):
+        JointGuidance(robot, replace(settings, cloud_focus=None)).plan(START, goal, obstacles)
+    assert seen == [(False, 0), (False, 1), (False, 2)]

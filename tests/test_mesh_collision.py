@@ -9,6 +9,7 @@ import pytest
 from robot_files import arm_urdf, folded_configuration
 
 from dynfab.geometry.exact_collision import exact_distance, placement_matrix, shape_geometry
+from dynfab.geometry.point_cloud import PointCloud
 from dynfab.geometry.shapes import Box, Placement, Plane, Sphere, quaternion_from_rpy
 from dynfab.robots import Kinematics, load_urdf, parse_urdf
 from dynfab.robots.mesh_collision import adjacent_links, mesh_collision_model
@@ -126,3 +127,21 @@ def test_placements_must_cover_the_run(ur5) -> None:  # type: ignore[no-untyped-
     ball = PlacedShape("obstacles[0]", Sphere(0.1), (Placement((1, 0, 0)), Placement((1, 0, 0))))
     with pytest.raises(ValueError, match=r"obstacles\[0\]: 2 placements for a run of 3 samples"):
         sweep_meshes(ur5, np.zeros((3, 6)), [ball])
+
+
+def test_a_cloud_is_swept_to_its_exact_minimum_less_its_lowering(ur5) -> None:  # type: ignore[no-untyped-def]
+    start, end = np.array([0.0, -1.57, 1.57, -1.57, -1.57, 0.0]), np.array([2.0, -0.6, 2.6, -2.5, 0.4, 1.0])
+    qs = start + np.linspace(0.0, 1.0, 30)[:, None] * (end - start)
+    rng = np.random.default_rng(5)
+    wall = np.column_stack([np.full(4000, 0.3), rng.uniform(-0.6, 0.6, 4000), rng.uniform(0.0, 0.8, 4000)])
+    cloud = PointCloud.from_points(wall, voxel=0.01)
+    placement = Placement((0.0, 0.05, 0.0), quaternion_from_rpy((0.0, 0.0, 0.4)))
+    sweep = sweep_meshes(ur5, qs, [PlacedShape("wall", cloud, (placement,), lowering=cloud.lowering)])
+    poses, geometry, pose = ur5.link_poses(qs), shape_geometry(cloud), placement_matrix(placement)
+    exact = np.array([[exact_distance(ur5.meshes[i], poses[t, i], geometry, pose) for i in range(len(ur5.links))]
+                      for t in range(len(qs))]) - cloud.lowering
+    assert sweep.clearance == pytest.approx(exact.min(), abs=1e-12)
+    found = {(c.first, c.samples) for c in sweep.obstacle_contacts}
+    expected = {(ur5.links[i], tuple(np.flatnonzero(exact[:, i] <= 0.0))) for i in range(len(ur5.links))
+                if (exact[:, i] <= 0.0).any()}
+    assert found == expected and found  # the arm sweeps through the wall

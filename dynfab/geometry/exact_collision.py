@@ -17,7 +17,9 @@ inside the other (then no surfaces cross; one point of the inner solid is tested
 the outer mesh by ray parity, which needs closed meshes, as collision meshes are; an open
 obstacle mesh, a surface, has no inside and is touched only when surfaces meet). Obstacle shapes (:mod:`dynfab.geometry.shapes`)
 are coal primitives, exact; a :class:`~dynfab.geometry.shapes.Plane` is the solid
-half-space ``z <= 0`` of its frame.
+half-space ``z <= 0`` of its frame; a point cloud's kept points are measured as points, a
+point inside a link as deep as its distance to the link's surface
+(:mod:`dynfab.geometry.cloud_collision`).
 
 Poses are 4x4 homogeneous transforms ``x_world = R x_local + p`` [m].
 """
@@ -32,6 +34,8 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
+from dynfab.geometry.cloud_collision import (CloudSolid, LinkSolid, closed_solid, cloud_distance, cloud_lower_bound,
+                                             cloud_solid, hull_planes)
 from dynfab.geometry.shapes import Box, Capsule, Cylinder, Mesh, Placement, Plane, PointCloud, Shape, Sphere
 
 __all__ = [
@@ -41,12 +45,12 @@ __all__ = [
 
 
 @dataclass(frozen=True, eq=False)
-class _MeshPart:
-    """One triangle mesh as its convex hull, as a BVH of its triangles and as is, and whether
-    it is closed (watertight: it has an inside), decided once."""
+class _MeshPart(LinkSolid):
+    """One triangle mesh as its convex hull (coal's, and its face planes), as a BVH of its
+    triangles, as is and merged (:class:`~dynfab.geometry.cloud_collision.LinkSolid`), and
+    whether it is closed as is (watertight: it has an inside), decided once."""
 
     hull: coal.Convex
-    mesh: coal.BVHModelOBBRSS
     triangles: trimesh.Trimesh
     closed: bool
 
@@ -66,8 +70,8 @@ class MeshSet:
     radius: float
 
 
-#: What a :class:`MeshSet` can be measured against: another mesh set or a coal primitive.
-Solid = MeshSet | coal.CollisionGeometry
+#: What a :class:`MeshSet` can be measured against: another mesh set, a coal primitive or a cloud's points.
+Solid = MeshSet | coal.CollisionGeometry | CloudSolid
 
 
 def mesh_set(meshes: Sequence[trimesh.Trimesh]) -> MeshSet:
@@ -82,7 +86,8 @@ def mesh_set(meshes: Sequence[trimesh.Trimesh]) -> MeshSet:
     for mesh in meshes:
         if len(mesh.faces) == 0:
             raise ValueError("a collision mesh has no triangles")
-        parts.append(_MeshPart(_convex(mesh.convex_hull), _bvh(mesh), mesh, bool(mesh.is_watertight)))
+        parts.append(_MeshPart(mesh=_bvh(mesh), planes=hull_planes(mesh), solid=closed_solid(mesh),
+                               hull=_convex(mesh.convex_hull), triangles=mesh, closed=bool(mesh.is_watertight)))
     vertices = np.concatenate([np.asarray(mesh.vertices, dtype=float) for mesh in meshes])
     center = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
     radius = float(np.max(np.linalg.norm(vertices - center, axis=1)))
@@ -91,12 +96,12 @@ def mesh_set(meshes: Sequence[trimesh.Trimesh]) -> MeshSet:
 
 def shape_geometry(shape: Shape) -> Solid:
     """The coal primitive of an obstacle shape, in the shape's frame (see shapes.py); a mesh
-    obstacle's :class:`MeshSet` (built once per mesh); a point cloud's, of a 0.1 mm triangle
-    at each point (:attr:`~dynfab.geometry.point_cloud.PointCloud.specks`)."""
+    obstacle's :class:`MeshSet` (built once per mesh); a non-empty point cloud's
+    :class:`~dynfab.geometry.cloud_collision.CloudSolid` (built once per cloud)."""
     if isinstance(shape, PointCloud):
-        cached = shape.__dict__.get("_mesh_set")
+        cached = shape.__dict__.get("_cloud_solid")
         if cached is None:
-            cached = shape.__dict__["_mesh_set"] = mesh_set([shape.specks.triangles])
+            cached = shape.__dict__["_cloud_solid"] = cloud_solid(shape, _bvh(shape.specks.triangles))
         return cached
     if isinstance(shape, Mesh):
         cached = shape.__dict__.get("_mesh_set")
@@ -146,8 +151,11 @@ def hull_distance(a: MeshSet, pose_a: NDArray[np.float64], b: Solid, pose_b: NDA
     """Signed distance [m] between the convex hulls of ``a``'s meshes and ``b``.
 
     ``min_{i,j} d(hull(A_i), B_j)``, negative when two hulls overlap (minus the
-    penetration depth). A lower bound of the meshes' own distance.
+    penetration depth). A lower bound of the meshes' own distance. Against a cloud, the
+    bound of its bounding spheres (:func:`~dynfab.geometry.cloud_collision.cloud_lower_bound`).
     """
+    if isinstance(b, CloudSolid):
+        return cloud_lower_bound(a.center, a.radius, pose_a, b, pose_b)
     transform_a, transform_b = _transform(pose_a), _transform(pose_b)
     return min(_distance(part.hull, transform_a, other, transform_b)
                for part in a.parts for other in _hulls(b))
@@ -160,8 +168,12 @@ def exact_distance(a: MeshSet, pose_a: NDArray[np.float64], b: Solid, pose_b: ND
     exact distance between the meshes (>= 0); if they touch (surfaces intersect or one
     is inside the other), the hulls' signed distance (<= 0: its magnitude is the hulls'
     penetration depth). The result is the minimum over the pairs. Against a half-space the
-    hulls are exact: the lowest point of a hull is one of the mesh's vertices.
+    hulls are exact: the lowest point of a hull is one of the mesh's vertices. Against a
+    cloud, the signed distance to its points
+    (:func:`~dynfab.geometry.cloud_collision.cloud_distance`).
     """
+    if isinstance(b, CloudSolid):
+        return cloud_distance(a.parts, a.center, a.radius, pose_a, b, pose_b)
     if isinstance(b, coal.Halfspace):
         return hull_distance(a, pose_a, b, pose_b)
     transform_a, transform_b = _transform(pose_a), _transform(pose_b)

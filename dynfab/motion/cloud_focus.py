@@ -12,8 +12,9 @@ radii. Its points become a :class:`~dynfab.geometry.focused_cloud.FocusedCloud` 
 is the same (``d(x, C) − δ``); only the grid's shortfall below it shrinks, from up to
 1.7 cm to up to ``pitch·√3`` (7 mm at 4 mm) where the robot is near its goal.
 
-Guidance plans on the focus only where the whole clouds' grids give no plan
-(:meth:`~dynfab.motion.guidance.JointGuidance.plan`): plans on it run closer to the scene
+Guidance plans on the focus only where the whole clouds' grids give no plan in their first
+``whole_attempts`` attempts (:meth:`~dynfab.motion.guidance.JointGuidance.plan`; then every
+attempt is made on the focus): plans on it run closer to the scene
 (what the grid no longer takes away), and with it as the first choice held-out
 table_pick/0020's first plan passed 2.7 cm (spheres, true shapes) from the table top, which
 the fabric then entered 5 cm deep. On the point-cloud MotionBenchMaker problems (training
@@ -47,16 +48,22 @@ class CloudFocus:
         reach: how far the focus reaches beyond the robot's spheres at the goal [m].
         pitch: node spacing of the focused points' grid [m] (grown by the grid to stay
             within its node budget: 8 M nodes, a 0.8 m cube at 4 mm).
+        whole_attempts: plan attempts on the whole clouds' grids before the focus [-]
+            (at least 1): a cage grasp blocked on the whole cloud spent all three (1 + 2 +
+            4 s of search) there before the focus planned it, about 11 s a plan.
     """
 
     reach: float = 0.1
     pitch: float = 0.004
+    whole_attempts: int = 1
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.reach) and self.reach >= 0.0):
             raise ValueError(f"cloud focus reach: must be a finite number >= 0, got {self.reach}")
         if not (math.isfinite(self.pitch) and self.pitch > 0.0):
             raise ValueError(f"cloud focus pitch: must be a positive number, got {self.pitch}")
+        if self.whole_attempts < 1:
+            raise ValueError(f"cloud focus whole_attempts: must be at least 1, got {self.whole_attempts}")
 
 
 def focused_obstacles(obstacles: Sequence[PlacedObstacle], centres: NDArray[np.float64], radii: NDArray[np.float64],

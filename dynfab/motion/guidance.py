@@ -38,8 +38,8 @@ from dynfab.perception.surfaces import surface_clearance
 from dynfab.robots.builtin_meshes import builtin_collision_meshes
 from dynfab.robots.link_meshes import LinkMeshError
 from dynfab.robots.mesh_collision import MeshCollisionModel, mesh_collision_model
-from dynfab.motion.joint_planning import (ApproachTest, JointPath, NoPathError, approach_clear, plan_joint_path,
-                                          polyline_samples)
+from dynfab.motion.joint_planning import (ApproachTest, JointPath, JointPlannerSettings, NoPathError, approach_clear,
+                                          plan_joint_path, polyline_samples)
 from dynfab.motion.joint_trajectory import JointTrajectory, TimingError, time_path
 from dynfab.motion.guidance_settings import GuidanceSettings
 from dynfab.motion.phased_trajectory import PhasedTrajectory
@@ -164,10 +164,11 @@ class JointGuidance:
     def plan(self, q: NDArray[np.float64], goal: GoalTargets, obstacles: Sequence[PlacedObstacle],
              seed: int = 0, wide: bool = False) -> Plan:
         """A timed free reference from ``q`` (at rest) to ``goal`` among ``obstacles``; if
-        ``wide``, the first attempt keeps ``stall_margin`` (a replan after a stall). Where
-        no attempt finds a path (or escapes a blocked endpoint) among point clouds, the
-        attempts are made again with the clouds focused around the goal
-        (:mod:`dynfab.motion.cloud_focus`).
+        ``wide``, the first attempt keeps ``stall_margin`` (a replan after a stall). Among
+        point clouds, where the first ``cloud_focus.whole_attempts`` attempts find no path
+        (or no escape of a blocked endpoint), every attempt is made again with the clouds
+        focused around the goal (:mod:`dynfab.motion.cloud_focus`); without clouds or focus
+        (or after another failure) the rest of the attempts on the whole obstacles.
 
         Raises:
             GuidanceError: if every attempt failed (the last one's reason).
@@ -176,22 +177,27 @@ class JointGuidance:
         self.checker.set_obstacles(obstacles)
         start = np.clip(np.asarray(q, dtype=float), self._lower, self._upper)
         target = self.goal_configuration(goal, start, seed)
+        approach = self._goal_approach(target)
+        tries = self._tries(approach, seed, wide)
+        focus = self.settings.cloud_focus
+        first = len(tries)
+        if focus is not None and any(isinstance(o.shape, PointCloud) for o in obstacles):
+            first = min(first, first - self.settings.attempts + focus.whole_attempts)
         try:
-            return self._attempts(start, target, seed, wide, began)
+            return self._attempts(start, target, tries[:first], approach, began)
         except GuidanceError as failure:
             focused = self._focused(obstacles, target) if failure.reason in _FOCUS_HELPS else None
             if focused is None:
-                raise
+                if first == len(tries) or failure.reason == "timing":
+                    raise
+                return self._attempts(start, target, tries[first:], approach, began)
         self.checker.set_obstacles(focused)
-        return self._attempts(start, target, seed, wide, began)
+        approach = self._goal_approach(target)  # the goal's test on the focus's grid
+        return self._attempts(start, target, self._tries(approach, seed, wide), approach, began)
 
-    def _attempts(self, start: NDArray[np.float64], target: NDArray[np.float64], seed: int, wide: bool,
-                  began: float) -> Plan:
-        """The plan from ``start`` to ``target`` among the checker's obstacles: each attempt
-        with the next seed and twice the time limit, a ``wide`` one first (:meth:`plan`)."""
-        approach = self._goal_approach(target)
-        error: GuidanceError | None = None
-        checks = 0
+    def _tries(self, approach: ApproachTest | None, seed: int, wide: bool) -> list[tuple[JointPlannerSettings, int]]:
+        """The planner's settings and seed of each attempt: each with the next seed and twice the
+        time limit, a ``wide`` one first (:meth:`plan`)."""
         path_settings = self.settings.path
         if approach is not None and approach.instead_of_spheres:
             path_settings = replace(path_settings, escape_samples=self.settings.mesh_escape_samples)
@@ -200,6 +206,15 @@ class JointGuidance:
         if wide and self.settings.stall_margin > path_settings.margin:
             tries.insert(0, (replace(path_settings, margin=self.settings.stall_margin,
                                      time_limit=self.settings.stall_margin_time), seed))
+        return tries
+
+    def _attempts(self, start: NDArray[np.float64], target: NDArray[np.float64],
+                  tries: Sequence[tuple[JointPlannerSettings, int]], approach: ApproachTest | None,
+                  began: float) -> Plan:
+        """The plan from ``start`` to ``target`` among the checker's obstacles: the first of
+        ``tries`` (planner settings, seed) that finds one."""
+        error: GuidanceError | None = None
+        checks = 0
         for settings, attempt_seed in tries:
             try:
                 path = plan_joint_path(self.checker, start, target, self._lower, self._upper, settings, attempt_seed,

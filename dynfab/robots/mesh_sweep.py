@@ -4,7 +4,8 @@ Every sample of the run counts; nothing is skipped by a stride. Three tiers keep
 
 1. a lower bound for every (sample, link, obstacle) and (sample, pair) from bounding
    spheres, in numpy: ``||c_a - c_b|| - R_a - R_b`` (for a plane, the signed height of
-   the link's sphere centre above it minus ``R_a``);
+   the link's sphere centre above it minus ``R_a``; for a point cloud, the distance of the
+   link's sphere centre to the nearest kept point minus ``R_a``, one KD-tree query);
 2. the convex hulls' signed distance (:func:`~dynfab.geometry.exact_collision.hull_distance`),
    also a lower bound, a few microseconds each;
 3. :func:`~dynfab.geometry.exact_collision.exact_distance` on the meshes.
@@ -13,6 +14,10 @@ Entries are visited in increasing order of their bound. Every entry whose bound 
 is settled (so every contact is found), and the search for the minimum stops once the
 bound exceeds the smallest exact distance found: the reported minima are exactly the
 minima over all samples of tier 3.
+
+Against a point cloud the distance is to its kept points, signed
+(:mod:`dynfab.geometry.cloud_collision`), less the obstacle's :attr:`PlacedShape.lowering`
+(the run's metrics: the cloud's voxel half-diagonal ``δ``).
 """
 
 from __future__ import annotations
@@ -26,7 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 from dynfab.geometry.exact_collision import (
     exact_distance, hull_distance, placement_matrix, shape_bounding_radius, shape_geometry,
 )
-from dynfab.geometry.shapes import Placement, Plane, Shape
+from dynfab.geometry.shapes import Placement, Plane, PointCloud, Shape
 
 from .mesh_collision import MeshCollisionModel
 
@@ -41,11 +46,19 @@ class PlacedShape:
         name: How reports name it, e.g. ``obstacles[2]``.
         shape: The obstacle's shape.
         placements: One placement per sample, or a single one for a static obstacle.
+        lowering: subtracted from every distance to it [m] (>= 0): a point cloud's ``δ``
+            in a run's metrics, the distance to the raw points it stands for being at least
+            that to its kept points less ``δ``; 0 for the distance to the shape as given.
     """
 
     name: str
     shape: Shape
     placements: tuple[Placement, ...]
+    lowering: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.lowering) and self.lowering >= 0.0):
+            raise ValueError(f"{self.name}: lowering must be a finite number >= 0, got {self.lowering}")
 
 
 @dataclass(frozen=True)
@@ -166,9 +179,9 @@ def _obstacle_distances(model: MeshCollisionModel, obstacle: PlacedShape, poses:
 
     def distance(t: int, link: int, exact: bool) -> float:
         measure = exact_distance if exact else hull_distance
-        return measure(model.meshes[link], poses[t, link], geometry, obstacle_poses[t])
+        return measure(model.meshes[link], poses[t, link], geometry, obstacle_poses[t]) - obstacle.lowering
 
-    return _obstacle_bound(obstacle.shape, obstacle_poses, centers, radii), distance
+    return _obstacle_bound(obstacle.shape, obstacle_poses, centers, radii) - obstacle.lowering, distance
 
 
 def _obstacle_poses(obstacle: PlacedShape, samples: int) -> NDArray[np.float64]:
@@ -186,6 +199,12 @@ def _obstacle_bound(shape: Shape, poses: NDArray[np.float64], centers: NDArray[n
     offsets = centers - poses[:, None, :3, 3]
     if isinstance(shape, Plane):  # height above the plane z_s = 0 along its normal
         return np.einsum("tli,ti->tl", offsets, poses[:, :3, 2]) - radii
+    if isinstance(shape, PointCloud):  # the nearest kept point to each centre, in the cloud's frame
+        if shape.empty:
+            return np.full(offsets.shape[:2], np.inf)
+        local = np.einsum("tji,tlj->tli", poses[:, :3, :3], offsets)
+        gaps, _ = shape.tree.query(np.ascontiguousarray(local.reshape(-1, 3)))
+        return gaps.reshape(offsets.shape[:2]) - radii
     return np.linalg.norm(offsets, axis=-1) - radii - shape_bounding_radius(shape)
 
 

@@ -13,7 +13,10 @@ geometry: ``clearance`` is the sphere clearance and ``self_collision`` /
 For a mesh robot the run's metrics become
 
 - ``clearance``: min over every sample, link and obstacle of the mesh-to-shape distance
-  [m] (negative: the penetration depth of the link's convex hull);
+  [m] (negative: the penetration depth of the link's convex hull); to a point cloud, the
+  signed distance to its kept points (a point inside a link: minus its distance to the
+  link's surface, :mod:`dynfab.geometry.cloud_collision`) less the voxel half-diagonal
+  ``δ``, a lower bound of the distance to the measured points;
 - ``collision``: some link touched an obstacle (distance <= 0);
 - ``self_collision``: some checked link pair touched
   (:mod:`dynfab.robots.mesh_collision` says which pairs are checked);
@@ -30,7 +33,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from dynfab.geometry.shapes import Placement
+from dynfab.geometry.shapes import Placement, PointCloud
 from dynfab.robots.builtin_meshes import builtin_collision_meshes
 from dynfab.robots.link_meshes import LinkMeshError
 from dynfab.robots.mesh_collision import MeshCollisionModel, mesh_collision_model
@@ -56,18 +59,23 @@ def mesh_model_for(robot: Robot) -> MeshCollisionModel | None:
         raise ScenarioError("robot.urdf", str(error)) from error
 
 
-def obstacle_shapes(obstacles: Sequence[ObstacleSpec], centers: NDArray[np.float64]) -> list[PlacedShape]:
+def obstacle_shapes(obstacles: Sequence[ObstacleSpec], centers: NDArray[np.float64],
+                    lowered: bool = False) -> list[PlacedShape]:
     """The scenario's obstacles as shapes placed at each sample.
 
     Args:
         obstacles: The scenario's obstacles.
         centers: Their centres (a plane: its point) at each sample, shape (T, m, 3) [m].
+        lowered: a point cloud's distances less its ``δ`` (a run's metrics: a lower bound of
+            the distance to the measured points); else to its kept points (the start
+            check, which refuses only a start that touches one).
     """
     shapes = []
     for k, obstacle in enumerate(obstacles):
         track = centers[:1, k] if obstacle.trajectory is None else centers[:, k]
+        lowering = obstacle.shape.lowering if lowered and isinstance(obstacle.shape, PointCloud) else 0.0
         shapes.append(PlacedShape(obstacle.name(k), obstacle.shape,
-                                  tuple(Placement(tuple(c), obstacle.orientation) for c in track)))
+                                  tuple(Placement(tuple(c), obstacle.orientation) for c in track), lowering))
     return shapes
 
 

@@ -112,7 +112,7 @@ def check_recording(scenario: Scenario, recording: Recording) -> CheckReport:
                                            f"the scenario's robot has {', '.join(joints)}")
     references = scenario_references(scenario, robot)
     centres = obstacle_centres(references, recording.t)
-    sweep = sweep_meshes(model, recording.q, obstacle_shapes(scenario.obstacles, centres))
+    sweep = sweep_meshes(model, recording.q, obstacle_shapes(scenario.obstacles, centres, lowered=True))
     violations = []
     for i, joint in enumerate(joints):
         lower, upper = float(robot.kinematics.lower[i]), float(robot.kinematics.upper[i])

@@ -218,7 +218,8 @@ def measure_run(scenario: Scenario, robot: Robot, references: References, record
         metrics = dataclasses.replace(metrics, solver_time_ms=1e3 * float(np.mean(solve_times)))
     mesh_sweep = None
     if mesh_model is not None:
-        mesh_sweep = sweep_meshes(mesh_model, record.q, obstacle_shapes(scenario.obstacles, obstacle_centers))
+        shapes = obstacle_shapes(scenario.obstacles, obstacle_centers, lowered=True)  # a cloud less its δ
+        mesh_sweep = sweep_meshes(mesh_model, record.q, shapes)
         metrics = with_mesh_metrics(metrics, mesh_sweep)
     if scenario.simulation.simulator == "mujoco":
         metrics = with_contacts(metrics, contacts)

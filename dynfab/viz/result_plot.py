@@ -70,7 +70,7 @@ def reported_clearance(result: RunResult) -> tuple[NDArray[np.float64], str]:
     if result.mesh_sweep is None or not result.scenario.obstacles:
         return result.clearance, "sphere clearance"
     model = mesh_model_for(result.robot)
-    shapes = obstacle_shapes(result.scenario.obstacles, result.obstacle_centers)
+    shapes = obstacle_shapes(result.scenario.obstacles, result.obstacle_centers, lowered=True)
     return clearance_per_sample(model, result.record.q, shapes), "mesh clearance"
 
 
