@@ -135,6 +135,7 @@ class GuidedFabric:
         self._pending: PendingPlan | None = None
         self._interim: tuple[float, StraightMotion] | None = None   # since when, toward the goal
         self._joining = ConfigurationChecker(fabric.robot)   # the control thread's own: the worker has the guidance's
+        self._sight = ConfigurationChecker(fabric.robot)     # the static obstacles, between the robot and q_r
         self._static: tuple[PlacedObstacle, ...] = ()
         self._goal: GoalTargets | None = None
         self._plan: Plan | None = None
@@ -172,6 +173,7 @@ class GuidedFabric:
     def set_obstacles(self, obstacles: Sequence[PlacedObstacle]) -> None:
         """The obstacles plans avoid (those that do not move; moving ones go to :meth:`update`)."""
         self._static = tuple(obstacles)
+        self._sight.set_obstacles(self._static)
         self._table = np.zeros((1, len(self._static)))
 
     @property
@@ -231,7 +233,7 @@ class GuidedFabric:
                       else (settings.close_lag_slow, settings.close_lag_stop) if self._close or self._entering()
                       else (settings.lag_slow, settings.lag_stop))
         self._approaching = self._approaching or (in_approach and lag <= settings.approach_lag_stop)
-        waiting = self._pending is not None and not in_approach
+        waiting = self._pending is not None and not in_approach or not (in_approach or self._in_sight(q))
         rate = 0.0 if waiting else float(np.clip((stop - lag) / (stop - slow), 0.0, 1.0))
         self._tau += rate * dt
         self._write(self._tau, rate)
@@ -241,6 +243,12 @@ class GuidedFabric:
         """:meth:`update`, then the fabric's command (always finite, within the limits)."""
         self.update(t, q, moving)
         return self.fabric.compute(q, qdot)
+
+    def _in_sight(self, q: NDArray[np.float64]) -> bool:
+        """Whether the straight segment from ``q`` to the reference written last tick touches
+        none of the static obstacles (checked every ``path.resolution`` rad)."""
+        reference = self.fabric.parameters.goal_position[0]
+        return self._sight.motion_free(q, reference, self._settings.path.resolution, 0.0, -np.inf)[0]
 
     def _entering(self) -> bool:
         """Whether the reference's clock is within ``close_time`` before the plan's approach."""

@@ -154,6 +154,8 @@ def make_plan(guidance: JointGuidance, request: PlanRequest,
         plan = None
         if request.after == "short" and request.previous_goal is not None:   # held short of an approach
             plan = guidance.approach_from(request.q, request.previous_goal)
+        if plan is None and request.previous_goal is not None and not isinstance(request.goal, JointTarget):
+            plan = _replan_to(guidance, request, obstacles, publish)
         if plan is None:
             target = guidance.goal_configuration(request.goal, request.q, request.seed)
             publish(target)
@@ -165,6 +167,22 @@ def make_plan(guidance: JointGuidance, request: PlanRequest,
         segment, table = guidance.approach_allowances(plan, request.static, request.buffers)
         return PlanOutcome(plan, None, None, _ms_since(began), segment, table)
     return PlanOutcome(plan, None, None, _ms_since(began), plan.goal[None], none)
+
+
+def _replan_to(guidance: JointGuidance, request: PlanRequest, obstacles: tuple[PlacedObstacle, ...],
+               publish: Callable[[NDArray[np.float64]], None]) -> Plan | None:
+    """A replan of task goals to the goal configuration the robot was heading for
+    (``request.previous_goal``), or None if none can be made (then inverse kinematics
+    looks for another). Solving them again from where the robot is held can pick a
+    configuration far from it whose plan does not fit in the run (MBM table_bars/0008:
+    5.5 rad away, a 17 s plan, after a stall 0.59 rad from the goal)."""
+    assert request.previous_goal is not None
+    publish(request.previous_goal)
+    try:
+        return guidance.plan(request.q, JointTarget(tuple(request.previous_goal)), obstacles, seed=request.seed,
+                             wide=request.wide)
+    except GuidanceError:
+        return None
 
 
 def _ms_since(began: float) -> float:
