@@ -30,6 +30,9 @@ there cuts the corner into the approach and is held by what it passes):
     ρ = clip((e_stop − e) / (e_stop − e_slow), 0, 1),   e = ‖q − q_r(τ)‖,
     τ ← τ + ρ Δt,   q̇_r ← ρ q̇_r(τ),   q̈_r ← ρ² q̈_r(τ).
 
+Off the approach ``ρ = 0`` while the reference is out of the robot's sight
+(:func:`~dynfab.motion.plan_joining.in_sight`: a corner the attractor would pull it into).
+
 It asks for a replan from where the robot is (at most ``replans`` times; until the new
 one arrives the old reference's clock stands still outside a grasp's approach, so the
 fabric brakes at its point and keeps avoiding rather than following it into what blocked
@@ -95,7 +98,7 @@ from dynfab.geometry.shapes import Sphere
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.guidance import GoalTargets, GuidanceSettings, JointGuidance, Plan, allowances_ahead
 from dynfab.motion.guidance_status import GuidanceStatus
-from dynfab.motion.plan_joining import join_time
+from dynfab.motion.plan_joining import in_sight, join_time
 from dynfab.motion.plan_requests import PendingPlan, PlanRequest, plan_maker
 from dynfab.motion.straight_motion import StraightMotion
 
@@ -134,8 +137,7 @@ class GuidedFabric:
         self._maker = plan_maker(self.guidance, plan_latency)
         self._pending: PendingPlan | None = None
         self._interim: tuple[float, StraightMotion] | None = None   # since when, toward the goal
-        self._joining = ConfigurationChecker(fabric.robot)   # the control thread's own: the worker has the guidance's
-        self._sight = ConfigurationChecker(fabric.robot)     # the static obstacles, between the robot and q_r
+        self._joining, self._sight = ConfigurationChecker(fabric.robot), ConfigurationChecker(fabric.robot)  # not the worker's
         self._static: tuple[PlacedObstacle, ...] = ()
         self._goal: GoalTargets | None = None
         self._plan: Plan | None = None
@@ -233,7 +235,8 @@ class GuidedFabric:
                       else (settings.close_lag_slow, settings.close_lag_stop) if self._close or self._entering()
                       else (settings.lag_slow, settings.lag_stop))
         self._approaching = self._approaching or (in_approach and lag <= settings.approach_lag_stop)
-        waiting = self._pending is not None and not in_approach or not (in_approach or self._in_sight(q))
+        sight = in_approach or in_sight(self._sight, q, params.goal_position[0], settings.path.resolution)  # static ones
+        waiting = self._pending is not None and not in_approach or not sight
         rate = 0.0 if waiting else float(np.clip((stop - lag) / (stop - slow), 0.0, 1.0))
         self._tau += rate * dt
         self._write(self._tau, rate)
@@ -243,12 +246,6 @@ class GuidedFabric:
         """:meth:`update`, then the fabric's command (always finite, within the limits)."""
         self.update(t, q, moving)
         return self.fabric.compute(q, qdot)
-
-    def _in_sight(self, q: NDArray[np.float64]) -> bool:
-        """Whether the straight segment from ``q`` to the reference written last tick touches
-        none of the static obstacles (checked every ``path.resolution`` rad)."""
-        reference = self.fabric.parameters.goal_position[0]
-        return self._sight.motion_free(q, reference, self._settings.path.resolution, 0.0, -np.inf)[0]
 
     def _entering(self) -> bool:
         """Whether the reference's clock is within ``close_time`` before the plan's approach."""
@@ -345,7 +342,7 @@ class GuidedFabric:
         if plan is None:
             if first:
                 self._plan = None
-                self._hold(q)
+                self._set_reference(q, 0.0, 0.0)   # q at rest
             return True  # a failed replan keeps following the old reference
         if first:
             distance = float(np.linalg.norm(request.q - plan.goal))
@@ -368,7 +365,7 @@ class GuidedFabric:
         assert self._pending is not None
         target = self._pending.goal_configuration   # published by the maker after IK
         if target is None:
-            self._hold(q)
+            self._set_reference(q, 0.0, 0.0)   # q at rest
             return
         if self._interim is None or self._interim[1].goal is not target:
             limits, settings = self.fabric.robot.limits, self._settings
@@ -392,10 +389,6 @@ class GuidedFabric:
         spheres, shapes = config.obstacle_avoidance, config.shape_avoidance
         return [(spheres.barrier.offset if spheres else 0.0) if isinstance(o.shape, Sphere)
                 else (shapes.barrier.offset if shapes else 0.0) for o in self._static]
-
-    def _hold(self, q: NDArray[np.float64]) -> None:
-        """Write the reference ``q`` at rest into the fabric's first goal."""
-        self._set_reference(q, 0.0, 0.0)
 
     def _set_reference(self, position: NDArray[np.float64], velocity: NDArray[np.float64] | float,
                        acceleration: NDArray[np.float64] | float) -> None:

@@ -4,7 +4,8 @@ the robot while it is made (issue 19: the robot never waits for a plan).
 A :class:`PlanRequest` holds everything a plan needs, captured when it is asked for (the
 robot's configuration, the goal, the obstacles, the seed), so the plan does not depend on
 when it is made. :func:`make_plan` turns it into a :class:`PlanOutcome`: the goal
-configuration (inverse kinematics for task goals), published on the
+configuration (inverse kinematics for task goals; a replan keeps the one the robot was
+heading for while a plan to it can be made), published on the
 :class:`PendingPlan` as soon as it is known (the fabric can head for it while the path is
 planned), then the path and its timing (:meth:`JointGuidance.plan`), and the static
 obstacles' allowances along a grasp's approach.
@@ -56,7 +57,9 @@ class PlanRequest:
         buffers: per static obstacle, the clearance its fabric leaves keep [m].
         after: why the plan is asked for (``held``, ``short``, ``stalled``, ``blocked``), None
             at first; after ``short`` the straight approach from ``q`` to ``previous_goal`` is
-            tried first (:meth:`~dynfab.motion.guidance.JointGuidance.approach_from`).
+            tried first (:meth:`~dynfab.motion.guidance.JointGuidance.approach_from`). A
+            replan of task goals plans to ``previous_goal`` first, and solves inverse
+            kinematics again only if no plan to it can be made.
     """
 
     t: float
