@@ -235,7 +235,7 @@ class GuidedFabric:
                       else (settings.close_lag_slow, settings.close_lag_stop) if self._close or self._entering()
                       else (settings.lag_slow, settings.lag_stop))
         self._approaching = self._approaching or (in_approach and lag <= settings.approach_lag_stop)
-        sight = in_approach or in_sight(self._sight, q, params.goal_position[0], settings.path.resolution)  # static ones
+        sight = in_approach or in_sight(self._sight, q, params.goal_position[0], settings.path)
         waiting = self._pending is not None and not in_approach or not sight
         rate = 0.0 if waiting else float(np.clip((stop - lag) / (stop - slow), 0.0, 1.0))
         self._tau += rate * dt

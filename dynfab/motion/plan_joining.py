@@ -1,5 +1,6 @@
 """Where a robot that moved while its plan was made joins that plan (issue 19: plans made
-off the control loop arrive late)."""
+off the control loop arrive late), and whether a robot sees its reference (the straight
+way to it clear)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ from numpy.typing import NDArray
 
 from dynfab.motion.configuration_checker import ConfigurationChecker
 from dynfab.motion.guidance import Plan
+from dynfab.motion.joint_planning import JointPlannerSettings
 
 __all__ = ["JOIN_CANDIDATES", "JOIN_SAMPLE_PERIOD", "in_sight", "join_time"]
 
@@ -28,21 +30,26 @@ def join_time(plan: Plan, q: NDArray[np.float64], checker: ConfigurationChecker,
     positions = plan.trajectory.sample(times)[0]
     order = np.argsort(np.linalg.norm(positions - q, axis=1), kind="stable")
     for k in order[:JOIN_CANDIDATES]:
-        if in_sight(checker, q, positions[k], resolution):
+        if checker.motion_free(q, positions[k], resolution, 0.0, -np.inf)[0]:
             return float(times[k])
     return float(times[order[0]])
 
 
 def in_sight(checker: ConfigurationChecker, q: NDArray[np.float64], point: NDArray[np.float64],
-             resolution: float) -> bool:
+             settings: JointPlannerSettings) -> bool:
     """Whether the straight joint-space segment from ``q`` to ``point`` (checked every
-    ``resolution`` rad, self-collision aside) touches none of ``checker``'s obstacles.
+    ``settings.resolution`` rad, self-collision aside) keeps ``min(margin, c(q), c(point)) −
+    escape_slack`` [m] from ``checker``'s obstacles: no closer than its ends (or the planner's
+    margin) by more than the slack of an escaped endpoint's segment.
 
     A guided fabric's reference clock waits while its reference is not in sight of the
     robot among the static obstacles (:mod:`dynfab.motion.guided_fabric`): its attractor
     pulls along that segment, and a reference that ran on around a corner the robot was
-    held behind left it there (moving-sphere MBM bookshelf_thin/0019 stalled 0.19 rad short
-    after 8 plans, 19 mm from a table leg the straight way to the goal goes 9 mm into). The
-    plan's path and timing are kept; a robot that cannot see its reference waits for a
-    stall replan rather than being pulled on."""
-    return checker.motion_free(q, point, resolution, 0.0, -np.inf)[0]
+    held behind left it there, where the obstacle leaves hold it (moving-sphere MBM
+    bookshelf_thin/0019 stalled 0.19 rad short after 8 plans, 19 mm from a table leg the
+    straight way to the goal goes 9 mm into; as posed bookshelf_small/0036, fingers 21 mm
+    from a shelf side the way to the reference touches). The plan's path and timing are
+    kept; a robot that cannot see its reference waits for a stall replan rather than being
+    pulled on."""
+    floor = min(settings.margin, checker.clearances(q)[0], checker.clearances(point)[0]) - settings.escape_slack
+    return checker.motion_free(q, point, settings.resolution, floor, -np.inf)[0]
