@@ -31,7 +31,7 @@ there cuts the corner into the approach and is held by what it passes):
     τ ← τ + ρ Δt,   q̇_r ← ρ q̇_r(τ),   q̈_r ← ρ² q̈_r(τ).
 
 Off the approach ``ρ = 0`` while the reference is out of the robot's sight among the static
-obstacles but point clouds (:func:`~dynfab.motion.plan_joining.in_sight`: a corner).
+primitives (:func:`~dynfab.motion.plan_joining.in_sight`: a corner; not meshes nor clouds).
 
 It asks for a replan from where the robot is (at most ``replans`` times; until the new
 one arrives the old reference's clock stands still outside a grasp's approach, so the
@@ -94,7 +94,7 @@ from numpy.typing import NDArray
 
 from dynfab.fabric.leaves.goal import GoalAttractor
 from dynfab.fabric.planner import FabricPlanner, GoalConfig
-from dynfab.geometry.shapes import PointCloud, Sphere
+from dynfab.geometry.shapes import Mesh, PointCloud, Sphere
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.guidance import GoalTargets, GuidanceSettings, JointGuidance, Plan, allowances_ahead
 from dynfab.motion.guidance_status import GuidanceStatus
@@ -175,7 +175,7 @@ class GuidedFabric:
     def set_obstacles(self, obstacles: Sequence[PlacedObstacle]) -> None:
         """The obstacles plans avoid (those that do not move; moving ones go to :meth:`update`)."""
         self._static = tuple(obstacles)
-        self._sight.set_obstacles([o for o in self._static if not isinstance(o.shape, PointCloud)])  # no grid per cloud
+        self._sight.set_obstacles([o for o in self._static if not isinstance(o.shape, Mesh | PointCloud)])  # in_sight
         self._table = np.zeros((1, len(self._static)))
 
     @property
