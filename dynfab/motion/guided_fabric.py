@@ -33,7 +33,9 @@ there cuts the corner into the approach and is held by what it passes):
 In the approach ``ρ`` is also at most ``clip((o_stop − o) / (o_stop − o_slow), 0, 1)``, ``o``
 the robot's distance from the approach's straight segment [rad] (``approach_offset_slow``,
 ``approach_offset_stop``): the segment is what the planner checked; along it a lag does no
-harm, beside it the hand nears what it is to grasp.
+harm, beside it the hand nears what it is to grasp. Off the approach ``ρ = 0`` while the
+reference is out of the robot's sight among the static primitives
+(:func:`~dynfab.motion.plan_joining.in_sight`: a corner; not meshes nor clouds).
 
 It asks for a replan from where the robot is (at most ``replans`` times; until the new
 one arrives the old reference's clock stands still outside a grasp's approach, so the
@@ -96,12 +98,12 @@ from numpy.typing import NDArray
 
 from dynfab.fabric.leaves.goal import GoalAttractor
 from dynfab.fabric.planner import FabricPlanner, GoalConfig
-from dynfab.geometry.shapes import Sphere
+from dynfab.geometry.shapes import Mesh, PointCloud, Sphere
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.guidance import (GoalTargets, GuidanceSettings, JointGuidance, Plan, allowances_ahead,
                                     segment_offset)
 from dynfab.motion.guidance_status import GuidanceStatus
-from dynfab.motion.plan_joining import join_time
+from dynfab.motion.plan_joining import in_sight, join_time
 from dynfab.motion.plan_requests import PendingPlan, PlanRequest, plan_maker
 from dynfab.motion.straight_motion import StraightMotion
 
@@ -140,7 +142,7 @@ class GuidedFabric:
         self._maker = plan_maker(self.guidance, plan_latency)
         self._pending: PendingPlan | None = None
         self._interim: tuple[float, StraightMotion] | None = None   # since when, toward the goal
-        self._joining = ConfigurationChecker(fabric.robot)   # the control thread's own: the worker has the guidance's
+        self._joining, self._sight = ConfigurationChecker(fabric.robot), ConfigurationChecker(fabric.robot)  # not the worker's
         self._static: tuple[PlacedObstacle, ...] = ()
         self._goal: GoalTargets | None = None
         self._plan: Plan | None = None
@@ -178,6 +180,7 @@ class GuidedFabric:
     def set_obstacles(self, obstacles: Sequence[PlacedObstacle]) -> None:
         """The obstacles plans avoid (those that do not move; moving ones go to :meth:`update`)."""
         self._static = tuple(obstacles)
+        self._sight.set_obstacles([o for o in self._static if not isinstance(o.shape, Mesh | PointCloud)])  # in_sight
         self._table = np.zeros((1, len(self._static)))
 
     @property
@@ -237,7 +240,8 @@ class GuidedFabric:
                       else (settings.close_lag_slow, settings.close_lag_stop) if self._close or self._entering()
                       else (settings.lag_slow, settings.lag_stop))
         self._approaching = self._approaching or (in_approach and lag <= settings.approach_lag_stop)
-        waiting = self._pending is not None and not in_approach
+        sight = in_approach or in_sight(self._sight, q, params.goal_position[0], settings.path)
+        waiting = self._pending is not None and not in_approach or not sight
         rate = 0.0 if waiting else _ramp(lag, slow, stop)
         if in_approach:
             rate = min(rate, _ramp(segment_offset(self._segment, q), settings.approach_offset_slow,
@@ -346,7 +350,7 @@ class GuidedFabric:
         if plan is None:
             if first:
                 self._plan = None
-                self._hold(q)
+                self._set_reference(q, 0.0, 0.0)   # q at rest
             return True  # a failed replan keeps following the old reference
         if first:
             distance = float(np.linalg.norm(request.q - plan.goal))
@@ -369,7 +373,7 @@ class GuidedFabric:
         assert self._pending is not None
         target = self._pending.goal_configuration   # published by the maker after IK
         if target is None:
-            self._hold(q)
+            self._set_reference(q, 0.0, 0.0)   # q at rest
             return
         if self._interim is None or self._interim[1].goal is not target:
             limits, settings = self.fabric.robot.limits, self._settings
@@ -393,10 +397,6 @@ class GuidedFabric:
         spheres, shapes = config.obstacle_avoidance, config.shape_avoidance
         return [(spheres.barrier.offset if spheres else 0.0) if isinstance(o.shape, Sphere)
                 else (shapes.barrier.offset if shapes else 0.0) for o in self._static]
-
-    def _hold(self, q: NDArray[np.float64]) -> None:
-        """Write the reference ``q`` at rest into the fabric's first goal."""
-        self._set_reference(q, 0.0, 0.0)
 
     def _set_reference(self, position: NDArray[np.float64], velocity: NDArray[np.float64] | float,
                        acceleration: NDArray[np.float64] | float) -> None:

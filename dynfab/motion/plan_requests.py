@@ -4,7 +4,8 @@ the robot while it is made (issue 19: the robot never waits for a plan).
 A :class:`PlanRequest` holds everything a plan needs, captured when it is asked for (the
 robot's configuration, the goal, the obstacles, the seed), so the plan does not depend on
 when it is made. :func:`make_plan` turns it into a :class:`PlanOutcome`: the goal
-configuration (inverse kinematics for task goals), published on the
+configuration (inverse kinematics for task goals; a replan keeps the one the robot was
+heading for while a plan to it can be made), published on the
 :class:`PendingPlan` as soon as it is known (the fabric can head for it while the path is
 planned), then the path and its timing (:meth:`JointGuidance.plan`), and the static
 obstacles' allowances along a grasp's approach.
@@ -56,7 +57,9 @@ class PlanRequest:
         buffers: per static obstacle, the clearance its fabric leaves keep [m].
         after: why the plan is asked for (``held``, ``short``, ``stalled``, ``blocked``), None
             at first; after ``short`` the straight approach from ``q`` to ``previous_goal`` is
-            tried first (:meth:`~dynfab.motion.guidance.JointGuidance.approach_from`).
+            tried first (:meth:`~dynfab.motion.guidance.JointGuidance.approach_from`). A
+            replan of task goals plans to ``previous_goal`` first, and solves inverse
+            kinematics again only if no plan to it can be made.
     """
 
     t: float
@@ -154,6 +157,8 @@ def make_plan(guidance: JointGuidance, request: PlanRequest,
         plan = None
         if request.after == "short" and request.previous_goal is not None:   # held short of an approach
             plan = guidance.approach_from(request.q, request.previous_goal)
+        if plan is None and request.previous_goal is not None and not isinstance(request.goal, JointTarget):
+            plan = _replan_to(guidance, request, obstacles, publish)
         if plan is None:
             target = guidance.goal_configuration(request.goal, request.q, request.seed)
             publish(target)
@@ -165,6 +170,22 @@ def make_plan(guidance: JointGuidance, request: PlanRequest,
         segment, table = guidance.approach_allowances(plan, request.static, request.buffers)
         return PlanOutcome(plan, None, None, _ms_since(began), segment, table)
     return PlanOutcome(plan, None, None, _ms_since(began), plan.goal[None], none)
+
+
+def _replan_to(guidance: JointGuidance, request: PlanRequest, obstacles: tuple[PlacedObstacle, ...],
+               publish: Callable[[NDArray[np.float64]], None]) -> Plan | None:
+    """A replan of task goals to the goal configuration the robot was heading for
+    (``request.previous_goal``), or None if none can be made (then inverse kinematics
+    looks for another). Solving them again from where the robot is held can pick a
+    configuration far from it whose plan does not fit in the run (MBM table_bars/0008:
+    5.5 rad away, a 17 s plan, after a stall 0.59 rad from the goal)."""
+    assert request.previous_goal is not None
+    publish(request.previous_goal)
+    try:
+        return guidance.plan(request.q, JointTarget(tuple(request.previous_goal)), obstacles, seed=request.seed,
+                             wide=request.wide)
+    except GuidanceError:
+        return None
 
 
 def _ms_since(began: float) -> float:
