@@ -228,9 +228,9 @@ def test_guidance_instances_of_one_robot_share_its_mesh_model(panda) -> None:
 def test_a_goal_the_meshes_judge_is_escaped_with_mesh_escape_samples(panda, touching, monkeypatch) -> None:
     used = []
 
-    def recording(checker, start, goal, lower, upper, settings, seed, approach):
+    def recording(checker, start, goal, lower, upper, settings, seed, approach, leave):
         used.append(settings.escape_samples)
-        return plan_joint_path(checker, start, goal, lower, upper, settings, seed, approach)
+        return plan_joint_path(checker, start, goal, lower, upper, settings, seed, approach, leave)
 
     monkeypatch.setattr(guidance_module, "plan_joint_path", recording)
     guidance = JointGuidance(panda, replace(GuidanceSettings(), mesh_escape_samples=777))
