@@ -110,7 +110,7 @@ class GuidanceSettings:
     path: JointPlannerSettings = field(default_factory=JointPlannerSettings)
     ik: IkSettings = field(default_factory=IkSettings)
     ik_retry: IkSettings = field(default_factory=lambda: IkSettings(seeds=240, time_limit=2.0))
-    mesh_margin: float = 0.003
+    mesh_margin: float = 0.002
     approach_clearance: float = 0.005
     mesh_escape_samples: int = 1000
     cloud_focus: CloudFocus | None = CloudFocus()
