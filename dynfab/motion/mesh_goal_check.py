@@ -15,12 +15,15 @@ kept points stand for raw points within ``δ`` of them; 0 without clouds) [m]. A
 accepts and the spheres refuse is then planned as a blocked joint goal: escaped to a free
 configuration nearby and approached slowly (:mod:`dynfab.motion.joint_planning`).
 
-Among meshes and point clouds the approach of every escaped goal is also checked here
-(:meth:`MeshGoalCheck.segment_free`): on the meshes it goes no deeper than the goal,
-``c_obs ≥ min(margin, c_obs(goal))`` at every configuration. The spheres' own test ("no
+The segment of every escaped endpoint (a goal's approach, a start's way out) among meshes
+and point clouds, and of one free on the meshes anywhere, is checked here
+(:meth:`MeshGoalCheck.segment_free`): on the meshes it goes no deeper than the endpoint,
+``c_obs ≥ min(floor, c_obs(endpoint))`` at every configuration. The spheres' own test ("no
 deeper than the goal" on the grid) lets it go deeper than the goal truly is, the grid
 reading up to ``h√3`` low at the goal and exactly elsewhere: a finger's mesh touched a shelf
-on such an approach (training table_bars/0004, seed 0).
+on such an approach (training table_bars/0004, seed 0). Where the meshes find the endpoint
+free (and no point cloud is among the obstacles) this test replaces the spheres'
+(:meth:`~dynfab.motion.guidance.JointGuidance._endpoint_test`).
 """
 
 from __future__ import annotations
