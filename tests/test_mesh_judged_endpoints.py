@@ -100,3 +100,24 @@ def test_a_run_from_a_start_the_spheres_overlap_ends_clear_on_the_meshes(touchin
     metrics = run_scenario(scenario).metrics
     assert metrics.guided and metrics.success and not metrics.collision
     assert metrics.clearance is not None and metrics.clearance > 0.0
+
+
+@pytest.mark.parametrize("wall", [WALL, MESH_WALL], ids=["box", "mesh"])
+def test_a_segment_test_stopping_early_agrees_with_the_exact_minimum(panda, touching, wall) -> None:
+    """:meth:`MeshGoalCheck.segment_free` stops at the first configuration below its floor
+    (:func:`~dynfab.robots.mesh_sweep.meshes_clear`); its answers are those of the exact
+    minimum over the segment, on both sides of the floor."""
+    guidance = JointGuidance(panda)
+    guidance.checker.set_obstacles([wall])
+    meshes = guidance._meshes()
+    rng = np.random.default_rng(5)
+    answers = []
+    for _ in range(12):
+        free = touching + rng.normal(scale=0.15, size=touching.size)
+        line = free + np.linspace(0.0, 1.0, 41)[:, None] * (touching - free)
+        least, itself = meshes.clearance(line)
+        for floor in (0.002, 0.01, least - 1e-4, least + 1e-4):
+            expected = least >= floor and itself > 0.0
+            assert meshes.segment_free(free, touching, np.linalg.norm(touching - free) / 40 + 1e-12, floor) == expected
+            answers.append(expected)
+    assert any(answers) and not all(answers)

@@ -36,7 +36,7 @@ from numpy.typing import NDArray
 from dynfab.geometry.point_cloud import PointCloud
 from dynfab.motion.configuration_checker import PlacedObstacle
 from dynfab.robots.mesh_collision import MeshCollisionModel
-from dynfab.robots.mesh_sweep import PlacedShape, sweep_meshes
+from dynfab.robots.mesh_sweep import PlacedShape, meshes_clear, sweep_meshes
 
 __all__ = ["MeshGoalCheck"]
 
@@ -82,5 +82,6 @@ class MeshGoalCheck:
         ``step`` apart [rad] (both ends included), keeps ``c_obs ≥ floor`` [m] (default
         :attr:`margin`) with no checked link pair touching."""
         count = max(1, int(np.ceil(np.linalg.norm(b - a) / step)))
-        obstacle, itself = self.clearance(a + np.linspace(0.0, 1.0, count + 1)[:, None] * (b - a))
-        return obstacle >= (self.margin if floor is None else floor) and itself > 0.0
+        line = a + np.linspace(0.0, 1.0, count + 1)[:, None] * (b - a)
+        least = (self.margin if floor is None else floor) + self._lowering
+        return meshes_clear(self.model, line, self._shapes, least)

@@ -30,7 +30,7 @@ from dynfab.geometry.shapes import Placement, Plane, Shape
 
 from .mesh_collision import MeshCollisionModel
 
-__all__ = ["Contact", "MeshSweep", "PlacedShape", "clearance_per_sample", "sweep_meshes"]
+__all__ = ["Contact", "MeshSweep", "PlacedShape", "clearance_per_sample", "meshes_clear", "sweep_meshes"]
 
 
 @dataclass(frozen=True)
@@ -147,6 +147,33 @@ def clearance_per_sample(model: MeshCollisionModel, qs: ArrayLike, obstacles: Se
     return clearance
 
 
+def meshes_clear(model: MeshCollisionModel, qs: ArrayLike, obstacles: Sequence[PlacedShape], floor: float) -> bool:
+    """Whether at every sample every link keeps a mesh distance ``≥ floor`` [m] from every
+    obstacle and no checked link pair touches (distance ``≤ 0``): the same answer as
+    :func:`sweep_meshes`' ``clearance ≥ floor and min_self_distance > 0``, found with the
+    same three tiers but stopping at the first entry below the threshold, or once every
+    bound left is above it (no exact minimum is sought).
+
+    Raises:
+        ValueError: An obstacle whose number of placements is neither 1 nor T.
+    """
+    poses, centers, radii = _link_spheres(model, qs)
+    for obstacle in obstacles:
+        if _any_below(*_obstacle_distances(model, obstacle, poses, centers, radii), floor):
+            return False
+    if not model.pairs:
+        return True
+    first, second = (np.array(side) for side in zip(*model.pairs))
+    bound = np.linalg.norm(centers[:, first] - centers[:, second], axis=-1) - radii[first] - radii[second]
+
+    def pair_distance(t: int, pair: int, exact: bool) -> float:
+        measure = exact_distance if exact else hull_distance
+        a, b = model.pairs[pair]
+        return measure(model.meshes[a], poses[t, a], model.meshes[b], poses[t, b])
+
+    return not _any_below(bound, pair_distance, np.nextafter(0.0, 1.0))   # below the least positive: ≤ 0
+
+
 def _link_spheres(model: MeshCollisionModel, qs: ArrayLike
                   ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """The links' poses (T, L, 4, 4), bounding-sphere centres (T, L, 3) [m] and radii (L,) [m]."""
@@ -218,6 +245,20 @@ def _search(bound: NDArray[np.float64], distance: Callable[[int, int, bool], flo
     for found in contacts.values():
         found.sort()
     return float(best), contacts
+
+
+def _any_below(bound: NDArray[np.float64], distance: Callable[[int, int, bool], float], threshold: float) -> bool:
+    """Whether ``distance(t, j, exact=True) < threshold`` for some (t, j), visiting entries in
+    increasing order of ``bound`` (lower bounds, shape (T, P)) and skipping those whose
+    cheaper bound ``distance(t, j, exact=False)`` is not below it (:func:`_search`)."""
+    columns = bound.shape[1]
+    for flat in np.argsort(bound, axis=None, kind="stable"):
+        t, j = divmod(int(flat), columns)
+        if bound[t, j] >= threshold:
+            return False
+        if distance(t, j, False) < threshold and distance(t, j, True) < threshold:
+            return True
+    return False
 
 
 def _by_first_sample(contacts: list[Contact]) -> tuple[Contact, ...]:
