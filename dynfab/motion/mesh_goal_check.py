@@ -22,7 +22,8 @@ and point clouds, and of one free on the meshes anywhere, is checked here
 deeper than the goal" on the grid) lets it go deeper than the goal truly is, the grid
 reading up to ``h√3`` low at the goal and exactly elsewhere: a finger's mesh touched a shelf
 on such an approach (training table_bars/0004, seed 0). Where the meshes find the endpoint
-free (and no point cloud is among the obstacles) this test replaces the spheres'
+free this test replaces the spheres': among shapes at once, among meshes once both tests
+together found no escape, never among point clouds
 (:meth:`~dynfab.motion.guidance.JointGuidance._endpoint_tests`).
 """
 
