@@ -104,15 +104,7 @@ def sweep_meshes(model: MeshCollisionModel, qs: ArrayLike, obstacles: Sequence[P
                                       min(d for _, d in found)) for link, found in contacts.items()]
     min_self_distance, self_contacts = None, []
     if model.pairs:
-        first, second = (np.array(side) for side in zip(*model.pairs))
-        bound = np.linalg.norm(centers[:, first] - centers[:, second], axis=-1) - radii[first] - radii[second]
-
-        def pair_distance(t: int, pair: int, exact: bool) -> float:
-            measure = exact_distance if exact else hull_distance
-            a, b = model.pairs[pair]
-            return measure(model.meshes[a], poses[t, a], model.meshes[b], poses[t, b])
-
-        min_self_distance, contacts = _search(bound, pair_distance)
+        min_self_distance, contacts = _search(*_pair_distances(model, poses, centers, radii))
         self_contacts = [Contact(model.links[model.pairs[p][0]], model.links[model.pairs[p][1]],
                                  tuple(s for s, _ in found), min(d for _, d in found))
                          for p, found in contacts.items()]
@@ -163,15 +155,7 @@ def meshes_clear(model: MeshCollisionModel, qs: ArrayLike, obstacles: Sequence[P
             return False
     if not model.pairs:
         return True
-    first, second = (np.array(side) for side in zip(*model.pairs))
-    bound = np.linalg.norm(centers[:, first] - centers[:, second], axis=-1) - radii[first] - radii[second]
-
-    def pair_distance(t: int, pair: int, exact: bool) -> float:
-        measure = exact_distance if exact else hull_distance
-        a, b = model.pairs[pair]
-        return measure(model.meshes[a], poses[t, a], model.meshes[b], poses[t, b])
-
-    return not _any_below(bound, pair_distance, np.nextafter(0.0, 1.0))   # below the least positive: ≤ 0
+    return not _any_below(*_pair_distances(model, poses, centers, radii), np.nextafter(0.0, 1.0))   # ≤ 0
 
 
 def _link_spheres(model: MeshCollisionModel, qs: ArrayLike
@@ -181,6 +165,21 @@ def _link_spheres(model: MeshCollisionModel, qs: ArrayLike
     centers = np.einsum("tlij,lj->tli", poses[:, :, :3, :3], np.array([m.center for m in model.meshes]))
     centers += poses[:, :, :3, 3]
     return poses, centers, np.array([m.radius for m in model.meshes])
+
+
+def _pair_distances(model: MeshCollisionModel, poses: NDArray[np.float64], centers: NDArray[np.float64],
+                    radii: NDArray[np.float64]) -> tuple[NDArray[np.float64], Callable[[int, int, bool], float]]:
+    """Tier 1's bounds (T, P) [m] of each checked link pair's distance, and the distance
+    ``(t, pair, exact)`` of tiers 2 (``exact=False``) and 3."""
+    first, second = (np.array(side) for side in zip(*model.pairs))
+    bound = np.linalg.norm(centers[:, first] - centers[:, second], axis=-1) - radii[first] - radii[second]
+
+    def distance(t: int, pair: int, exact: bool) -> float:
+        measure = exact_distance if exact else hull_distance
+        a, b = model.pairs[pair]
+        return measure(model.meshes[a], poses[t, a], model.meshes[b], poses[t, b])
+
+    return bound, distance
 
 
 def _obstacle_distances(model: MeshCollisionModel, obstacle: PlacedShape, poses: NDArray[np.float64],
