@@ -1,8 +1,8 @@
 """Blocked endpoints judged on the robot's meshes (issue 20): a start the spheres refuse and
 the meshes find free is left along a segment clear of the meshes (the mirror of a goal's
 approach), and in a scene of meshes an endpoint free on the meshes is judged on them alone
-(coal, mesh-mesh), while one the meshes refuse too keeps the spheres' test and fails with
-its reason."""
+(coal, mesh-mesh) where the spheres' test and theirs together find no escape, while one the
+meshes refuse too keeps the spheres' test and fails with its reason."""
 
 from __future__ import annotations
 
