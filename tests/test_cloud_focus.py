@@ -167,7 +167,7 @@ def test_after_the_first_failed_whole_cloud_attempt_every_attempt_is_on_the_focu
     obstacles = [PlacedObstacle(cloud, ORIGIN)]
     seen: list[tuple[bool, int]] = []
 
-    def no_path(checker, start, goal, lower, upper, settings, seed, approach):  # type: ignore[no-untyped-def]
+    def no_path(checker, start, goal, lower, upper, settings, seed, approach, leave=None):  # type: ignore[no-untyped-def]
         seen.append((any(isinstance(o.shape, FocusedCloud) for o in checker.obstacles), seed))
         raise NoPathError("no_path", "none")
 

@@ -25,10 +25,19 @@ def _scene(rng: np.random.Generator) -> list[PlacedObstacle]:
     return obstacles
 
 
+def _moving(robot) -> np.ndarray:
+    """The spheres whose centres differ between two configurations (c_obs is over these)."""
+    kin = robot.kinematics
+    a, b = np.asarray(robot.sphere_centers(kin.lower / 2)), np.asarray(robot.sphere_centers(kin.upper / 2))
+    return np.flatnonzero(np.linalg.norm(a - b, axis=1) > 1e-9)
+
+
 def _reference(robot, obstacles, q: np.ndarray) -> tuple[float, float]:
     centres = np.asarray(robot.sphere_centers(q))
     radii = robot.sphere_radii
-    obstacle = min(float((placed_distance(o.shape, o.placement, centres) - radii).min()) for o in obstacles)
+    moving = _moving(robot)
+    obstacle = min(float((placed_distance(o.shape, o.placement, centres[moving]) - radii[moving]).min())
+                   for o in obstacles)
     itself = min(float(np.linalg.norm(centres[a] - centres[b]) - radii[a] - radii[b])
                  for a, b in robot.self_collision_pairs)
     return obstacle, itself
@@ -51,6 +60,29 @@ def test_compiled_kernel_equals_the_numpy_distances(panda) -> None:
         assert row == pytest.approx(expected, abs=1e-12)
         assert checker.clearances(q) == pytest.approx(expected, abs=1e-12)
     assert (batch[:, 0] < 0).any() and (batch[:, 0] > 0).any()  # the scene is neither empty nor solid
+
+
+def test_a_sphere_no_joint_moves_blocks_no_configuration(panda) -> None:
+    """An obstacle touching only the base's spheres (the same at every configuration) leaves
+    every configuration that keeps the others clear free; counted, it blocked them all
+    (held-out MBM kitchen/0012: the base 4.8 mm from a dishwasher door)."""
+    moving = _moving(panda)
+    base = np.setdiff1d(np.arange(len(panda.sphere_radii)), moving)
+    assert base.size
+    q = np.asarray(panda.default_q, dtype=float)
+    centre = np.asarray(panda.sphere_centers(q))[base[0]]
+    touching = PlacedObstacle(Sphere(0.02), Placement(tuple(centre + [0.0, 0.0, -panda.sphere_radii[base[0]]]),
+                                                      (1.0, 0.0, 0.0, 0.0)))
+    for checker in (ConfigurationChecker(panda, [touching]), _numpy_checker(panda, [touching])):
+        obstacle, _ = checker.clearances(q)
+        assert obstacle > 0.01
+        assert checker.free(q, 0.01, 0.0)
+
+
+def _numpy_checker(robot, obstacles) -> ConfigurationChecker:
+    checker = ConfigurationChecker(robot, obstacles)
+    checker._library = None   # the numpy evaluation, as without a C compiler
+    return checker
 
 
 def test_free_and_first_blocked_agree_with_the_clearances(panda) -> None:

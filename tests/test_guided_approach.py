@@ -229,9 +229,9 @@ def test_guidance_instances_of_one_robot_share_its_mesh_model(panda) -> None:
 def test_a_goal_the_meshes_judge_is_escaped_with_mesh_escape_samples(panda, touching, monkeypatch) -> None:
     used = []
 
-    def recording(checker, start, goal, lower, upper, settings, seed, approach):
+    def recording(checker, start, goal, lower, upper, settings, seed, approach, leave):
         used.append(settings.escape_samples)
-        return plan_joint_path(checker, start, goal, lower, upper, settings, seed, approach)
+        return plan_joint_path(checker, start, goal, lower, upper, settings, seed, approach, leave)
 
     monkeypatch.setattr(guidance_module, "plan_joint_path", recording)
     guidance = JointGuidance(panda, replace(GuidanceSettings(), mesh_escape_samples=777))
@@ -254,9 +254,9 @@ def test_a_goal_the_meshes_clear_by_less_than_mesh_margin_is_approached_on_both(
     guidance.checker.set_obstacles([WALL])
     meshes = guidance._meshes()
     assert 0.0 < meshes.clearance(barely)[0] < guidance.settings.mesh_margin
-    test = guidance._goal_approach(barely)
+    (test,) = guidance._endpoint_tests(barely)
     assert test is not None and not test.instead_of_spheres   # the meshes' test beside the spheres'
-    assert guidance._goal_approach(goal_near_the_wall(panda, -0.03)) is None   # in collision on the meshes too
+    assert guidance._endpoint_tests(goal_near_the_wall(panda, -0.03)) == (None,)   # in collision on the meshes too
 
 
 @pytest.mark.parametrize("meshes_accept", [True, False])

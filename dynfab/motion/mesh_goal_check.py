@@ -15,12 +15,16 @@ kept points stand for raw points within ``δ`` of them; 0 without clouds) [m]. A
 accepts and the spheres refuse is then planned as a blocked joint goal: escaped to a free
 configuration nearby and approached slowly (:mod:`dynfab.motion.joint_planning`).
 
-Among meshes and point clouds the approach of every escaped goal is also checked here
-(:meth:`MeshGoalCheck.segment_free`): on the meshes it goes no deeper than the goal,
-``c_obs ≥ min(margin, c_obs(goal))`` at every configuration. The spheres' own test ("no
+The segment of every escaped endpoint (a goal's approach, a start's way out) among meshes
+and point clouds, and of one free on the meshes anywhere, is checked here
+(:meth:`MeshGoalCheck.segment_free`): on the meshes it goes no deeper than the endpoint,
+``c_obs ≥ min(floor, c_obs(endpoint))`` at every configuration. The spheres' own test ("no
 deeper than the goal" on the grid) lets it go deeper than the goal truly is, the grid
 reading up to ``h√3`` low at the goal and exactly elsewhere: a finger's mesh touched a shelf
-on such an approach (training table_bars/0004, seed 0).
+on such an approach (training table_bars/0004, seed 0). Where the meshes find the endpoint
+free this test replaces the spheres': among shapes at once, among meshes once both tests
+together found no escape, never among point clouds
+(:meth:`~dynfab.motion.guidance.JointGuidance._endpoint_tests`).
 """
 
 from __future__ import annotations
@@ -33,7 +37,7 @@ from numpy.typing import NDArray
 from dynfab.geometry.point_cloud import PointCloud
 from dynfab.motion.configuration_checker import PlacedObstacle
 from dynfab.robots.mesh_collision import MeshCollisionModel
-from dynfab.robots.mesh_sweep import PlacedShape, sweep_meshes
+from dynfab.robots.mesh_sweep import PlacedShape, meshes_clear, sweep_meshes
 
 __all__ = ["MeshGoalCheck"]
 
@@ -79,5 +83,6 @@ class MeshGoalCheck:
         ``step`` apart [rad] (both ends included), keeps ``c_obs ≥ floor`` [m] (default
         :attr:`margin`) with no checked link pair touching."""
         count = max(1, int(np.ceil(np.linalg.norm(b - a) / step)))
-        obstacle, itself = self.clearance(a + np.linspace(0.0, 1.0, count + 1)[:, None] * (b - a))
-        return obstacle >= (self.margin if floor is None else floor) and itself > 0.0
+        line = a + np.linspace(0.0, 1.0, count + 1)[:, None] * (b - a)
+        least = (self.margin if floor is None else floor) + self._lowering
+        return meshes_clear(self.model, line, self._shapes, least)

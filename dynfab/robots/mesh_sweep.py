@@ -35,7 +35,7 @@ from dynfab.geometry.shapes import Placement, Plane, PointCloud, Shape
 
 from .mesh_collision import MeshCollisionModel
 
-__all__ = ["Contact", "MeshSweep", "PlacedShape", "clearance_per_sample", "sweep_meshes"]
+__all__ = ["Contact", "MeshSweep", "PlacedShape", "clearance_per_sample", "meshes_clear", "sweep_meshes"]
 
 
 @dataclass(frozen=True)
@@ -117,15 +117,7 @@ def sweep_meshes(model: MeshCollisionModel, qs: ArrayLike, obstacles: Sequence[P
                                       min(d for _, d in found)) for link, found in contacts.items()]
     min_self_distance, self_contacts = None, []
     if model.pairs:
-        first, second = (np.array(side) for side in zip(*model.pairs))
-        bound = np.linalg.norm(centers[:, first] - centers[:, second], axis=-1) - radii[first] - radii[second]
-
-        def pair_distance(t: int, pair: int, exact: bool) -> float:
-            measure = exact_distance if exact else hull_distance
-            a, b = model.pairs[pair]
-            return measure(model.meshes[a], poses[t, a], model.meshes[b], poses[t, b])
-
-        min_self_distance, contacts = _search(bound, pair_distance)
+        min_self_distance, contacts = _search(*_pair_distances(model, poses, centers, radii))
         self_contacts = [Contact(model.links[model.pairs[p][0]], model.links[model.pairs[p][1]],
                                  tuple(s for s, _ in found), min(d for _, d in found))
                          for p, found in contacts.items()]
@@ -160,6 +152,25 @@ def clearance_per_sample(model: MeshCollisionModel, qs: ArrayLike, obstacles: Se
     return clearance
 
 
+def meshes_clear(model: MeshCollisionModel, qs: ArrayLike, obstacles: Sequence[PlacedShape], floor: float) -> bool:
+    """Whether at every sample every link keeps a mesh distance ``≥ floor`` [m] from every
+    obstacle and no checked link pair touches (distance ``≤ 0``): the same answer as
+    :func:`sweep_meshes`' ``clearance ≥ floor and min_self_distance > 0``, found with the
+    same three tiers but stopping at the first entry below the threshold, or once every
+    bound left is above it (no exact minimum is sought).
+
+    Raises:
+        ValueError: An obstacle whose number of placements is neither 1 nor T.
+    """
+    poses, centers, radii = _link_spheres(model, qs)
+    for obstacle in obstacles:
+        if _any_below(*_obstacle_distances(model, obstacle, poses, centers, radii), floor):
+            return False
+    if not model.pairs:
+        return True
+    return not _any_below(*_pair_distances(model, poses, centers, radii), np.nextafter(0.0, 1.0))   # ≤ 0
+
+
 def _link_spheres(model: MeshCollisionModel, qs: ArrayLike
                   ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """The links' poses (T, L, 4, 4), bounding-sphere centres (T, L, 3) [m] and radii (L,) [m]."""
@@ -167,6 +178,21 @@ def _link_spheres(model: MeshCollisionModel, qs: ArrayLike
     centers = np.einsum("tlij,lj->tli", poses[:, :, :3, :3], np.array([m.center for m in model.meshes]))
     centers += poses[:, :, :3, 3]
     return poses, centers, np.array([m.radius for m in model.meshes])
+
+
+def _pair_distances(model: MeshCollisionModel, poses: NDArray[np.float64], centers: NDArray[np.float64],
+                    radii: NDArray[np.float64]) -> tuple[NDArray[np.float64], Callable[[int, int, bool], float]]:
+    """Tier 1's bounds (T, P) [m] of each checked link pair's distance, and the distance
+    ``(t, pair, exact)`` of tiers 2 (``exact=False``) and 3."""
+    first, second = (np.array(side) for side in zip(*model.pairs))
+    bound = np.linalg.norm(centers[:, first] - centers[:, second], axis=-1) - radii[first] - radii[second]
+
+    def distance(t: int, pair: int, exact: bool) -> float:
+        measure = exact_distance if exact else hull_distance
+        a, b = model.pairs[pair]
+        return measure(model.meshes[a], poses[t, a], model.meshes[b], poses[t, b])
+
+    return bound, distance
 
 
 def _obstacle_distances(model: MeshCollisionModel, obstacle: PlacedShape, poses: NDArray[np.float64],
@@ -237,6 +263,20 @@ def _search(bound: NDArray[np.float64], distance: Callable[[int, int, bool], flo
     for found in contacts.values():
         found.sort()
     return float(best), contacts
+
+
+def _any_below(bound: NDArray[np.float64], distance: Callable[[int, int, bool], float], threshold: float) -> bool:
+    """Whether ``distance(t, j, exact=True) < threshold`` for some (t, j), visiting entries in
+    increasing order of ``bound`` (lower bounds, shape (T, P)) and skipping those whose
+    cheaper bound ``distance(t, j, exact=False)`` is not below it (:func:`_search`)."""
+    columns = bound.shape[1]
+    for flat in np.argsort(bound, axis=None, kind="stable"):
+        t, j = divmod(int(flat), columns)
+        if bound[t, j] >= threshold:
+            return False
+        if distance(t, j, False) < threshold and distance(t, j, True) < threshold:
+            return True
+    return False
 
 
 def _by_first_sample(contacts: list[Contact]) -> tuple[Contact, ...]:
