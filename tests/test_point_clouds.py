@@ -237,14 +237,16 @@ def test_the_compiled_checker_bounds_the_sphere_distance_to_the_cloud_from_below
     checker = ConfigurationChecker(robot, [PlacedObstacle(cloud, Placement((0.0, 0.0, 0.0)))])
     assert checker.compiled
     qs = rng.uniform(robot.kinematics.lower, robot.kinematics.upper, (300, robot.dof))
+    moving = list(moving_spheres(robot))   # c_obs is over the spheres a joint moves
+    radii = np.asarray(robot.sphere_radii)[moving]
     tree = cKDTree(raw)
-    exact = np.array([(tree.query(np.asarray(robot.sphere_centers(q), dtype=float).reshape(-1, 3))[0]
-                       - robot.sphere_radii).min() for q in qs])
+    exact = np.array([(tree.query(np.asarray(robot.sphere_centers(q), dtype=float).reshape(-1, 3)[moving])[0]
+                       - radii).min() for q in qs])
     bound = checker.batch(qs)[:, 0]
     assert (bound <= exact + 1e-12).all()
     grid = cloud_distance_grid(cloud)
-    mirrored = np.array([(grid.lower_bound(np.asarray(robot.sphere_centers(q), dtype=float).reshape(-1, 3))
-                          - robot.sphere_radii).min() for q in qs])
+    mirrored = np.array([(grid.lower_bound(np.asarray(robot.sphere_centers(q), dtype=float).reshape(-1, 3)[moving])
+                          - radii).min() for q in qs])
     assert np.allclose(bound, mirrored, atol=1e-9)  # the kernel computes what cloud_grid says
     near = (exact > 0) & (exact < 0.05)
     assert near.sum() > 5 and (exact - bound)[near].max() < 2 * math.sqrt(3) * 0.01 + 2 * cloud.lowering
