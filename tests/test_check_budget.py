@@ -13,7 +13,7 @@ import pytest
 
 from dynfab.motion import ompl_problem
 from dynfab.motion.configuration_checker import ConfigurationChecker
-from dynfab.motion.guidance_settings import GuidanceSettings, counted_checks
+from dynfab.motion.guidance_settings import SIMULATION_CHECK_RATE, GuidanceSettings, counted_checks
 from dynfab.motion.joint_planning import WALL_FACTOR, JointPlannerSettings, NoPathError, plan_joint_path
 from dynfab.robots import load_robot
 from wall_scene import START, WALL
@@ -55,3 +55,26 @@ def test_the_simulators_settings_count_checks_and_widen_wall_times() -> None:
     assert counted.path == replace(settings.path, check_rate=1000.0)
     assert counted.ik.time_limit == WALL_FACTOR * settings.ik.time_limit
     assert counted.ik_retry.time_limit == WALL_FACTOR * settings.ik_retry.time_limit
+
+
+def test_counting_checks_twice_changes_nothing() -> None:
+    once = counted_checks(GuidanceSettings(), rate=1000.0)
+    assert counted_checks(once) == once and counted_checks(once, rate=5.0) == once
+
+
+@pytest.mark.parametrize("latency", [None, 0.05])
+def test_a_guided_fabric_with_a_plan_latency_counts_checks(latency: float | None) -> None:
+    """A plan latency means the caller's clock is simulated: the searches are bounded by
+    checks, as the scenario runner's are, whoever builds the guided fabric; real time keeps
+    wall-time limits."""
+    from dynfab.fabric.planner import FabricPlanner, PlannerConfig
+    from dynfab.motion.guided_fabric import GuidedFabric, guided_goal_config
+
+    robot = load_robot("panda")
+    fabric = FabricPlanner(robot, PlannerConfig.for_robot(robot, (guided_goal_config(),), 0, dynamic=True))
+    guided = GuidedFabric(fabric, GuidanceSettings(), plan_latency=latency)
+    try:
+        expected = None if latency is None else SIMULATION_CHECK_RATE
+        assert guided.guidance.settings.path.check_rate == expected
+    finally:
+        guided.close()

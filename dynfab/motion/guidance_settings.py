@@ -161,7 +161,10 @@ def counted_checks(settings: GuidanceSettings, rate: float = SIMULATION_CHECK_RA
     """``settings`` whose searches are bounded by checks, not wall time (``path.check_rate``
     ``= rate``; inverse kinematics given :data:`~dynfab.motion.joint_planning.WALL_FACTOR`
     times its time, so its seeds bound it): the plans, and a simulated run, are the same at
-    any load. The simulators plan this way; a robot in real time keeps wall times."""
+    any load. The simulators plan this way; a robot in real time keeps wall times. Settings
+    that count checks already are returned as they are."""
+    if settings.path.check_rate is not None:
+        return settings
     return replace(settings, path=replace(settings.path, check_rate=rate),
                    ik=replace(settings.ik, time_limit=settings.ik.time_limit * WALL_FACTOR),
                    ik_retry=replace(settings.ik_retry, time_limit=settings.ik_retry.time_limit * WALL_FACTOR))

@@ -102,6 +102,7 @@ from dynfab.geometry.shapes import Mesh, PointCloud, Sphere
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.guidance import (GoalTargets, GuidanceSettings, JointGuidance, Plan, allowances_ahead,
                                     segment_offset)
+from dynfab.motion.guidance_settings import counted_checks
 from dynfab.motion.guidance_status import GuidanceStatus
 from dynfab.motion.plan_joining import in_sight, join_time
 from dynfab.motion.plan_requests import PendingPlan, PlanRequest, plan_maker
@@ -127,13 +128,16 @@ class GuidedFabric:
 
     def __init__(self, fabric: FabricPlanner, settings: GuidanceSettings = GuidanceSettings(),
                  plan_latency: float | None = None) -> None:
-        """``plan_latency``: None makes plans on a worker thread (real time); seconds of the
-        caller's clock make them at once and apply them that much later (simulation)."""
+        """``plan_latency``: None makes plans on a worker thread (real time), bounded by wall
+        time; seconds of the caller's clock make them at once and apply them that much later
+        (simulation), their searches bounded by checks (:func:`counted_checks`), so a
+        simulated run is the same at any load."""
         goal = fabric.config.goals[0]
         if not fabric.config.dynamic or not isinstance(goal, GoalConfig) or goal.link is not None or (
                 goal.joints is not None and tuple(goal.joints) != tuple(range(fabric.robot.dof))):
             raise ValueError("GuidedFabric needs a dynamic FabricPlanner whose first goal is "
                              "guided_goal_config() (a joint goal on every joint)")
+        settings = settings if plan_latency is None else counted_checks(settings)
         self.fabric = fabric
         self.guidance = JointGuidance(fabric.robot, settings)
         self.status = GuidanceStatus()

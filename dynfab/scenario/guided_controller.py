@@ -41,7 +41,6 @@ from dynfab.geometry.shapes import quaternion_matrix
 from dynfab.motion.configuration_checker import PlacedObstacle
 from dynfab.motion.guidance import GoalTargets, GuidanceSettings, JointTarget
 from dynfab.motion.guided_fabric import GuidanceStatus, GuidedFabric, guided_goal_config
-from dynfab.motion.guidance_settings import counted_checks
 from dynfab.motion.inverse_kinematics import AxisTarget, PointTarget
 from dynfab.motion.references import References
 from dynfab.motion.trajectories import StaticPoint
@@ -296,7 +295,7 @@ def _guided_controller(scenario: Scenario, robot: Robot, references: References,
     surfaces = mesh_obstacles(fabric, planning_robot, scenario.obstacles)
     inner = FabricController(fabric, References((StaticPoint(tuple(scenario.initial_state.q)),), references.obstacles),
                              (), moving_indices, slots, surfaces)
-    guided = GuidedFabric(fabric, settings if plan_latency is None else counted_checks(settings), plan_latency)
+    guided = GuidedFabric(fabric, settings, plan_latency)   # a plan latency: counted checks
     guided.set_obstacles(_placed(scenario, references, 0.0, static=True))
     # one per obstacle: a slot's, or a mesh's or a point cloud's entry of the nearest-point feed
     allowance_slots = [SurfaceAllowance(surfaces, surfaces.surface_of(k)) if slot is None and surfaces is not None
