@@ -60,3 +60,20 @@ def test_tables_flag_contradicted_successes_and_read_guidance_metrics_when_prese
     assert box.failures == {"mesh_collision": 1, "no_path": 1}
     assert (box.median_plan_time_ms, box.mean_plans, box.guided) == (21.0, 3.0, 2)
     assert box.median_time_to_goal_s == 3.0
+
+
+def test_runs_recorded_by_other_code_are_not_resumed(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The digest covers dynfab's source: records of older code are refused, not mixed into
+    a table (a rerun into an old output directory once reused them silently)."""
+    import dynfab.benchmarks.mbm.benchmark as benchmark
+    from dynfab.benchmarks.mbm.franka import franka
+    from dynfab.benchmarks.mbm.problems import load_problems
+    from dynfab.benchmarks.mbm.variants import prepare_case
+
+    case = prepare_case(load_problems(["box"], per_type=1)[0], "as-posed", franka())
+    record = {"digest": benchmark._digest(case.mapping)}
+    assert benchmark._fresh(case, {case.problem.name: record}) is record   # the same code: resumed
+    monkeypatch.setattr(benchmark, "package_digest", lambda: "other code")
+    assert benchmark._digest(case.mapping) != record["digest"]
+    with pytest.raises(benchmark.BenchmarkError, match="recorded from another scenario"):
+        benchmark._fresh(case, {case.problem.name: record})

@@ -65,6 +65,18 @@ def source_digest() -> str:
     return digest.hexdigest()
 
 
+@functools.lru_cache(maxsize=1)
+def package_digest() -> str:
+    """SHA-256 (hex) of every ``.py`` and ``.c`` file of the dynfab package: the code a
+    recorded result came from (read once per process)."""
+    root = Path(__file__).resolve().parent.parent
+    digest = hashlib.sha256()
+    for path in sorted(p for p in root.rglob("*") if p.suffix in (".py", ".c") and p.is_file()):
+        digest.update(str(path.relative_to(root)).encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
 def canonical(value: object) -> str:
     """A text that is equal for equal values (of the types a planner is made of).
 

@@ -8,8 +8,10 @@ or Dask, :mod:`dynfab.experiments.cluster`), resumable, with per-type tables.
 - ``runs.jsonl``: one JSON line per case, appended as it finishes (invalid cases at
   once): ``{"benchmark", "variant", "problem", "type", "number", "digest", "removed",
   "invalid", "metrics", "check", "refused", "wall_time_s"}`` (``digest``: of the
-  scenario mapping). On start, the cases already in it with the same digest are skipped,
-  so an interrupted benchmark resumes; a case recorded from another scenario is an error;
+  scenario mapping and of dynfab's source, :func:`~dynfab.fabric.fingerprint.package_digest`).
+  On start, the cases already in it with the same digest are skipped, so an interrupted
+  benchmark resumes; a case recorded from another scenario, or by other code, is an error
+  (results of older code are never mixed into a table);
 - ``runs.csv``, ``summary.md``, ``summary.json``: :mod:`dynfab.benchmarks.mbm.tables`.
 """
 
@@ -39,6 +41,7 @@ from dynfab.benchmarks.mbm.ur5 import ur5
 from dynfab.benchmarks.mbm.ur5_case import VARIANT as UR5_VARIANT
 from dynfab.benchmarks.mbm.ur5_case import prepare_ur5_case
 from dynfab.benchmarks.mbm.variants import Case, prepare_case
+from dynfab.fabric.fingerprint import package_digest
 from dynfab.experiments.cluster import Cluster, series_executor
 from dynfab.experiments.series import Progress, RunError, SeriesError, exclusive, log_lines
 
@@ -154,7 +157,9 @@ def _cases(settings: BenchmarkSettings) -> list[Case]:
 
 
 def _digest(mapping: dict[str, Any]) -> str:
-    return hashlib.sha256(json.dumps(mapping, sort_keys=True).encode()).hexdigest()[:16]
+    """Of the scenario ``mapping`` and of the code that runs it (module docstring)."""
+    text = json.dumps(mapping, sort_keys=True) + package_digest()
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
 def _record(case: Case, outcome: dict[str, Any] | None) -> dict[str, Any]:
