@@ -15,11 +15,11 @@ import pytest
 from dynfab.geometry.shapes import Box, Placement
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 import dynfab.motion.guidance as guidance_module
-from dynfab.motion.guidance import (GuidanceError, GuidanceSettings, JointGuidance, JointTarget, along_segment,
-                                    robot_mesh_model, segment_offset)
+from dynfab.motion.approach_segment import along_segment, segment_offset
+from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance, JointTarget
 from dynfab.motion.joint_planning import (ApproachTest, JointPlannerSettings, NoPathError, approach_clear,
                                           plan_joint_path)
-from dynfab.motion.mesh_goal_check import MeshGoalCheck
+from dynfab.motion.mesh_goal_check import MeshGoalCheck, robot_mesh_model
 from dynfab.motion.phased_trajectory import PhasedTrajectory
 from dynfab.robots import load_robot
 from dynfab.scenario.guided_controller import make_scenario_controller

@@ -23,7 +23,6 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
@@ -33,11 +32,8 @@ from dynfab.geometry.shapes import Mesh, PointCloud
 from dynfab.motion.cloud_focus import focused_obstacles
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.inverse_kinematics import AxisTarget, IkSettings, PointTarget, solve_ik
-from dynfab.motion.mesh_goal_check import MeshGoalCheck
+from dynfab.motion.mesh_goal_check import MeshGoalCheck, robot_mesh_model
 from dynfab.perception.surfaces import surface_clearance
-from dynfab.robots.builtin_meshes import builtin_collision_meshes
-from dynfab.robots.link_meshes import LinkMeshError
-from dynfab.robots.mesh_collision import MeshCollisionModel, mesh_collision_model
 from dynfab.motion.joint_planning import (ApproachTest, JointPath, JointPlannerSettings, NoPathError, approach_clear,
                                           plan_joint_path, polyline_samples)
 from dynfab.motion.joint_trajectory import JointTrajectory, TimingError, time_path
@@ -45,8 +41,7 @@ from dynfab.motion.guidance_settings import GuidanceSettings
 from dynfab.motion.phased_trajectory import PhasedTrajectory
 from dynfab.robots.robot import Robot
 
-__all__ = ["GuidanceError", "GuidanceSettings", "JointGuidance", "JointTarget", "Plan", "allowances_ahead",
-           "along_segment", "segment_offset"]
+__all__ = ["GuidanceError", "GuidanceSettings", "JointGuidance", "JointTarget", "Plan"]
 
 #: a value within this of a joint limit counts as at the limit [rad or m]
 LIMIT_SLACK = 1e-6
@@ -397,38 +392,3 @@ class JointGuidance:
 
     def _ik_settings(self, seed: int) -> IkSettings:
         return replace(self.settings.ik, seed=seed)
-
-
-def allowances_ahead(segment: NDArray[np.float64], table: NDArray[np.float64],
-                     q: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Per obstacle, the largest allowance [m] of ``table`` (k, m) at the approach's
-    configurations ``segment`` (k, n) [rad] from the robot's (``q``'s projection on the
-    segment, less one sample) to the goal (:meth:`JointGuidance.approach_allowances`)."""
-    first = max(0, int(np.floor(along_segment(segment, q) * (len(segment) - 1))) - 1)
-    return table[first:].max(axis=0)
-
-
-def along_segment(segment: NDArray[np.float64], q: NDArray[np.float64]) -> float:
-    """Where ``q`` projects on the straight segment from the first to the last configuration
-    of ``segment`` (k, n) [rad]: 0 at its start, 1 at its end (clipped) [-]."""
-    start, direction = segment[0], segment[-1] - segment[0]
-    return float(np.clip(np.dot(q - start, direction) / max(float(np.dot(direction, direction)), 1e-12), 0.0, 1.0))
-
-
-def segment_offset(segment: NDArray[np.float64], q: NDArray[np.float64]) -> float:
-    """Distance [rad] of ``q`` from the straight segment from the first to the last
-    configuration of ``segment`` (k, n): from its nearest point."""
-    start, direction = segment[0], segment[-1] - segment[0]
-    return float(np.linalg.norm(q - (start + along_segment(segment, q) * direction)))
-
-
-@lru_cache(maxsize=4)
-def robot_mesh_model(robot: Robot) -> MeshCollisionModel | None:
-    """``robot``'s collision meshes (:func:`~dynfab.robots.mesh_collision.mesh_collision_model`),
-    read once per robot (60-110 ms for the Panda: every run's guidance asks for them at its
-    first blocked goal); None without meshes (or if they cannot be read). Queries leave the
-    model unchanged, so guidance instances and their worker threads share it."""
-    try:
-        return mesh_collision_model(robot.kinematics, robot.default_q, builtin_collision_meshes(robot))
-    except LinkMeshError:
-        return None

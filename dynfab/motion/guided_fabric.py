@@ -18,22 +18,11 @@ leaves keep acting on everything the user writes into its slots.
 
 A plan arrives after the robot has moved: its clock starts where the robot joins it
 (:func:`~dynfab.motion.plan_joining.join_time`), so the reference does not jump back to
-where the plan began; the lag rule below slows its clock until the robot is on it.
+where the plan began; its clock slows until the robot is on it.
 
-The reference runs on its own clock ``τ``, which slows while the robot lags behind it
-(a moving obstacle in the way; during a grasp's approach, below, ``approach_lag_slow`` and
-``approach_lag_stop`` take the place of ``e_slow`` and ``e_stop``, and in the last
-``close_time`` of the way before it, and on the whole way of a plan made after the robot
-was held short of an approach, ``close_lag_slow`` and ``close_lag_stop``: a robot lagging
-there cuts the corner into the approach and is held by what it passes):
-
-    ρ = clip((e_stop − e) / (e_stop − e_slow), 0, 1),   e = ‖q − q_r(τ)‖,
-    τ ← τ + ρ Δt,   q̇_r ← ρ q̇_r(τ),   q̈_r ← ρ² q̈_r(τ).
-
-In the approach ``ρ`` is also at most ``clip((o_stop − o) / (o_stop − o_slow), 0, 1)``, ``o``
-the robot's distance from the approach's straight segment [rad] (``approach_offset_slow``,
-``approach_offset_stop``): the segment is what the planner checked; along it a lag does no
-harm, beside it the hand nears what it is to grasp. Off the approach ``ρ = 0`` while the
+The reference runs on its own clock ``τ``, which slows while the robot lags behind it or,
+in a grasp's approach, drifts beside the checked segment
+(:mod:`dynfab.motion.reference_clock`). Off the approach the clock stands still while the
 reference is out of the robot's sight among the static primitives
 (:func:`~dynfab.motion.plan_joining.in_sight`: a corner; not meshes nor clouds).
 
@@ -49,7 +38,7 @@ reached their goals) when
 - the reference within ``check_horizon`` ahead meets an obstacle given as moving
   (checked every ``check_period``, and not within ``blocked_interval`` of a replan for a
   blocked reference), or
-- the run stalls: while the reference runs, the robot has stayed more than ``e_slow``
+- the run stalls: while the reference runs, the robot has stayed more than ``lag_slow``
   behind it for ``stall_lag_time`` seconds (outside an approach), or the clock ``τ`` has
   not advanced by ``stall_rate · stall_window`` within ``stall_window`` seconds (the robot
   is held back); on an approach the robot follows, the joint-space distance to the goal
@@ -100,11 +89,12 @@ from dynfab.fabric.leaves.goal import GoalAttractor
 from dynfab.fabric.planner import FabricPlanner, GoalConfig
 from dynfab.geometry.shapes import Mesh, PointCloud, Sphere
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
-from dynfab.motion.guidance import (GoalTargets, GuidanceSettings, JointGuidance, Plan, allowances_ahead,
-                                    segment_offset)
+from dynfab.motion.approach_segment import allowances_ahead, segment_offset
+from dynfab.motion.guidance import GoalTargets, GuidanceSettings, JointGuidance, Plan
 from dynfab.motion.guidance_settings import counted_checks
 from dynfab.motion.guidance_status import GuidanceStatus
 from dynfab.motion.plan_joining import in_sight, join_time
+from dynfab.motion.reference_clock import approach_rate, way_rate
 from dynfab.motion.plan_requests import PendingPlan, PlanRequest, plan_maker
 from dynfab.motion.straight_motion import StraightMotion
 
@@ -240,16 +230,15 @@ class GuidedFabric:
         dt = 0.0 if self._last_t is None else max(0.0, t - self._last_t)
         self._last_t = t
         in_approach = self._in_approach()
-        slow, stop = ((settings.approach_lag_slow, settings.approach_lag_stop) if in_approach
-                      else (settings.close_lag_slow, settings.close_lag_stop) if self._close or self._entering()
-                      else (settings.lag_slow, settings.lag_stop))
         self._approaching = self._approaching or (in_approach and lag <= settings.approach_lag_stop)
         sight = in_approach or in_sight(self._sight, q, params.goal_position[0], settings.path)
         waiting = self._pending is not None and not in_approach or not sight
-        rate = 0.0 if waiting else _ramp(lag, slow, stop)
-        if in_approach:
-            rate = min(rate, _ramp(segment_offset(self._segment, q), settings.approach_offset_slow,
-                                   settings.approach_offset_stop))
+        if waiting:
+            rate = 0.0
+        elif in_approach:
+            rate = approach_rate(settings, lag, segment_offset(self._segment, q))
+        else:
+            rate = way_rate(settings, lag, close=self._close or self._entering())
         self._tau += rate * dt
         self._write(self._tau, rate)
 
@@ -409,9 +398,3 @@ class GuidedFabric:
         params.goal_position[0][:] = position
         params.goal_velocity[0][:] = velocity
         params.goal_acceleration[0][:] = acceleration
-
-
-def _ramp(error: float, slow: float, stop: float) -> float:
-    """The clock's rate for ``error``: 1 up to ``slow``, 0 from ``stop`` on, linear between."""
-    return float(np.clip((stop - error) / (stop - slow), 0.0, 1.0))
-

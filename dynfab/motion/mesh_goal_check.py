@@ -30,16 +30,20 @@ together found no escape, never among point clouds
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
 
 from dynfab.geometry.point_cloud import PointCloud
 from dynfab.motion.configuration_checker import PlacedObstacle
-from dynfab.robots.mesh_collision import MeshCollisionModel
+from dynfab.robots.builtin_meshes import builtin_collision_meshes
+from dynfab.robots.link_meshes import LinkMeshError
+from dynfab.robots.mesh_collision import MeshCollisionModel, mesh_collision_model
+from dynfab.robots.robot import Robot
 from dynfab.robots.mesh_sweep import PlacedShape, meshes_clear, sweep_meshes
 
-__all__ = ["MeshGoalCheck"]
+__all__ = ["MeshGoalCheck", "robot_mesh_model"]
 
 
 class MeshGoalCheck:
@@ -86,3 +90,15 @@ class MeshGoalCheck:
         line = a + np.linspace(0.0, 1.0, count + 1)[:, None] * (b - a)
         least = (self.margin if floor is None else floor) + self._lowering
         return meshes_clear(self.model, line, self._shapes, least)
+
+
+@lru_cache(maxsize=4)
+def robot_mesh_model(robot: Robot) -> MeshCollisionModel | None:
+    """``robot``'s collision meshes (:func:`~dynfab.robots.mesh_collision.mesh_collision_model`),
+    read once per robot (60-110 ms for the Panda: every run's guidance asks for them at its
+    first blocked goal); None without meshes (or if they cannot be read). Queries leave the
+    model unchanged, so guidance instances and their worker threads share it."""
+    try:
+        return mesh_collision_model(robot.kinematics, robot.default_q, builtin_collision_meshes(robot))
+    except LinkMeshError:
+        return None
