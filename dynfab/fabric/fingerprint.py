@@ -23,6 +23,7 @@ import dataclasses
 import enum
 import functools
 import hashlib
+from collections.abc import Iterable
 from pathlib import Path
 
 import casadi as ca
@@ -53,26 +54,28 @@ def inputs_digest(*values: object) -> str:
     return digest.hexdigest()
 
 
+#: the dynfab package's folder
+_ROOT = Path(__file__).resolve().parent.parent
+
+
 @functools.cache
 def source_digest() -> str:
     """SHA-256 (hex) of the ``.py`` files of the packages the planner is built from."""
-    root = Path(__file__).resolve().parent.parent
-    digest = hashlib.sha256()
-    for package in _SOURCE_PACKAGES:
-        for path in sorted((root / package).rglob("*.py")):
-            digest.update(str(path.relative_to(root)).encode())
-            digest.update(path.read_bytes())
-    return digest.hexdigest()
+    return _files_digest(path for package in _SOURCE_PACKAGES for path in sorted((_ROOT / package).rglob("*.py")))
 
 
-@functools.lru_cache(maxsize=1)
+@functools.cache
 def package_digest() -> str:
     """SHA-256 (hex) of every ``.py`` and ``.c`` file of the dynfab package: the code a
     recorded result came from (read once per process)."""
-    root = Path(__file__).resolve().parent.parent
+    return _files_digest(sorted(p for p in _ROOT.rglob("*") if p.suffix in (".py", ".c") and p.is_file()))
+
+
+def _files_digest(paths: Iterable[Path]) -> str:
+    """SHA-256 (hex) of each file's path (relative to the package) and bytes, in order."""
     digest = hashlib.sha256()
-    for path in sorted(p for p in root.rglob("*") if p.suffix in (".py", ".c") and p.is_file()):
-        digest.update(str(path.relative_to(root)).encode())
+    for path in paths:
+        digest.update(str(path.relative_to(_ROOT)).encode())
         digest.update(path.read_bytes())
     return digest.hexdigest()
 
