@@ -190,8 +190,8 @@ class ViewSession:
             return False
         controller = self._controller(self.planner)
         if isinstance(controller, CameraController) and self.sensor is not None:
-            state, sensor = self.scene(), self.sensor
-            controller.capture(self.t, lambda: sensor(state), self.q.copy())
+            sensor = self.sensor   # the scene's state is built only when a frame is due
+            controller.capture(self.t, lambda: sensor(self.scene()), self.q.copy())
         start = time.perf_counter()
         try:
             command = np.asarray(controller(self.t, self.q.copy(), self.qdot.copy()), dtype=float)
