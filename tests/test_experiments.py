@@ -19,6 +19,7 @@ from dynfab.experiments.panda_sampling import PandaSampler
 from dynfab.experiments.registry import EXPERIMENTS, MPC
 from dynfab.experiments.series import SeriesError, SeriesResult, load_records, run_series, scenario_file
 from dynfab.experiments.series_summary import METRIC_KEYS, METRICS, OUTCOMES
+from dynfab.fabric.fingerprint import package_digest
 from dynfab.scenario.runner import run_scenario
 from dynfab.scenario.schema import load_scenario
 from dynfab.motion.trajectory_mapping import trajectory_from_mapping
@@ -148,6 +149,20 @@ def test_an_output_directory_of_another_experiment_is_refused(tmp_path: Path) ->
     with pytest.raises(SeriesError, match="holds runs of exp2a, not exp6"):
         run_series(EXPERIMENTS["exp6"], 1, 0, tmp_path, jobs=1)
     assert not (tmp_path / "summary.md").exists()
+
+
+def test_an_output_directory_of_another_dynfab_version_is_refused(tmp_path: Path) -> None:
+    """Runs recorded by other code (another ``code`` digest, or none: before the digest was
+    recorded) are not resumed as if this code had made them."""
+    metrics = dict.fromkeys(METRIC_KEYS, 0)
+    record = {"experiment": "exp6", "seed": 0, "planner": "static-fabric", "metrics": metrics, "wall_time_s": 1.0}
+    for code in ("0" * 64, None):
+        (tmp_path / "runs.jsonl").write_text(json.dumps({**record, "code": code}) + "\n", encoding="utf-8")
+        with pytest.raises(SeriesError, match="runs.jsonl:1: recorded by another dynfab version"):
+            run_series(EXPERIMENTS["exp6"], 1, 0, tmp_path, jobs=1)
+    assert not (tmp_path / "summary.md").exists()
+    (tmp_path / "runs.jsonl").write_text(json.dumps({**record, "code": package_digest()}) + "\n", encoding="utf-8")
+    assert load_records(tmp_path / "runs.jsonl", "exp6")[(0, "static-fabric")].metrics == metrics
 
 
 def test_a_directory_another_series_is_running_in_is_refused(tmp_path: Path) -> None:

@@ -6,8 +6,10 @@ with a summary beside the paper's figures and plots.
 - ``scenarios/<exp>_<seed>_<planner>.yaml``: every run's scenario file; ``dynfab run
   FILE`` replays it (the same metrics apart from the solver time);
 - ``runs.jsonl``: one JSON line per finished run, appended the moment it finishes:
-  ``{"experiment", "seed", "planner", "metrics", "wall_time_s"}``. On start, the
-  (seed, planner) pairs already in it are skipped, so an interrupted series resumes;
+  ``{"experiment", "seed", "planner", "metrics", "wall_time_s", "code"}`` (``code``: the
+  digest of dynfab's source, :func:`~dynfab.fabric.fingerprint.package_digest`). On start,
+  the (seed, planner) pairs already in it are skipped, so an interrupted series resumes; a
+  log written by other code is refused (its runs would not be this code's);
 - ``runs.csv``: the same, one row per run of the requested seeds;
 - ``summary.md``, ``summary.json``: per planner the success rate, collisions and
   deadlocks (goal not reached, no collision), and mean ± std of the metrics over the runs
@@ -45,6 +47,7 @@ from dynfab.experiments.registry import Experiment
 from dynfab.experiments.series_plots import write_plots
 from dynfab.experiments.series_summary import (METRIC_KEYS, MetricValue, RunRecord, SeriesSummary, render_summary,
                                                render_timings, summarize, summary_dict, timings_dict)
+from dynfab.fabric.fingerprint import package_digest
 from dynfab.scenario.recording import Recording, run_recording, save_recording
 from dynfab.fabric.backends import series_backend
 from dynfab.scenario.runner import run_scenario
@@ -109,9 +112,9 @@ def run_series(experiment: Experiment, runs: int, seed: int, out_dir: str | Path
 
     Raises:
         ValueError: ``runs`` or ``jobs`` < 1.
-        SeriesError: ``out_dir`` holds runs of another experiment, a recorded run's
-            scenario file no longer matches what its seed draws, or another series is
-            running in it.
+        SeriesError: ``out_dir`` holds runs of another experiment or of another dynfab
+            version, a recorded run's scenario file no longer matches what its seed draws,
+            or another series is running in it.
         RunError: a run raised (the finished ones stay recorded).
         ClusterError: the Dask cluster cannot be used.
     """
@@ -168,9 +171,11 @@ def load_records(log: Path, experiment: str) -> dict[Pair, RunRecord]:
     A last line without its newline (a write cut short) is removed from the file.
 
     Raises:
-        SeriesError: a line is not a run record, or belongs to another experiment.
+        SeriesError: a line is not a run record, or belongs to another experiment, or was
+            recorded by other code than this process runs (another ``code`` digest).
     """
     records: dict[Pair, RunRecord] = {}
+    code = package_digest()
     for number, line in enumerate(log_lines(log), 1):
         try:
             data = json.loads(line)
@@ -184,6 +189,9 @@ def load_records(log: Path, experiment: str) -> dict[Pair, RunRecord]:
             raise SeriesError(f"{log}:{number}: not a run record ({error})") from None
         if name != experiment:
             raise SeriesError(f"{log} holds runs of {name}, not {experiment}: use another output directory")
+        if data.get("code") != code:
+            raise SeriesError(f"{log}:{number}: recorded by another dynfab version (code digest "
+                              f"{str(data.get('code'))[:12]}, this one {code[:12]}): use another output directory")
         records.setdefault((record.seed, record.planner), record)
     return records
 
@@ -263,7 +271,8 @@ def _execute(experiment: str, pending: list[Pair], files: dict[Pair, Path], jobs
                         save_recording(recordings / (files[(seed, planner)].stem + ".npz"),
                                        dataclasses.replace(recording, scenario=str(files[(seed, planner)].resolve())))
                     record = RunRecord(seed, planner, metrics, wall_time)
-                    file.write(json.dumps({"experiment": experiment, **dataclasses.asdict(record)}) + "\n")
+                    file.write(json.dumps({"experiment": experiment, **dataclasses.asdict(record), "code": package_digest()})
+                               + "\n")
                     file.flush()
                     os.fsync(file.fileno())
                     if bar is not None:
