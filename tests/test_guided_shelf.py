@@ -1,0 +1,25 @@
+"""A reference threading a shelf is followed (issue 19): as posed MBM bookshelf_small/0054
+(a problem of the shared set found stalling on main) moves the arm between a shelf's floor,
+roof and side on its way to the grasp. With the static shapes' leaves ranging 10 cm the
+robot was held 0.15 rad off its reference and stalled after 7 plans; with
+``GUIDED_SHAPE_RANGE`` (5 cm) it follows the first plans to the goal, clear on Franka's
+meshes."""
+
+from __future__ import annotations
+
+from dynfab.benchmarks.mbm.franka import franka
+from dynfab.benchmarks.mbm.problem_run import run_case
+from dynfab.benchmarks.mbm.problems import load_problems
+from dynfab.benchmarks.mbm.variants import prepare_case
+
+
+def test_a_reference_between_a_shelfs_floor_roof_and_side_is_followed_to_the_grasp() -> None:
+    problem = next(p for p in load_problems(["bookshelf_small"], per_type=1, skip=45) if p.number == 54)
+    case = prepare_case(problem, "as-posed", franka())
+    assert case.invalid is None
+    outcome = run_case(case.mapping)
+    metrics, check = outcome["metrics"], outcome["check"]
+    assert metrics["goal_reached"] and metrics["guided"], metrics["failure"]
+    assert metrics["plans"] <= 2 and metrics["fallbacks"] == 0
+    assert check["collisions"] == [] and check["self_collisions"] == [] and check["joint_limit_violations"] == []
+    assert check["clearance"] > 0.0
