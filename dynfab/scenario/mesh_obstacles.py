@@ -51,8 +51,9 @@ class MeshObstacles:
         if len(self.allowances) != len(self.indices) + len(self.clouds):
             object.__setattr__(self, "allowances", np.zeros(len(self.indices) + len(self.clouds)))
 
-    def write(self, t: float, q: np.ndarray, references: References) -> None:
-        """Write the nearest surface point of each robot sphere at time ``t`` [s]."""
+    def write(self, t: float, q: np.ndarray, references: References, qdot: np.ndarray | None = None) -> None:
+        """Write the nearest surface point of each robot sphere at time ``t`` [s] (``qdot``
+        [rad/s]: a braking leaf reaches farther into the clouds, :meth:`SurfaceFeed.cloud_reach`)."""
         placed = []
         for k, obstacle in zip(self.indices, self.obstacles):
             point = references.obstacles[k].evaluate(t)
@@ -60,7 +61,7 @@ class MeshObstacles:
             assert obstacle.mesh is not None
             placed.append(PlacedMesh(obstacle.mesh, Placement(tuple(point.position), obstacle.orientation),
                                      velocity, float(self.allowances[len(placed)])))  # type: ignore[arg-type]
-        self.feed.write(q, placed, self.clouds, self.allowances[len(placed):])
+        self.feed.write(q, placed, self.clouds, self.allowances[len(placed):], qdot)
 
     def surface_of(self, obstacle_index: int) -> int:
         """Where the scenario's obstacle ``obstacle_index`` (a mesh or a point cloud) is in
