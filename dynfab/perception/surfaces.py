@@ -50,6 +50,7 @@ from numpy.typing import NDArray
 
 from dynfab.fabric.leaves.surface_points import NearestSurfaceAvoidance
 from dynfab.fabric.parameters import LeafViews
+from dynfab.geometry.cloud_far_side import far_side_points
 from dynfab.geometry.mesh_distance import nearest_on_mesh
 from dynfab.geometry.mesh_shape import Mesh
 from dynfab.geometry.point_cloud import PointCloud
@@ -146,10 +147,35 @@ class SurfaceFeed:
             velocities[closer] = 0.0
         active = np.isfinite(best)
         normals[~active] = (0.0, 0.0, 1.0)
+        if self.leaf.far_side:
+            far_points, far_normals, far_active = self._far_side(centres, points, normals, active, clouds,
+                                                                 allowances, reach)
+            points, normals = np.concatenate([points, far_points]), np.concatenate([normals, far_normals])
+            velocities = np.concatenate([velocities, np.zeros_like(velocities)])
+            active = np.concatenate([active, far_active])
         self._views["points"] = points
         self._views["normals"] = normals
         self._views["velocities"] = velocities
         self._views["active"] = active.astype(float)
+
+    @staticmethod
+    def _far_side(centres: NDArray[np.float64], points: NDArray[np.float64], normals: NDArray[np.float64],
+                  active: NDArray[np.bool_], clouds: Sequence[PointCloud], allowances: Sequence[float],
+                  reach: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
+        """The far-side slots (:mod:`dynfab.geometry.cloud_far_side`): per sphere the
+        nearest far-side point of the clouds, less each cloud's allowance as the first
+        slots are, its normal and whether there is one (static: velocity 0)."""
+        count = len(centres)
+        best = np.full(count, np.inf)
+        far_points, far_normals = np.zeros((count, 3)), np.tile((0.0, 0.0, 1.0), (count, 1))
+        for cloud, allowance in zip(clouds, allowances, strict=True):
+            found = far_side_points(cloud, centres, points, normals, active, reach - allowance)
+            seen = found.distances + allowance
+            closer = found.found & (seen < best)
+            best[closer] = seen[closer]
+            far_points[closer] = found.points[closer] - allowance * found.normals[closer]
+            far_normals[closer] = found.normals[closer]
+        return far_points, far_normals, np.isfinite(best)
 
 
 def surface_clearance(centres: NDArray[np.float64], radii: NDArray[np.float64], surface: Mesh | PointCloud,

@@ -80,7 +80,9 @@ class MeshObstacles:
 def surface_leaf(robot: Robot, obstacles: Sequence[ObstacleSpec], barrier: Barrier,
                  perceived: bool = False) -> NearestSurfaceAvoidance | None:
     """The nearest-point leaf of a scenario with mesh obstacles or point clouds, or whose
-    scene is ``perceived`` by a camera (on every sphere a joint moves); None otherwise."""
+    scene is ``perceived`` by a camera (on every sphere a joint moves; with a point cloud
+    obstacle, a far-side slot each, :mod:`dynfab.geometry.cloud_far_side`); None otherwise."""
     if not perceived and not any(obstacle.type in ("mesh", "points") for obstacle in obstacles):
         return None
-    return NearestSurfaceAvoidance(spheres=moving_spheres(robot), barrier=barrier)
+    clouds = any(obstacle.type == "points" for obstacle in obstacles)
+    return NearestSurfaceAvoidance(spheres=moving_spheres(robot), barrier=barrier, far_side=clouds)
