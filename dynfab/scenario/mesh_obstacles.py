@@ -84,5 +84,5 @@ def surface_leaf(robot: Robot, obstacles: Sequence[ObstacleSpec], barrier: Barri
     obstacle, a far-side slot each, :mod:`dynfab.geometry.cloud_far_side`); None otherwise."""
     if not perceived and not any(obstacle.type in ("mesh", "points") for obstacle in obstacles):
         return None
-    clouds = any(obstacle.type == "points" for obstacle in obstacles)
-    return NearestSurfaceAvoidance(spheres=moving_spheres(robot), barrier=barrier, far_side=clouds)
+    clouds = any(obstacle.type == "points" for obstacle in obstacles)   # a camera's feed writes one slot a sphere
+    return NearestSurfaceAvoidance(spheres=moving_spheres(robot), barrier=barrier, far_side=clouds and not perceived)
