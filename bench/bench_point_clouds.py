@@ -14,7 +14,11 @@ Measured, as wall-clock medians (and p95) over ``--ticks`` ticks of a closed-loo
 - per tick: ``write(q)`` (sphere centres, one KD-tree query of all spheres, the leaf's
   parameters: :mod:`dynfab.perception.nearest_cloud_points`, compiled on ``--backend c``) and the fabric
   step ``compute(q, qdot)``, beside the primitives' step; the ratio of the cloud's tick
-  (write + step) to the primitives' step.
+  (write + step) to the primitives' step;
+- per tick, a scenario's feed of a ``points`` obstacle (``SurfaceFeed``, the guided fabric's
+  braking leaf): as on e94d6d6 (one slot per sphere, reach without the spheres' speeds) and
+  now (a far-side slot per sphere, :mod:`dynfab.geometry.cloud_far_side`, and the reach grown
+  by each sphere's stopping distance), write and step each.
 
     .venv/bin/python bench/bench_point_clouds.py [--points 100000] [--ticks 1000] [--backend c|vm]
 """
@@ -45,13 +49,13 @@ def scene_cloud(count: int, rng: np.random.Generator) -> np.ndarray:
 
 
 def closed_loop(planner, ticks: int, before_step=None) -> tuple[list[float], list[float]]:
-    """Run ``ticks`` ticks; per tick the time of ``before_step(q)`` and of the step [µs]."""
+    """Run ``ticks`` ticks; per tick the time of ``before_step(q, qdot)`` and of the step [µs]."""
     q, qdot = Q0.copy(), np.zeros(7)
     feed_times, step_times = [], []
     for _ in range(ticks):
         start = time.perf_counter()
         if before_step is not None:
-            before_step(q)
+            before_step(q, qdot)
         middle = time.perf_counter()
         qddot = planner.compute(q, qdot)
         end = time.perf_counter()
@@ -114,7 +118,7 @@ def main() -> None:
           f"p95 {np.percentile(updates, 95):8.1f} ms   (CPU median {statistics.median(update_cpus):.1f} ms)")
 
     _, primitive_steps = closed_loop(shapes, args.ticks)
-    feed_times, cloud_steps = closed_loop(cloudy, args.ticks, feed.write)
+    feed_times, cloud_steps = closed_loop(cloudy, args.ticks, lambda q, qdot: feed.write(q))
     ticks = [a + b for a, b in zip(feed_times, cloud_steps)]
     print(f"per tick, primitives step:    {summary(primitive_steps)}")
     print(f"per tick, cloud write(q):     {summary(feed_times)}")
@@ -122,6 +126,35 @@ def main() -> None:
     print(f"per tick, cloud write + step: {summary(ticks)}")
     print(f"ratio cloud step / primitives step:         {statistics.median(cloud_steps) / statistics.median(primitive_steps):.2f}")
     print(f"ratio cloud (write + step) / primitives step: {statistics.median(ticks) / statistics.median(primitive_steps):.2f}")
+    scenario_feed(robot, goals, feed.cloud, args)
+
+
+def scenario_feed(robot, goals, cloud, args: argparse.Namespace) -> None:
+    """A scenario's feed of ``cloud`` (module docstring), as on e94d6d6 and now."""
+    from dynfab.fabric.leaves.barrier import Barrier
+    from dynfab.fabric.leaves.surface_points import NearestSurfaceAvoidance, moving_spheres
+    from dynfab.fabric.planner import FabricPlanner, PlannerConfig
+    from dynfab.perception.surfaces import SurfaceFeed
+    from dynfab.scenario import guided_controller as guided
+
+    barrier = Barrier(geometry_gain=5.0, energy_gain=guided.GUIDED_SURFACE_ENERGY, horizon=guided.GUIDED_OBSTACLE_RANGE,
+                      offset=guided.GUIDED_OBSTACLE_BUFFER, braking=guided.GUIDED_BRAKING_DECELERATION)
+    medians = {}
+    for far_side in (False, True):
+        leaf = NearestSurfaceAvoidance(spheres=moving_spheres(robot), barrier=barrier, far_side=far_side)
+        start = time.perf_counter()
+        planner = FabricPlanner(robot, PlannerConfig(goals=goals, leaves=(leaf,), backend=args.backend))
+        planner.parameters.goal_position[0][:] = GOAL
+        print(f"scenario planner ({len(leaf.slots)} slots) built in {time.perf_counter() - start:.1f} s")
+        feed = SurfaceFeed(robot, leaf, planner.parameters.leaves[leaf.name])
+        write = ((lambda q, qdot: feed.write(q, [], [cloud], qdot=qdot)) if far_side
+                 else (lambda q, qdot: feed.write(q, [], [cloud])))
+        writes, steps = closed_loop(planner, args.ticks, write)
+        name = "far side + speeds" if far_side else "as on e94d6d6   "
+        print(f"per tick, scenario feed, {name}: write {summary(writes)}")
+        print(f"per tick, scenario feed, {name}: step  {summary(steps)}")
+        medians[far_side] = statistics.median([a + b for a, b in zip(writes, steps)])
+    print(f"ratio scenario tick (write + step), now / e94d6d6: {medians[True] / medians[False]:.2f}")
 
 
 if __name__ == "__main__":

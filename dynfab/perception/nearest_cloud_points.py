@@ -65,6 +65,9 @@ class NearestCloudPoints:
 
     def __init__(self, robot: Robot, leaf: NearestSurfaceAvoidance, views: LeafViews,
                  backend: str | None = None) -> None:
+        if leaf.far_side:
+            raise ValueError(f"leaf {leaf.name!r}: far_side slots are written by SurfaceFeed, "
+                             "not by the per-tick cloud writer (one point per sphere)")
         spheres = list(leaf.spheres)
         count = len(spheres)
         radii = np.asarray(robot.sphere_radii, dtype=float)[spheres]

@@ -14,6 +14,20 @@ without turning, as shapes do) are written into the leaf
 where a point was found. A sphere with nothing in reach is left inactive: beyond its range the
 barrier is zero anyway.
 
+**A braking leaf reaches farther into a cloud.** With braking (``a_b``, the leaf's
+:class:`~dynfab.fabric.leaves.barrier.Barrier`) the leaf's energy acts on the clearance left
+after a stop, ``x_b = x − δ_o − min(ẋ, 0)²/(2 a_b)``, and is nonzero while ``x_b`` is below
+its range ``r`` (``δ_o`` its offset): a sphere approaching at ``|ẋ| ≤ ‖ṗ_i‖`` needs the
+surfaces out to
+
+    reach_i(q̇) = r + δ_o + r_i + ‖ṗ_i‖² / (2 a_b)          [m],   ṗ_i = J_{p_i}(q) q̇,
+
+or the leaf meets a surface only once it is within ``r`` and too fast to stop (a link 10 mm
+into a table at 1 m/s, MotionBenchMaker table_under_pick/0036 as a cloud: the stop from 1 m/s
+at 4 m/s² takes 12.5 cm, the range is 10 cm). A shape leaf reads its distance at any range;
+so, given ``q̇``, a cloud's nearest points are looked for within ``reach_i(q̇)``. Meshes keep
+the static ``reach_i(0)`` (the same cutoff, not changed here).
+
 A surface may carry an *allowance* ``a ≥ 0`` [m] (guidance gives one near a grasp goal the
 robot's spheres overlap, :mod:`dynfab.motion.guided_fabric`): its nearest point is written
 ``a`` farther along the inward normal, ``c' = c − a n``, so the leaf sees the clearance
@@ -36,6 +50,7 @@ from numpy.typing import NDArray
 
 from dynfab.fabric.leaves.surface_points import NearestSurfaceAvoidance
 from dynfab.fabric.parameters import LeafViews
+from dynfab.geometry.cloud_far_side import far_side_points
 from dynfab.geometry.mesh_distance import nearest_on_mesh
 from dynfab.geometry.mesh_shape import Mesh
 from dynfab.geometry.point_cloud import PointCloud
@@ -76,15 +91,29 @@ class SurfaceFeed:
         radii = np.asarray(robot.sphere_radii, dtype=float)[list(leaf.spheres)]
         self.reach = leaf.barrier.horizon + leaf.barrier.offset + radii
         self._radii = radii
+        self._braking = leaf.barrier.braking
         q = ca.SX.sym("q", robot.kinematics.dof)
+        qdot = ca.SX.sym("qdot", robot.kinematics.dof)
         centres = robot.sphere_centers(q)[list(leaf.spheres), :] if leaf.spheres else ca.SX(0, 3)
         self._centres = ca.Function("sphere_centres", [q], [centres])
+        speeds = ca.sqrt(ca.sum2(ca.reshape(ca.jtimes(ca.vec(centres), q, qdot), centres.shape) ** 2))
+        self._speeds = ca.Function("sphere_speeds", [q, qdot], [speeds])
+
+    def cloud_reach(self, q: NDArray[np.float64], qdot: NDArray[np.float64] | None) -> NDArray[np.float64]:
+        """Per sphere, how far from its centre a cloud's points are looked for [m]:
+        ``reach_i + ‖ṗ_i‖²/(2 a_b)`` with a braking leaf and ``q̇`` given, else ``reach_i``
+        (module docstring)."""
+        if qdot is None or self._braking is None or not self.leaf.spheres:
+            return self.reach
+        speeds = np.asarray(self._speeds(q, qdot), dtype=float).reshape(-1)
+        return self.reach + speeds**2 / (2.0 * self._braking)
 
     def write(self, q: NDArray[np.float64], meshes: Sequence[PlacedMesh], clouds: Sequence[PointCloud] = (),
-              cloud_allowances: Sequence[float] = ()) -> None:
+              cloud_allowances: Sequence[float] = (), qdot: NDArray[np.float64] | None = None) -> None:
         """Find and write the nearest surface point of every sphere at configuration ``q``
         among ``meshes`` and ``clouds`` (``cloud_allowances``: one per cloud [m], zeros if
-        empty; module docstring)."""
+        empty; ``qdot`` [rad/s]: the clouds' reach grows by each sphere's stopping distance,
+        :meth:`cloud_reach`; module docstring)."""
         if not self.leaf.spheres:
             return
         centres = np.asarray(self._centres(q), dtype=float).reshape(-1, 3)
@@ -107,20 +136,46 @@ class SurfaceFeed:
                               - allowance * normals[closer])
             velocities[closer] = placed.velocity
         allowances = list(cloud_allowances) or [0.0] * len(clouds)
+        reach = self.cloud_reach(q, qdot) if clouds else self.reach
         for cloud, allowance in zip(clouds, allowances, strict=True):
-            found = cloud.nearest(centres, max_distance=float(self.reach.max()) - allowance)
+            found = cloud.nearest(centres, max_distance=float(reach.max()) - allowance)
             seen = found.distances + allowance
-            closer = found.found & (seen < best) & (seen <= self.reach)
+            closer = found.found & (seen < best) & (seen <= reach)
             best[closer] = seen[closer]
             points[closer] = found.points[closer] - allowance * found.normals[closer]
             normals[closer] = found.normals[closer]
             velocities[closer] = 0.0
         active = np.isfinite(best)
         normals[~active] = (0.0, 0.0, 1.0)
+        if self.leaf.far_side:
+            far_points, far_normals, far_active = self._far_side(centres, points, normals, active, clouds,
+                                                                 allowances, reach)
+            points, normals = np.concatenate([points, far_points]), np.concatenate([normals, far_normals])
+            velocities = np.concatenate([velocities, np.zeros_like(velocities)])
+            active = np.concatenate([active, far_active])
         self._views["points"] = points
         self._views["normals"] = normals
         self._views["velocities"] = velocities
         self._views["active"] = active.astype(float)
+
+    @staticmethod
+    def _far_side(centres: NDArray[np.float64], points: NDArray[np.float64], normals: NDArray[np.float64],
+                  active: NDArray[np.bool_], clouds: Sequence[PointCloud], allowances: Sequence[float],
+                  reach: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
+        """The far-side slots (:mod:`dynfab.geometry.cloud_far_side`): per sphere the
+        nearest far-side point of the clouds, less each cloud's allowance as the first
+        slots are, its normal and whether there is one (static: velocity 0)."""
+        count = len(centres)
+        best = np.full(count, np.inf)
+        far_points, far_normals = np.zeros((count, 3)), np.tile((0.0, 0.0, 1.0), (count, 1))
+        for cloud, allowance in zip(clouds, allowances, strict=True):
+            found = far_side_points(cloud, centres, points, normals, active, reach - allowance)
+            seen = found.distances + allowance
+            closer = found.found & (seen < best)
+            best[closer] = seen[closer]
+            far_points[closer] = found.points[closer] - allowance * found.normals[closer]
+            far_normals[closer] = found.normals[closer]
+        return far_points, far_normals, np.isfinite(best)
 
 
 def surface_clearance(centres: NDArray[np.float64], radii: NDArray[np.float64], surface: Mesh | PointCloud,

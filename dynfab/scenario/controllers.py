@@ -93,7 +93,7 @@ class FabricController:
     def __call__(self, t: float, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
         self._write(t, self._moving_goals, self._moving_obstacles)
         if self._meshes is not None:
-            self._meshes.write(t, q, self.references)
+            self._meshes.write(t, q, self.references, qdot)
         return self.planner.compute(q, qdot)
 
     def retarget(self, references: References, t: float) -> None:

@@ -51,8 +51,9 @@ class MeshObstacles:
         if len(self.allowances) != len(self.indices) + len(self.clouds):
             object.__setattr__(self, "allowances", np.zeros(len(self.indices) + len(self.clouds)))
 
-    def write(self, t: float, q: np.ndarray, references: References) -> None:
-        """Write the nearest surface point of each robot sphere at time ``t`` [s]."""
+    def write(self, t: float, q: np.ndarray, references: References, qdot: np.ndarray | None = None) -> None:
+        """Write the nearest surface point of each robot sphere at time ``t`` [s] (``qdot``
+        [rad/s]: a braking leaf reaches farther into the clouds, :meth:`SurfaceFeed.cloud_reach`)."""
         placed = []
         for k, obstacle in zip(self.indices, self.obstacles):
             point = references.obstacles[k].evaluate(t)
@@ -60,7 +61,7 @@ class MeshObstacles:
             assert obstacle.mesh is not None
             placed.append(PlacedMesh(obstacle.mesh, Placement(tuple(point.position), obstacle.orientation),
                                      velocity, float(self.allowances[len(placed)])))  # type: ignore[arg-type]
-        self.feed.write(q, placed, self.clouds, self.allowances[len(placed):])
+        self.feed.write(q, placed, self.clouds, self.allowances[len(placed):], qdot)
 
     def surface_of(self, obstacle_index: int) -> int:
         """Where the scenario's obstacle ``obstacle_index`` (a mesh or a point cloud) is in
@@ -79,7 +80,9 @@ class MeshObstacles:
 def surface_leaf(robot: Robot, obstacles: Sequence[ObstacleSpec], barrier: Barrier,
                  perceived: bool = False) -> NearestSurfaceAvoidance | None:
     """The nearest-point leaf of a scenario with mesh obstacles or point clouds, or whose
-    scene is ``perceived`` by a camera (on every sphere a joint moves); None otherwise."""
+    scene is ``perceived`` by a camera (on every sphere a joint moves; with a point cloud
+    obstacle, a far-side slot each, :mod:`dynfab.geometry.cloud_far_side`); None otherwise."""
     if not perceived and not any(obstacle.type in ("mesh", "points") for obstacle in obstacles):
         return None
-    return NearestSurfaceAvoidance(spheres=moving_spheres(robot), barrier=barrier)
+    clouds = any(obstacle.type == "points" for obstacle in obstacles)   # a camera's feed writes one slot a sphere
+    return NearestSurfaceAvoidance(spheres=moving_spheres(robot), barrier=barrier, far_side=clouds and not perceived)

@@ -17,9 +17,15 @@ surface, so the leaf is exact to first order wherever the nearest point is uniqu
 ticks the tangent plane stands for the surface. Nothing here knows about meshes: a point
 cloud's nearest points serve as well.
 
+With ``far_side`` every sphere has a second slot, the same leaf on a second point: one
+nearest point stands for one surface, and a link between two (a cage's bar and its side wall)
+sees only the nearer until the other is the nearer and too close to brake for. The feed
+writes there a point of another side (:mod:`dynfab.geometry.cloud_far_side`).
+
 A leaf of the leaf interface (:mod:`dynfab.fabric.leaf`); its runtime parameters
-(``planner.parameters.leaves[name]``), for the ``K`` spheres it acts on, in their order:
-``points`` (3K), ``normals`` (3K), ``velocities`` (3K) [m, -, m/s] and ``active`` (K).
+(``planner.parameters.leaves[name]``), for its ``K`` slots (the spheres it acts on in their
+order, then with ``far_side`` the same spheres again): ``points`` (3K), ``normals`` (3K),
+``velocities`` (3K) [m, -, m/s] and ``active`` (K).
 """
 
 from __future__ import annotations
@@ -49,21 +55,28 @@ class NearestSurfaceAvoidance:
         name: The leaf's name (unique among the planner's leaves).
         barrier: Geometry and energy on the clearance; by default the shape obstacles'
             (``k = 5``, ``λ = 0.5``, range 0.2 m).
+        far_side: Give every sphere a second slot (module docstring).
     """
 
     spheres: tuple[int, ...]
     name: str = "surfaces"
     barrier: Barrier = field(default_factory=lambda: Barrier(geometry_gain=5.0, energy_gain=0.5, horizon=0.2))
+    far_side: bool = False
+
+    @property
+    def slots(self) -> tuple[int, ...]:
+        """The sphere of each slot: :attr:`spheres`, then again with :attr:`far_side`."""
+        return self.spheres + self.spheres if self.far_side else self.spheres
 
     def parameter_sizes(self) -> Mapping[str, int]:
-        k = len(self.spheres)
+        k = len(self.slots)
         return {"points": 3 * k, "normals": 3 * k, "velocities": 3 * k, "active": k} if k else {}
 
     def geometry(self, context: LeafContext) -> WeightedGeometry:
         robot = context.robot
         if robot.planar:
             raise ValueError(f"leaf {self.name!r}: surfaces are 3-D; a planar robot cannot avoid them")
-        spheres = [robot.collision_spheres[i] for i in self.spheres]
+        spheres = [robot.collision_spheres[i] for i in self.slots]
         maps = link_point_maps(robot.kinematics, context.q, context.qdot,
                                [(sphere.link, sphere.center) for sphere in spheres])
         n = context.q.shape[0]
