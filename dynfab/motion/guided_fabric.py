@@ -89,7 +89,7 @@ from dynfab.fabric.leaves.goal import GoalAttractor
 from dynfab.fabric.planner import FabricPlanner, GoalConfig
 from dynfab.geometry.shapes import Mesh, PointCloud, Sphere
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
-from dynfab.motion.approach_segment import allowances_ahead, segment_offset
+from dynfab.motion.approach_segment import allowances_ahead, toward_segment
 from dynfab.motion.guidance import GoalTargets, GuidanceSettings, JointGuidance, Plan
 from dynfab.motion.guidance_settings import counted_checks
 from dynfab.motion.guidance_status import GuidanceStatus
@@ -151,6 +151,7 @@ class GuidedFabric:
         self._segment = np.zeros((1, fabric.robot.dof))   # the approach's configurations (k, n) [rad]
         self._table = np.zeros((1, 0))                     # the allowances at each (k, m) [m]
         self._q = np.zeros(fabric.robot.dof)               # the robot at the last update [rad]
+        self._reference = np.zeros(fabric.robot.dof)       # q_r(τ) written last, without the pull [rad]
         self._approaching = False
         self._lagging_since: float | None = None
         self._short_since: float | None = None
@@ -218,29 +219,29 @@ class GuidedFabric:
                 self._head_for_goal(t, q)
             return
         settings = self._settings
-        params = self.fabric.parameters
         self._q = np.array(q, dtype=float)
-        lag = float(np.linalg.norm(q - params.goal_position[0]))   # the reference at τ, written last tick
+        lag = float(np.linalg.norm(q - self._reference))   # the reference at τ, written last tick
         if self._pending is None and self.status.plans + self.status.failed_plans <= settings.replans:
             reason = self._replan_reason(t, q, lag, moving)
             if reason is not None:
                 self._request(t, q, moving, after=reason)
                 if self._receive(t, q, moving):
-                    lag = float(np.linalg.norm(q - params.goal_position[0]))
+                    lag = float(np.linalg.norm(q - self._reference))
         dt = 0.0 if self._last_t is None else max(0.0, t - self._last_t)
         self._last_t = t
         in_approach = self._in_approach()
         self._approaching = self._approaching or (in_approach and lag <= settings.approach_lag_stop)
-        sight = in_approach or in_sight(self._sight, q, params.goal_position[0], settings.path)
+        sight = in_approach or in_sight(self._sight, q, self._reference, settings.path)
         waiting = self._pending is not None and not in_approach or not sight
+        across = toward_segment(self._segment, q) if in_approach else None
         if waiting:
             rate = 0.0
-        elif in_approach:
-            rate = approach_rate(settings, lag, segment_offset(self._segment, q))
+        elif across is not None:
+            rate = approach_rate(settings, lag, float(np.linalg.norm(across)))
         else:
             rate = way_rate(settings, lag, close=self._close or self._entering())
         self._tau += rate * dt
-        self._write(self._tau, rate)
+        self._write(self._tau, rate, None if across is None else settings.approach_pull * across)
 
     def compute(self, t: float, q: NDArray[np.float64], qdot: NDArray[np.float64],
                 moving: Sequence[PlacedObstacle] = ()) -> NDArray[np.float64]:
@@ -377,12 +378,13 @@ class GuidedFabric:
         point = motion.evaluate(t - began)
         self._set_reference(point.position, point.velocity, point.acceleration)
 
-    def _write(self, tau: float, rate: float) -> None:
+    def _write(self, tau: float, rate: float, pull: NDArray[np.float64] | None = None) -> None:
         """Write the reference at its time ``tau`` [s], its clock running at ``rate`` [-],
-        into the fabric's first goal: ``q_r(τ), ρ q̇_r(τ), ρ² q̈_r(τ)``."""
+        into the fabric's first goal: ``q_r(τ) + p, ρ q̇_r(τ), ρ² q̈_r(τ)``, with ``p`` =
+        ``pull`` [rad] in a grasp's approach (:mod:`dynfab.motion.reference_clock`), else 0."""
         assert self._plan is not None
         point = self._plan.trajectory.evaluate(tau)
-        self._set_reference(point.position, rate * point.velocity, rate**2 * point.acceleration)
+        self._set_reference(point.position, rate * point.velocity, rate**2 * point.acceleration, pull)
 
     def _buffers(self) -> list[float]:
         """Per static obstacle, the clearance its fabric leaves keep (their barrier's offset) [m]."""
@@ -392,9 +394,12 @@ class GuidedFabric:
                 else (shapes.barrier.offset if shapes else 0.0) for o in self._static]
 
     def _set_reference(self, position: NDArray[np.float64], velocity: NDArray[np.float64] | float,
-                       acceleration: NDArray[np.float64] | float) -> None:
-        """Write ``q_r, q̇_r, q̈_r`` [rad, rad/s, rad/s²] into the fabric's first goal."""
+                       acceleration: NDArray[np.float64] | float, pull: NDArray[np.float64] | None = None) -> None:
+        """Write ``q_r, q̇_r, q̈_r`` [rad, rad/s, rad/s²] into the fabric's first goal, its
+        position moved by ``pull`` [rad] if given (``q_r`` itself is kept as the reference
+        the lag is measured from)."""
         params = self.fabric.parameters
-        params.goal_position[0][:] = position
+        self._reference = np.array(position, dtype=float)
+        params.goal_position[0][:] = position if pull is None else self._reference + pull
         params.goal_velocity[0][:] = velocity
         params.goal_acceleration[0][:] = acceleration
