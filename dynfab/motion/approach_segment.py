@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["allowances_ahead", "along_segment", "segment_offset", "toward_segment"]
+__all__ = ["allowances_ahead", "along_segment", "across_segment", "segment_offset"]
 
 
 def allowances_ahead(segment: NDArray[np.float64], table: NDArray[np.float64],
@@ -30,12 +30,17 @@ def along_segment(segment: NDArray[np.float64], q: NDArray[np.float64]) -> float
 def segment_offset(segment: NDArray[np.float64], q: NDArray[np.float64]) -> float:
     """Distance [rad] of ``q`` from the straight segment from the first to the last
     configuration of ``segment`` (k, n): from its nearest point."""
-    return float(np.linalg.norm(toward_segment(segment, q)))
-
-
-def toward_segment(segment: NDArray[np.float64], q: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The step (n,) [rad] from ``q`` to its nearest point on the straight segment from the
-    first to the last configuration of ``segment`` (k, n): across the segment where ``q``
-    projects inside it."""
     start, direction = segment[0], segment[-1] - segment[0]
-    return start + along_segment(segment, q) * direction - q
+    return float(np.linalg.norm(q - (start + along_segment(segment, q) * direction)))
+
+
+def across_segment(segment: NDArray[np.float64], q: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The step (n,) [rad] from ``q`` to the line through the first and last configurations
+    of ``segment`` (k, n), across it (perpendicular to its direction): the step to the
+    nearest point where ``q`` projects inside the segment."""
+    direction = segment[-1] - segment[0]
+    step = segment[0] - q
+    squared = float(np.dot(direction, direction))
+    if squared < 1e-12:
+        return step
+    return step - float(np.dot(step, direction)) / squared * direction

@@ -89,7 +89,7 @@ from dynfab.fabric.leaves.goal import GoalAttractor
 from dynfab.fabric.planner import FabricPlanner, GoalConfig
 from dynfab.geometry.shapes import Mesh, PointCloud, Sphere
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
-from dynfab.motion.approach_segment import allowances_ahead, toward_segment
+from dynfab.motion.approach_segment import across_segment, allowances_ahead, segment_offset
 from dynfab.motion.guidance import GoalTargets, GuidanceSettings, JointGuidance, Plan
 from dynfab.motion.guidance_settings import counted_checks
 from dynfab.motion.guidance_status import GuidanceStatus
@@ -152,6 +152,7 @@ class GuidedFabric:
         self._table = np.zeros((1, 0))                     # the allowances at each (k, m) [m]
         self._q = np.zeros(fabric.robot.dof)               # the robot at the last update [rad]
         self._reference = np.zeros(fabric.robot.dof)       # q_r(τ) written last, without the pull [rad]
+        self._pull_sum = np.zeros(fabric.robot.dof)        # k_i ∫e dt of the approach's pull [rad]
         self._approaching = False
         self._lagging_since: float | None = None
         self._short_since: float | None = None
@@ -233,15 +234,14 @@ class GuidedFabric:
         self._approaching = self._approaching or (in_approach and lag <= settings.approach_lag_stop)
         sight = in_approach or in_sight(self._sight, q, self._reference, settings.path)
         waiting = self._pending is not None and not in_approach or not sight
-        across = toward_segment(self._segment, q) if in_approach else None
         if waiting:
             rate = 0.0
-        elif across is not None:
-            rate = approach_rate(settings, lag, float(np.linalg.norm(across)))
+        elif in_approach:
+            rate = approach_rate(settings, lag, segment_offset(self._segment, q))
         else:
             rate = way_rate(settings, lag, close=self._close or self._entering())
         self._tau += rate * dt
-        self._write(self._tau, rate, None if across is None else settings.approach_pull * across)
+        self._write(self._tau, rate, self._pull(q, dt) if in_approach else None)
 
     def compute(self, t: float, q: NDArray[np.float64], qdot: NDArray[np.float64],
                 moving: Sequence[PlacedObstacle] = ()) -> NDArray[np.float64]:
@@ -353,6 +353,7 @@ class GuidedFabric:
         self._close = request.after == "short"
         self._approaching = False
         self._segment, self._table = outcome.segment, outcome.table
+        self._pull_sum = np.zeros(len(q))
         self._joining.set_obstacles(request.static + tuple(moving))
         self._tau = join_time(plan, np.asarray(q, dtype=float), self._joining, self._settings.path.resolution)
         self._last_t = t
@@ -377,6 +378,20 @@ class GuidedFabric:
         began, motion = self._interim
         point = motion.evaluate(t - began)
         self._set_reference(point.position, point.velocity, point.acceleration)
+
+    def _pull(self, q: NDArray[np.float64], dt: float) -> NDArray[np.float64]:
+        """The reference's shift across the approach's segment [rad] for the robot at ``q``
+        after ``dt`` [s]: ``p = k_p e + k_i ∫e dt``, ``e`` the step from ``q`` across to the
+        segment (:func:`~dynfab.motion.approach_segment.across_segment`), the integral at
+        most ``approach_pull_limit`` long."""
+        settings = self._settings
+        across = across_segment(self._segment, q)
+        summed = self._pull_sum + settings.approach_pull_rate * dt * across
+        length = float(np.linalg.norm(summed))
+        if length > settings.approach_pull_limit:
+            summed *= settings.approach_pull_limit / length
+        self._pull_sum = summed
+        return settings.approach_pull * across + summed
 
     def _write(self, tau: float, rate: float, pull: NDArray[np.float64] | None = None) -> None:
         """Write the reference at its time ``tau`` [s], its clock running at ``rate`` [-],
