@@ -152,7 +152,7 @@ class GuidanceSettings:
     approach_offset_slow: float = 0.004
     approach_offset_stop: float = 0.008
     approach_pull: float = 2.0
-    approach_pull_rate: float = 5.0
+    approach_pull_rate: float = 1.0
     approach_pull_limit: float = 0.03
     approach_hold_time: float = 1.0
     close_lag_slow: float = 0.03

@@ -241,7 +241,7 @@ class GuidedFabric:
         else:
             rate = way_rate(settings, lag, close=self._close or self._entering())
         self._tau += rate * dt
-        self._write(self._tau, rate, self._pull(q, dt) if in_approach else None)
+        self._write(self._tau, rate, self._pull(q, dt) if in_approach and self._approaching else None)
 
     def compute(self, t: float, q: NDArray[np.float64], qdot: NDArray[np.float64],
                 moving: Sequence[PlacedObstacle] = ()) -> NDArray[np.float64]:
