@@ -81,7 +81,7 @@ def test_in_the_approach_the_reference_is_shifted_across_by_the_pull(panda, gras
     expected = -(settings.approach_pull + settings.approach_pull_rate * ticks * DT) * beside * side
     np.testing.assert_allclose(written - reference, expected, atol=1e-9)
     # held far beside, the integral stops at approach_pull_limit
-    for _ in range(30):
+    for _ in range(int(settings.approach_pull_limit / (settings.approach_pull_rate * 0.05 * DT)) + 10):
         t += DT
         guided.update(t, plan.trajectory.evaluate(guided._tau).position + 0.05 * side)
     assert guided.plan is plan
@@ -115,12 +115,11 @@ def test_a_robot_pushed_beside_the_approach_is_pulled_back_and_reaches_the_goal(
     """Without the pull (``approach_pull`` and its rate 0, as before) the push holds the robot
     beside the segment, past ``approach_offset_stop``: the clock stops and the goal is not
     reached; with it the robot keeps near the segment and reaches it."""
-    push = 3.0
+    push = 1.0
     before = replace(GuidanceSettings(), approach_pull=0.0, approach_pull_rate=0.0)
     guided, record = _pushed_run(panda, grasp, before, push)
     assert np.linalg.norm(record.q[-1] - grasp) > 0.05
     assert guided._tau < guided.plan.trajectory.duration   # the clock waits for the robot
+    assert segment_offset(guided._segment, record.q[-1]) > before.approach_offset_stop
     guided, record = _pushed_run(panda, grasp, GuidanceSettings(), push)
-    assert np.linalg.norm(record.q[-1] - grasp) < 0.01
-    offsets = [segment_offset(guided._segment, q) for q in record.q[-100:]]
-    assert max(offsets) < guided.guidance.settings.approach_offset_slow
+    assert np.linalg.norm(record.q[-1] - grasp) < 0.005
