@@ -10,6 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from dynfab.motion.approach_pull import ApproachPull
 from dynfab.motion.approach_segment import across_segment, along_segment, segment_offset
 from dynfab.motion.guidance import GuidanceSettings, JointTarget
 from dynfab.robots import load_robot
@@ -123,3 +124,20 @@ def test_a_robot_pushed_beside_the_approach_is_pulled_back_and_reaches_the_goal(
     assert segment_offset(guided._segment, record.q[-1]) > before.approach_offset_stop
     guided, record = _pushed_run(panda, grasp, GuidanceSettings(), push)
     assert np.linalg.norm(record.q[-1] - grasp) < 0.005
+
+
+def test_the_pull_integrates_across_the_segment_up_to_its_limit_and_restarts_at_zero() -> None:
+    settings = replace(GuidanceSettings(), approach_pull=2.0, approach_pull_rate=1.0, approach_pull_limit=0.01)
+    pull = ApproachPull(settings, 3)
+    segment = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    q = np.array([0.4, 0.02, 0.0])   # 20 mrad beside, inside the segment
+    across = np.array([0.0, -0.02, 0.0])
+    np.testing.assert_allclose(pull.shift(segment, q, 0.1), 2.0 * across + 0.1 * across, atol=1e-12)
+    np.testing.assert_allclose(pull.shift(segment, q, 0.1), 2.0 * across + 0.2 * across, atol=1e-12)
+    for _ in range(50):
+        shift = pull.shift(segment, q, 0.1)
+    np.testing.assert_allclose(shift, 2.0 * across + np.array([0.0, -0.01, 0.0]), atol=1e-12)   # at the limit
+    beyond = np.array([1.5, 0.02, 0.0])   # past the goal: only the part across, none along
+    assert pull.shift(segment, beyond, 0.0)[0] == 0.0
+    pull.reset()
+    np.testing.assert_allclose(pull.shift(segment, q, 0.0), 2.0 * across, atol=1e-12)
