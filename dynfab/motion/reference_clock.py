@@ -1,5 +1,6 @@
 """The clock ``τ`` of a guided fabric's reference (:class:`~dynfab.motion.guided_fabric.GuidedFabric`):
-how fast it runs while the robot follows.
+how fast it runs while the robot follows, and the progress a run is judged on
+(:func:`run_progress`).
 
 It slows while the robot lags behind the reference (a moving obstacle in the way):
 
