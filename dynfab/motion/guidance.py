@@ -152,6 +152,10 @@ class JointGuidance:
 
             result = solve_ik(self.robot, list(goal), q, free, replace(self.settings.ik_retry, seed=seed),
                               self._lower, self._upper)
+            if result.q is None and meshes is not None:   # nearer the meshes than their margin: as a grasp
+                floor = self.settings.mesh_goal_floor
+                result = solve_ik(self.robot, list(goal), q, lambda x: meshes.free(x, floor),
+                                  replace(self.settings.ik_retry, seed=seed), self._lower, self._upper)
         if result.q is None:
             found = (f"{result.converged} solutions within the limits, all in collision" if result.converged
                      else "no solution within the joint limits")

@@ -40,6 +40,13 @@ class GuidanceSettings:
             every inverse-kinematics solution of held-out table_bars/0010, MBM's own goal
             among them, 2.2-2.6 mm from the bars on the meshes; 2 mm reached it but took
             table_bars/0013 to a goal 2.1 mm from a bar, which panda_link5 then touched.
+        mesh_goal_floor: clearance [m] on the robot's meshes of a goal solution kept when
+            inverse kinematics finds none free on them by ``mesh_margin`` (a third search,
+            with ``ik_retry``'s settings): such a goal is planned as a blocked grasp, its
+            approach going no deeper on the meshes than the goal, the rest of the path
+            keeping the planner's margin (:meth:`JointGuidance._endpoint_tests`).
+            MBM's own goals of training table_bars/0010 and kitchen/0018 (seed 0) are 2-3 mm
+            from a bar on the meshes; VALUE_NOTE
         approach_clearance: clearance [m] on the robot's meshes that the approach to a goal
             free on them (or a start's way out) keeps where the endpoint is farther (the
             endpoint's own where it is nearer;
@@ -125,6 +132,7 @@ class GuidanceSettings:
     ik: IkSettings = field(default_factory=IkSettings)
     ik_retry: IkSettings = field(default_factory=lambda: IkSettings(seeds=240, time_limit=2.0))
     mesh_margin: float = 0.003
+    mesh_goal_floor: float = 0.001
     approach_clearance: float = 0.005
     mesh_escape_samples: int = 1000
     cloud_focus: CloudFocus | None = CloudFocus()

@@ -76,10 +76,11 @@ class MeshGoalCheck:
         itself = np.inf if sweep.min_self_distance is None else sweep.min_self_distance
         return float(obstacle), float(itself)
 
-    def free(self, q: NDArray[np.float64]) -> bool:
-        """Whether ``q`` (or every row of a stack) is free on the meshes (module docstring)."""
+    def free(self, q: NDArray[np.float64], floor: float | None = None) -> bool:
+        """Whether ``q`` (or every row of a stack) is free on the meshes (module docstring),
+        its obstacle clearance at least ``floor`` [m] (default :attr:`margin`)."""
         obstacle, itself = self.clearance(q)
-        return obstacle >= self.margin and itself > 0.0
+        return obstacle >= (self.margin if floor is None else floor) and itself > 0.0
 
     def segment_free(self, a: NDArray[np.float64], b: NDArray[np.float64], step: float,
                      floor: float | None = None) -> bool:
