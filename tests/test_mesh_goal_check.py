@@ -80,7 +80,7 @@ def test_guidance_keeps_an_ik_solution_the_spheres_refuse_if_the_meshes_are_free
     guidance = JointGuidance(panda, settings)
     guidance.checker.set_obstacles((BESIDE_LINK2,))
     np.testing.assert_allclose(guidance.goal_configuration(_hand_pose_targets(panda), Q), Q, atol=1e-9)
-    strict = JointGuidance(panda, replace(settings, mesh_margin=0.05))
+    strict = JointGuidance(panda, replace(settings, mesh_margin=0.05, mesh_goal_floor=0.05))
     strict.checker.set_obstacles((BESIDE_LINK2,))
     with pytest.raises(GuidanceError) as failure:
         strict.goal_configuration(_hand_pose_targets(panda), Q)
