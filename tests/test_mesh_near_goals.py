@@ -92,3 +92,32 @@ def test_a_pose_goal_nearer_a_mesh_than_the_margin_is_kept_and_approached_no_dee
     np.testing.assert_allclose(approach[-1], goal, atol=1e-12)
     assert meshes.clearance(polyline_samples(way, path.resolution / 4))[0] >= meshes.margin
     assert meshes.clearance(polyline_samples(approach, path.resolution / 4))[0] >= GOAL_CLEARANCE - 2e-4
+
+
+def _narrow(settings: GuidanceSettings, radius: float = 0.2) -> GuidanceSettings:
+    """``settings`` whose escapes are looked for within ``radius`` [rad] only."""
+    return replace(settings, path=replace(settings.path, escape_radius=radius, escape_far_radius=radius))
+
+
+def test_where_no_escape_clears_the_margin_a_tight_round_plans_and_keeps_the_meshes_margin(panda, near) -> None:
+    """Within 0.2 rad no configuration clears the spheres' 1 cm margin (the goal is 19 mm
+    inside on the spheres, AWAY 9 mm short of the margin): without the tight round the plan fails; with
+    it, the way between the escapes keeps ``mesh_margin`` on the meshes."""
+    settings = _narrow(_settings())
+    without = JointGuidance(panda, replace(settings, tight_margin=settings.path.margin))
+    with pytest.raises(GuidanceError) as refused:
+        without.plan(AWAY, JointTarget(tuple(near)), [MESH_WALL])
+    assert refused.value.reason in ("start_in_collision", "goal_in_collision")
+    guidance = JointGuidance(panda, settings)
+    plan = guidance.plan(AWAY, JointTarget(tuple(near)), [MESH_WALL])
+    meshes = guidance._meshes()
+    way = plan.trajectory.phases[0].waypoints
+    assert plan.approach > 0.0
+    assert meshes.clearance(polyline_samples(way, settings.path.resolution / 4))[0] >= meshes.margin - 2e-4
+
+
+def test_a_tight_round_path_the_meshes_find_too_close_is_refused(panda, near, monkeypatch) -> None:
+    monkeypatch.setattr(JointGuidance, "_clear_on_meshes", lambda self, path: False)
+    with pytest.raises(GuidanceError) as refused:
+        JointGuidance(panda, _narrow(_settings())).plan(AWAY, JointTarget(tuple(near)), [MESH_WALL])
+    assert refused.value.reason == "no_path"
