@@ -13,7 +13,11 @@ against the exact obstacles with coal (:func:`~dynfab.robots.mesh_sweep.sweep_me
 with ``δ`` the largest voxel half-diagonal of the point clouds among the obstacles (a cloud's
 kept points stand for raw points within ``δ`` of them; 0 without clouds) [m]. A goal it
 accepts and the spheres refuse is then planned as a blocked joint goal: escaped to a free
-configuration nearby and approached slowly (:mod:`dynfab.motion.joint_planning`).
+configuration nearby and approached slowly (:mod:`dynfab.motion.joint_planning`). Where no
+solution is free, one free by the smaller ``mesh_goal_floor`` is kept
+(:meth:`free` with ``floor``), its approach judged like any other; and a path planned with
+the spheres' margin lowered (``tight_margin``: no escape was found at the planner's own) is
+checked here too, along its whole polyline (:meth:`polyline_free`).
 
 The segment of every escaped endpoint (a goal's approach, a start's way out) among meshes
 and point clouds, and of one free on the meshes anywhere, is checked here
