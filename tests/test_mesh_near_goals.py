@@ -10,21 +10,13 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-import trimesh
 
-from dynfab.geometry.shapes import Mesh
-from dynfab.motion.configuration_checker import PlacedObstacle
 from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance, JointTarget
-from dynfab.motion.inverse_kinematics import AxisTarget, IkSettings, PointTarget
+from dynfab.motion.inverse_kinematics import IkSettings
 from dynfab.motion.joint_planning import polyline_samples
 from dynfab.robots import load_robot
-from wall_scene import WALL, goal_near_the_wall
+from wall_scene import AWAY, MESH_WALL, goal_near_the_wall, hand_pose_targets
 
-#: Where the plans start: the hand away from the wall, at −y [rad].
-AWAY = np.array([-1.3, 0.3, 0.0, -1.8, 0.0, 2.1, 0.8])
-_BOX = trimesh.creation.box(extents=WALL.shape.size)
-#: The wall of wall_scene.py as a triangle mesh.
-MESH_WALL = PlacedObstacle(Mesh(_BOX.vertices, _BOX.faces, "wall"), WALL.placement)
 #: The goal's clearance from the wall on the robot's meshes [m]: between the floor and the margin.
 GOAL_CLEARANCE = 0.0025
 #: The current configuration alone seeds inverse kinematics: the goal configuration reaches the pose.
@@ -55,16 +47,6 @@ def near(panda) -> np.ndarray:
     return far
 
 
-def _hand_pose(panda, q: np.ndarray) -> list[PointTarget | AxisTarget]:
-    """The pose of the Panda's hand at ``q`` as targets."""
-    link = "panda_hand"
-    rotation = np.asarray(panda.kinematics.transform(q, link))[:3, :3]
-    targets: list[PointTarget | AxisTarget] = [PointTarget(link, tuple(panda.link_position(q, link)))]
-    for axis in range(3):
-        targets.append(AxisTarget(link, tuple(np.eye(3)[axis]), tuple(rotation[:, axis])))
-    return targets
-
-
 def _settings(**changes: float) -> GuidanceSettings:
     return replace(GuidanceSettings(ik=ONLY_HERE, ik_retry=ONLY_HERE), **changes)
 
@@ -74,7 +56,7 @@ def test_a_pose_goal_nearer_a_mesh_than_the_margin_is_refused_with_the_floor_at_
     as_before = JointGuidance(panda, replace(settings, mesh_goal_floor=settings.mesh_margin))
     as_before.checker.set_obstacles([MESH_WALL])
     with pytest.raises(GuidanceError) as refused:
-        as_before.goal_configuration(_hand_pose(panda, near), near)
+        as_before.goal_configuration(hand_pose_targets(panda, near), near)
     assert refused.value.reason == "no_ik_solution"
 
 
@@ -84,7 +66,7 @@ def test_a_pose_goal_nearer_a_mesh_than_the_margin_is_kept_and_approached_no_dee
     meshes = guidance._meshes()
     path = guidance.settings.path
     assert not guidance.checker.free(near, 0.0, path.self_margin)   # the spheres refuse it
-    goal = guidance.goal_configuration(_hand_pose(panda, near), near)
+    goal = guidance.goal_configuration(hand_pose_targets(panda, near), near)
     np.testing.assert_allclose(goal, near, atol=1e-9)
     plan = guidance.plan(AWAY, JointTarget(tuple(goal)), [MESH_WALL])
     assert plan.approach > 0.0
