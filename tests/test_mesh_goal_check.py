@@ -13,12 +13,13 @@ from dynfab.geometry.point_cloud import PointCloud
 from dynfab.geometry.shapes import Box, Placement
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance
-from dynfab.motion.inverse_kinematics import AxisTarget, IkSettings, PointTarget
+from dynfab.motion.inverse_kinematics import IkSettings
 from dynfab.motion.mesh_goal_check import MeshGoalCheck
 from dynfab.robots import load_robot
 from dynfab.robots.builtin_meshes import builtin_collision_meshes
 from dynfab.robots.mesh_collision import mesh_collision_model
 from dynfab.robots.mesh_sweep import PlacedShape, sweep_meshes
+from wall_scene import hand_pose_targets
 
 Q = np.array([1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0])
 #: a 2 cm cube that touches panda_link2's sphere at Q (2.6 mm deep) and clears its mesh by 1.7 cm
@@ -65,25 +66,16 @@ def test_a_bad_margin_is_refused_by_name(check) -> None:
         MeshGoalCheck(check.model, -0.001)
 
 
-def _hand_pose_targets(panda) -> list[PointTarget | AxisTarget]:
-    link = "panda_hand"
-    rotation = np.asarray(panda.kinematics.transform(Q, link))[:3, :3]
-    targets: list[PointTarget | AxisTarget] = [PointTarget(link, tuple(panda.link_position(Q, link)))]
-    for axis in range(3):
-        targets.append(AxisTarget(link, tuple(np.eye(3)[axis]), tuple(rotation[:, axis])))
-    return targets
-
-
 def test_guidance_keeps_an_ik_solution_the_spheres_refuse_if_the_meshes_are_free(panda) -> None:
     only_here = IkSettings(seeds=1)   # the current configuration alone: Q, which reaches the pose
     settings = GuidanceSettings(ik=only_here, ik_retry=only_here)
     guidance = JointGuidance(panda, settings)
     guidance.checker.set_obstacles((BESIDE_LINK2,))
-    np.testing.assert_allclose(guidance.goal_configuration(_hand_pose_targets(panda), Q), Q, atol=1e-9)
-    strict = JointGuidance(panda, replace(settings, mesh_margin=0.05))
+    np.testing.assert_allclose(guidance.goal_configuration(hand_pose_targets(panda, Q), Q), Q, atol=1e-9)
+    strict = JointGuidance(panda, replace(settings, mesh_margin=0.05, mesh_goal_floor=0.05))
     strict.checker.set_obstacles((BESIDE_LINK2,))
     with pytest.raises(GuidanceError) as failure:
-        strict.goal_configuration(_hand_pose_targets(panda), Q)
+        strict.goal_configuration(hand_pose_targets(panda, Q), Q)
     assert failure.value.reason == "no_ik_solution"
 
 

@@ -8,23 +8,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import trimesh
 
 import dynfab.motion.joint_planning as joint_planning
-from dynfab.geometry.shapes import Mesh
-from dynfab.motion.configuration_checker import PlacedObstacle
 from dynfab.motion.guidance import GuidanceError, JointGuidance, JointTarget
 from dynfab.motion.mesh_goal_check import MeshGoalCheck
 from dynfab.robots import load_robot
 from dynfab.scenario.runner import run_scenario
 from dynfab.scenario.schema import scenario_from_dict
-from wall_scene import WALL, WALL_ENTRY, goal_near_the_wall
-
-#: Where the robot goes from a start at the wall (the hand away from it, at −y) [rad].
-AWAY = np.array([-1.3, 0.3, 0.0, -1.8, 0.0, 2.1, 0.8])
-#: The wall of wall_scene.py as a triangle mesh (a scene of meshes).
-_BOX = trimesh.creation.box(extents=WALL.shape.size)
-MESH_WALL = PlacedObstacle(Mesh(_BOX.vertices, _BOX.faces, "wall"), WALL.placement)
+from wall_scene import AWAY, MESH_WALL, WALL, WALL_ENTRY, goal_near_the_wall
 
 
 @pytest.fixture(scope="module")

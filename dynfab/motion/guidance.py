@@ -32,7 +32,7 @@ from dynfab.geometry.shapes import Mesh, PointCloud
 from dynfab.motion.cloud_focus import focused_obstacles
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.inverse_kinematics import AxisTarget, IkSettings, PointTarget, solve_ik
-from dynfab.motion.mesh_goal_check import MeshGoalCheck, robot_mesh_model
+from dynfab.motion.mesh_goal_check import MeshGoalCheck, endpoint_tests, robot_mesh_model
 from dynfab.perception.surfaces import surface_clearance
 from dynfab.motion.joint_planning import (ApproachTest, JointPath, JointPlannerSettings, NoPathError, approach_clear,
                                           plan_joint_path, polyline_samples)
@@ -152,6 +152,10 @@ class JointGuidance:
 
             result = solve_ik(self.robot, list(goal), q, free, replace(self.settings.ik_retry, seed=seed),
                               self._lower, self._upper)
+            if result.q is None and meshes is not None:   # nearer the meshes than their margin: as a grasp
+                floor = self.settings.mesh_goal_floor
+                result = solve_ik(self.robot, list(goal), q, lambda x: meshes.free(x, floor),
+                                  replace(self.settings.ik_retry, seed=seed), self._lower, self._upper)
         if result.q is None:
             found = (f"{result.converged} solutions within the limits, all in collision" if result.converged
                      else "no solution within the joint limits")
@@ -202,10 +206,13 @@ class JointGuidance:
         return tries
 
     def _attempts(self, start: NDArray[np.float64], target: NDArray[np.float64],
-                  tries: Sequence[tuple[JointPlannerSettings, int]], began: float) -> Plan:
+                  tries: Sequence[tuple[JointPlannerSettings, int]], began: float, tight: bool = False) -> Plan:
         """The plan from ``start`` to ``target`` among the checker's obstacles: the first of
         ``tries`` (planner settings, seed) that finds one; in an attempt whose endpoint finds
-        no escape, the endpoints' next tests (:meth:`_endpoint_tests`)."""
+        no escape, the endpoints' next tests (:meth:`_endpoint_tests`). Where no attempt
+        found an escape among meshes (no clouds), the same attempts at ``tight_margin``
+        (``tight``), each path kept only if clear on the meshes between its escapes
+        (:meth:`_clear_on_meshes`)."""
         goal_tests, start_tests = self._endpoint_tests(target), self._endpoint_tests(start)
         modes = list(dict.fromkeys([(goal_tests[0], start_tests[0]), (goal_tests[-1], start_tests[-1])]))
         error: GuidanceError | None = None
@@ -224,9 +231,33 @@ class JointGuidance:
                         continue
                     break
                 checks += path.checks
+                if tight and not self._clear_on_meshes(path):
+                    error = GuidanceError("no_path", f"the path planned at margin {settings.margin} m comes closer "
+                                                     f"than mesh_margin to the meshes")
+                    break
                 return self._plan_of(path, target, began, checks)
         assert error is not None
-        raise error
+        if tight or error.reason not in _ENDPOINT_FAILURES or not self._tight_applies():
+            raise error
+        margin = self.settings.tight_margin
+        return self._attempts(start, target, [(replace(s, margin=margin), k) for s, k in tries], began, True)
+
+    def _tight_applies(self) -> bool:
+        """Whether a plan with no escape may be tried again at ``tight_margin``: among meshes
+        without point clouds, for a robot with collision meshes, a margin below the planner's."""
+        shapes = [o.shape for o in self.checker.obstacles]
+        return (self.settings.tight_margin < self.settings.path.margin and any(isinstance(s, Mesh) for s in shapes)
+                and not any(isinstance(s, PointCloud) for s in shapes) and self._meshes() is not None)
+
+    def _clear_on_meshes(self, path: JointPath) -> bool:
+        """Whether ``path`` between its escapes (the planned start to the planned goal), checked
+        every half ``path.resolution``, keeps ``mesh_margin`` on the robot's meshes (its ends'
+        own clearance where they are nearer); the escapes' segments were judged already."""
+        meshes = self._meshes()
+        assert meshes is not None
+        inner = path.waypoints[int(path.escaped_start):len(path.waypoints) - int(path.escaped_goal)]
+        floor = min(meshes.margin, meshes.clearance(inner[0])[0], meshes.clearance(inner[-1])[0])
+        return meshes.polyline_free(inner, self.settings.path.resolution / 2, floor)
 
     def _plan_of(self, path: JointPath, target: NDArray[np.float64], began: float, checks: int) -> Plan:
         try:   # timed (:meth:`_timed`) as a plan to target
@@ -342,43 +373,9 @@ class JointGuidance:
         return focused
 
     def _endpoint_tests(self, q: NDArray[np.float64]) -> tuple[ApproachTest | None, ...]:
-        """The tests of a blocked endpoint's segment (a goal's approach, a start's way out) in
-        the order tried, on the robot's meshes (:meth:`MeshGoalCheck.segment_free`, every half
-        ``path.resolution``): no deeper than the endpoint, nor closer than a floor where it
-        is farther. Among shapes, for an endpoint the meshes find free by ``mesh_margin``,
-        the meshes' alone (floor ``approach_clearance``): the spheres' test refused grasps
-        the meshes clear (as posed: bookshelf_small/0032) and accepted approaches into a
-        board (bookshelf_small/0019); for one they find free by less, the spheres' and the
-        meshes' together (the spheres' alone, "no deeper than the endpoint" over all
-        obstacles, let held-out as-posed bookshelf_tall/0046's approach, its goal 2.7 mm from
-        the grasped can, run 6.9 mm into the can beside it on the meshes). Among meshes or
-        clouds, the spheres' and the meshes' (floor ``mesh_margin``) together, then, free on
-        the meshes and without clouds, the meshes' alone: on the grids (up to ``h√3`` low)
-        the spheres refused every way out of held-out kitchen/0012's start (14 mm into a
-        cupboard its meshes clear by 11 mm); tried first, the meshes' alone lost
-        table_bars/0009 and 0011 (held out: nearer escapes, stalled). ``(None,)``: free on
-        the spheres, in collision on the meshes among shapes, no meshes, or the spheres'
-        test."""
-        path = self.settings.path
-        if self.checker.free(q, path.margin, path.self_margin):
-            return (None,)
-        surfaces = any(isinstance(o.shape, Mesh | PointCloud) for o in self.checker.obstacles)
-        clouds = any(isinstance(o.shape, PointCloud) for o in self.checker.obstacles)
-        meshes = self._meshes()
-        if meshes is None:
-            return (None,)
-        obstacle, itself = meshes.clearance(q)
-        free_on_meshes = obstacle >= meshes.margin and itself > 0.0
-        step = path.resolution / 2
-
-        def judged(floor: float, instead_of_spheres: bool) -> ApproachTest:
-            return ApproachTest(lambda free, end: meshes.segment_free(free, end, step, floor), instead_of_spheres)
-
-        alone = judged(min(self.settings.approach_clearance, obstacle), True)
-        both = judged(min(meshes.margin, obstacle), False)
-        if not surfaces:
-            return (alone,) if free_on_meshes else (both,) if obstacle > 0.0 and itself > 0.0 else (None,)
-        return (both, alone) if free_on_meshes and not clouds else (both,)
+        """The tests of a blocked endpoint's segment in the order tried
+        (:func:`~dynfab.motion.mesh_goal_check.endpoint_tests`)."""
+        return endpoint_tests(q, self.checker, self._meshes, self.settings)
 
     def _meshes(self) -> MeshGoalCheck | None:
         """The mesh check against the checker's obstacles (made once); None without meshes."""

@@ -40,6 +40,23 @@ class GuidanceSettings:
             every inverse-kinematics solution of held-out table_bars/0010, MBM's own goal
             among them, 2.2-2.6 mm from the bars on the meshes; 2 mm reached it but took
             table_bars/0013 to a goal 2.1 mm from a bar, which panda_link5 then touched.
+        mesh_goal_floor: clearance [m] on the robot's meshes of a goal solution kept when
+            inverse kinematics finds none free on them by ``mesh_margin`` (a third search,
+            with ``ik_retry``'s settings): such a goal is planned as a blocked grasp, its
+            approach going no deeper on the meshes than the goal, the rest of the path
+            keeping the planner's margin (:meth:`JointGuidance._endpoint_tests`).
+            Chosen on training kitchen/table_bars 5-24 (seed 0): the goals this search found
+            for table_bars/0010 and 0023 are 2.6 and 2.1 mm from a bar, and the robot that
+            reached them came 2.1 and 0.3 mm nearer (0.46 and 1.8 mm at the least): a floor of
+            1 mm leaves no room for that.
+        tight_margin: ``path.margin`` of a last round of attempts among meshes (no point
+            clouds) when no attempt found an escape of a blocked endpoint; each path of that
+            round is kept only if it keeps ``mesh_margin`` on the robot's meshes between its
+            escapes (:meth:`JointGuidance._attempts`). 0 (the spheres merely clear of the grid):
+            training kitchen/0009's goal, 15 mm inside a cupboard on the spheres (16 mm clear on
+            the meshes), has no configuration within 0.4 rad clear by 1 cm; at 0 it found
+            one. -2 cm found escapes for kitchen/0018 (30 mm inside on the spheres) but
+            every path came closer than ``mesh_margin`` to the meshes, kitchen/0009's too.
         approach_clearance: clearance [m] on the robot's meshes that the approach to a goal
             free on them (or a start's way out) keeps where the endpoint is farther (the
             endpoint's own where it is nearer;
@@ -143,6 +160,8 @@ class GuidanceSettings:
     ik: IkSettings = field(default_factory=IkSettings)
     ik_retry: IkSettings = field(default_factory=lambda: IkSettings(seeds=240, time_limit=2.0))
     mesh_margin: float = 0.003
+    mesh_goal_floor: float = 0.002
+    tight_margin: float = 0.0
     approach_clearance: float = 0.005
     mesh_escape_samples: int = 1000
     cloud_focus: CloudFocus | None = CloudFocus()

