@@ -9,8 +9,9 @@ kinematics turns into the configuration nearest the current one (free on the sph
 for goals millimetres from the scene, free on the robot's meshes:
 :mod:`dynfab.motion.mesh_goal_check`). The path is planned
 with OMPL among the obstacles given (:mod:`dynfab.motion.joint_planning`; where that finds
-no plan, again with a point cloud's points around the robot at the goal on a finer grid,
-:mod:`dynfab.motion.cloud_focus`), against the
+no plan, again with a point cloud's points around the robot at the goal, or a mesh's surface
+near the robot at its start and goal, on a finer grid, :mod:`dynfab.motion.cloud_focus`,
+:mod:`dynfab.motion.mesh_focus`), against the
 same spheres, shapes and self-collision pairs the fabric avoids, and timed within
 ``speed`` times the robot's velocity and acceleration limits
 (:mod:`dynfab.motion.joint_trajectory`): the rest of the limits is the fabric's, to track
@@ -30,8 +31,9 @@ from numpy.typing import NDArray
 from dynfab.fabric.leaves.surface_points import moving_spheres
 from dynfab.geometry.shapes import Mesh, PointCloud
 from dynfab.motion.cloud_focus import focused_obstacles
-from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
+from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle, mesh_grid
 from dynfab.motion.inverse_kinematics import AxisTarget, IkSettings, PointTarget, solve_ik
+from dynfab.motion.mesh_focus import focused_meshes
 from dynfab.motion.mesh_goal_check import MeshGoalCheck, endpoint_tests, robot_mesh_model
 from dynfab.perception.surfaces import surface_clearance
 from dynfab.motion.joint_planning import (ApproachTest, JointPath, JointPlannerSettings, NoPathError, approach_clear,
@@ -47,7 +49,7 @@ __all__ = ["GuidanceError", "GuidanceSettings", "JointGuidance", "JointTarget", 
 LIMIT_SLACK = 1e-6
 #: an approach shorter than this is none: the robot is at the goal [rad]
 SHORTEST_APPROACH = 1e-6
-#: failures a plan among point clouds makes again with the clouds focused around its goal
+#: failures a plan among point clouds or meshes makes again with them focused (:meth:`JointGuidance._focused`)
 _FOCUS_HELPS = frozenset({"start_in_collision", "goal_in_collision", "no_path"})
 #: failures of a blocked endpoint without an escape (its next test may find one)
 _ENDPOINT_FAILURES = frozenset({"start_in_collision", "goal_in_collision"})
@@ -115,8 +117,8 @@ class JointGuidance:
         self._single = ConfigurationChecker(robot)  # one obstacle at a time (allowances)
         self._ahead = ConfigurationChecker(robot)   # what moves (blocked_ahead)
         self._mesh_check: MeshGoalCheck | None | bool = False  # made on first use; None: no meshes
-        # the last focus made: the obstacles, the goal's bytes and the focused obstacles
-        self._focus: tuple[tuple[PlacedObstacle, ...], bytes, tuple[PlacedObstacle, ...]] | None = None
+        # the last focus made: the obstacles, the ends' bytes and the focused obstacles (None: no change)
+        self._focus: tuple[tuple[PlacedObstacle, ...], bytes, tuple[PlacedObstacle, ...] | None] | None = None
         self._leaf_spheres = list(moving_spheres(robot))  # those a nearest-point leaf acts on
         self._leaf_radii = np.asarray(robot.sphere_radii, dtype=float)[self._leaf_spheres]
         kin = robot.kinematics
@@ -169,7 +171,9 @@ class JointGuidance:
         point clouds, where the first ``cloud_focus.whole_attempts`` attempts find no path
         (or no escape of a blocked endpoint), every attempt is made again with the clouds
         focused around the goal (:mod:`dynfab.motion.cloud_focus`); without clouds or focus
-        (or after another failure) the rest of the attempts on the whole obstacles.
+        (or after another failure) the rest of the attempts on the whole obstacles. Among
+        meshes, where all of them failed so, all again with the meshes focused around the
+        robot at both ends (:mod:`dynfab.motion.mesh_focus`).
 
         Raises:
             GuidanceError: if every attempt failed (the last one's reason).
@@ -186,7 +190,7 @@ class JointGuidance:
         try:
             return self._attempts(start, target, tries[:first], began)
         except GuidanceError as failure:
-            focused = self._focused(obstacles, target) if failure.reason in _FOCUS_HELPS else None
+            focused = self._focused(obstacles, start, target) if failure.reason in _FOCUS_HELPS else None
             if focused is None:
                 if first == len(tries) or failure.reason == "timing":
                     raise
@@ -352,15 +356,16 @@ class JointGuidance:
         return time_path(segment, settings.approach_speed * limits.velocity,
                          settings.approach_speed * limits.acceleration, settings.timing)
 
-    def _focused(self, obstacles: Sequence[PlacedObstacle],
+    def _focused(self, obstacles: Sequence[PlacedObstacle], start: NDArray[np.float64],
                  target: NDArray[np.float64]) -> tuple[PlacedObstacle, ...] | None:
         """``obstacles`` with their point clouds focused around the robot at ``target``
-        (:mod:`dynfab.motion.cloud_focus`), None without clouds or focus; the last result
-        reused for the same obstacles and goal (a replan builds no new grids)."""
-        focus = self.settings.cloud_focus
-        if focus is None or not any(isinstance(o.shape, PointCloud) for o in obstacles):
+        (:mod:`dynfab.motion.cloud_focus`) and their meshes around it at ``target`` and
+        ``start`` (:mod:`dynfab.motion.mesh_focus`), None where nothing is focused; the last result reused for the same obstacles and ends (a replan builds no new grids)."""
+        clouds = self.settings.cloud_focus if any(isinstance(o.shape, PointCloud) for o in obstacles) else None
+        meshes = self.settings.mesh_focus if any(isinstance(o.shape, Mesh) for o in obstacles) else None
+        if clouds is None and meshes is None:
             return None
-        key = target.tobytes()
+        key = target.tobytes() + (b"" if meshes is None else start.tobytes())
         last = self._focus
         if (last is not None and last[1] == key and len(last[0]) == len(obstacles)
                 and all(a.shape is b.shape and np.array_equal(a.placement.position, b.placement.position)
@@ -368,9 +373,15 @@ class JointGuidance:
                         for a, b in zip(last[0], obstacles))):
             return last[2]
         centres = np.asarray(self.robot.sphere_centers(target), dtype=float)
-        focused = focused_obstacles(obstacles, centres, np.asarray(self.robot.sphere_radii, dtype=float), focus)
-        self._focus = (tuple(obstacles), key, focused)
-        return focused
+        focused = tuple(obstacles)
+        if clouds is not None:
+            focused = focused_obstacles(focused, centres, np.asarray(self.robot.sphere_radii, dtype=float), clouds)
+        if meshes is not None:
+            ends = [np.asarray(self.robot.sphere_centers(q), dtype=float)[self._leaf_spheres] for q in (target, start)]
+            focused = focused_meshes(focused, ends, self._leaf_radii, mesh_grid, meshes)
+        changed = len(focused) != len(obstacles) or any(a is not b for a, b in zip(focused, obstacles))
+        self._focus = (tuple(obstacles), key, focused if changed else None)
+        return self._focus[2]
 
     def _endpoint_tests(self, q: NDArray[np.float64]) -> tuple[ApproachTest | None, ...]:
         """The tests of a blocked endpoint's segment in the order tried
