@@ -7,19 +7,19 @@ meshes clear (MotionBenchMaker kitchen, issue 20). For axis-aligned boxes ``K_j`
 frame; their union ``K``) the surface ``M`` is covered by its parts in each box and the
 part outside them all,
 
-    M = ∪_j (M ∩ K_j) ∪ (M \ K°),   d(x, M) = min(min_j d(x, M ∩ K_j), d(x, M \ K°))   [m],
+    M = ∪_j (M ∩ K_j) ∪ (M ∖ K°),   d(x, M) = min(min_j d(x, M ∩ K_j), d(x, M ∖ K°))   [m],
 
 so the minimum of a lower bound of each is one of the whole (the checker takes the minimum
 over obstacles). :class:`FocusedMesh` holds ``M ∩ K_j``, each triangle clipped at the box's
 six planes (convex polygons fanned back into triangles), its grid built at the finer
 ``pitch`` (short of its distance by at most ``pitch·√3``). :class:`CarvedMesh` stands for
-``M \ K°``: its triangles are the whole mesh's (what coal measures: ``d(x, M)``, the
+``M ∖ K°``: its triangles are the whole mesh's (what coal measures: ``d(x, M)``, the
 minimum being the same), its grid the whole mesh's raised inside the boxes to the depth
 below their faces,
 
     v'(g) = max(v(g), max_j depth_j(g)),   depth_j(g) = max(0, min_a min(g_a − low_a, high_a − g_a)),
 
-a lower bound of ``d(g, M \ K°)`` (``≥ d(g, M) ≥ v(g)``; ``M \ K°`` lies outside every
+a lower bound of ``d(g, M ∖ K°)`` (``≥ d(g, M) ≥ v(g)``; ``M ∖ K°`` lies outside every
 open box) built in one pass over the nodes, no triangle measured again. A closed mesh's
 pieces are open: their distances are the unsigned ones, as the grid's always are.
 """

@@ -117,8 +117,8 @@ class JointGuidance:
         self._single = ConfigurationChecker(robot)  # one obstacle at a time (allowances)
         self._ahead = ConfigurationChecker(robot)   # what moves (blocked_ahead)
         self._mesh_check: MeshGoalCheck | None | bool = False  # made on first use; None: no meshes
-        # the last focus made: the obstacles, the ends' bytes and the focused obstacles (None: no change)
-        self._focus: tuple[tuple[PlacedObstacle, ...], bytes, tuple[PlacedObstacle, ...] | None] | None = None
+        # the last focus made: the obstacles, their and the ends' key, the focused obstacles (None: no change)
+        self._focus: tuple[tuple[PlacedObstacle, ...], tuple, tuple[PlacedObstacle, ...] | None] | None = None
         self._leaf_spheres = list(moving_spheres(robot))  # those a nearest-point leaf acts on
         self._leaf_radii = np.asarray(robot.sphere_radii, dtype=float)[self._leaf_spheres]
         kin = robot.kinematics
@@ -360,18 +360,15 @@ class JointGuidance:
                  target: NDArray[np.float64]) -> tuple[PlacedObstacle, ...] | None:
         """``obstacles`` with their point clouds focused around the robot at ``target``
         (:mod:`dynfab.motion.cloud_focus`) and their meshes around it at ``target`` and
-        ``start`` (:mod:`dynfab.motion.mesh_focus`), None where nothing is focused; the last result reused for the same obstacles and ends (a replan builds no new grids)."""
+        ``start`` (:mod:`dynfab.motion.mesh_focus`), None where nothing is focused; the last
+        result reused for the same obstacles and ends (a replan builds no new grids)."""
         clouds = self.settings.cloud_focus if any(isinstance(o.shape, PointCloud) for o in obstacles) else None
         meshes = self.settings.mesh_focus if any(isinstance(o.shape, Mesh) for o in obstacles) else None
-        if clouds is None and meshes is None:
-            return None
-        key = target.tobytes() + (b"" if meshes is None else start.tobytes())
-        last = self._focus
-        if (last is not None and last[1] == key and len(last[0]) == len(obstacles)
-                and all(a.shape is b.shape and np.array_equal(a.placement.position, b.placement.position)
-                        and np.array_equal(a.placement.orientation, b.placement.orientation)
-                        for a, b in zip(last[0], obstacles))):
-            return last[2]
+        places = tuple((id(o.shape), tuple(o.placement.position), tuple(o.placement.orientation))
+                       for o in obstacles)   # the shapes are kept alive with the key: their ids are theirs
+        key = (target.tobytes(), b"" if meshes is None else start.tobytes(), places)
+        if self._focus is not None and self._focus[1] == key:
+            return self._focus[2]
         centres = np.asarray(self.robot.sphere_centers(target), dtype=float)
         focused = tuple(obstacles)
         if clouds is not None:
@@ -379,8 +376,8 @@ class JointGuidance:
         if meshes is not None:
             ends = [np.asarray(self.robot.sphere_centers(q), dtype=float)[self._leaf_spheres] for q in (target, start)]
             focused = focused_meshes(focused, ends, self._leaf_radii, mesh_grid, meshes)
-        changed = len(focused) != len(obstacles) or any(a is not b for a, b in zip(focused, obstacles))
-        self._focus = (tuple(obstacles), key, focused if changed else None)
+        unchanged = len(focused) == len(obstacles) and all(a is b for a, b in zip(focused, obstacles))
+        self._focus = (tuple(obstacles), key, None if unchanged else focused)
         return self._focus[2]
 
     def _endpoint_tests(self, q: NDArray[np.float64]) -> tuple[ApproachTest | None, ...]:

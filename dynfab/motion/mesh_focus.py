@@ -66,7 +66,8 @@ class MeshFocus:
 
 
 def focused_meshes(obstacles: Sequence[PlacedObstacle], ends: Sequence[NDArray[np.float64]],
-                   radii: NDArray[np.float64], grid_of: Callable[[Mesh], DistanceGrid], focus: MeshFocus) -> tuple[PlacedObstacle, ...]:
+                   radii: NDArray[np.float64], grid_of: Callable[[Mesh], DistanceGrid],
+                   focus: MeshFocus) -> tuple[PlacedObstacle, ...]:
     """``obstacles`` with every mesh's surface near the spheres at each of ``ends`` (each the
     sphere centres (m, 3) at one endpoint [m], radii (m,) [m]) split off on a finer grid
     (module docstring); ``grid_of(mesh)`` is the whole mesh's grid."""
