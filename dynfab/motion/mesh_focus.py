@@ -55,8 +55,8 @@ class MeshFocus:
             within its node budget, 8 M nodes).
     """
 
-    reach: float = 0.05
-    pitch: float = 0.002
+    reach: float = 0.15
+    pitch: float = 0.003
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.reach) and self.reach >= 0.0):
