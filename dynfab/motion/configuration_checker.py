@@ -16,8 +16,8 @@ plane in its own frame, :mod:`dynfab.geometry.distance`; for a mesh, compiled, a
 of it from a grid, :mod:`dynfab.geometry.distance_grid`, at most ``h√3`` = 1.7 cm below it
 within 4 cm of the surface; for a point cloud, compiled, the grid of
 :mod:`dynfab.geometry.cloud_grid`, interpreted, the KD-tree distance less the voxel
-half-diagonal; the part of a cloud near a goal, :mod:`dynfab.geometry.focused_cloud`, or of
-a mesh near the robot, :mod:`dynfab.geometry.focused_mesh`, on a finer grid) and the robot's self-collision
+half-diagonal; the part of a cloud near a goal, :mod:`dynfab.geometry.focused_cloud`, on a
+finer grid) and the robot's self-collision
 pairs: the same spheres, shapes and pairs the fabric's leaves avoid, so a path the
 checker accepts is one the fabric can follow. ``inf`` where there is nothing to check.
 
@@ -47,19 +47,15 @@ from dynfab.geometry.distance import placed_distance
 from dynfab.geometry.distance_grid import DistanceGrid, distance_grid
 from dynfab.geometry.cloud_grid import cloud_distance_grid
 from dynfab.geometry.focused_cloud import FocusedCloud
-from dynfab.geometry.focused_mesh import CarvedMesh, FocusedMesh, carved_grid
 from dynfab.geometry.shapes import Box, Capsule, Cylinder, Mesh, Placement, Plane, PointCloud, Shape, Sphere
 from dynfab.motion.checker_library import as_pointer, load_checker_library
 from dynfab.robots.collision_model import cache_dir
 from dynfab.robots.robot import Robot
 
-__all__ = ["ConfigurationChecker", "PlacedObstacle", "mesh_grid"]
+__all__ = ["ConfigurationChecker", "PlacedObstacle"]
 
 _KIND: dict[type, int] = {Sphere: 0, Box: 1, Cylinder: 2, Capsule: 3, Plane: 4, Mesh: 5, PointCloud: 6,
-                          FocusedCloud: 6, FocusedMesh: 5, CarvedMesh: 5}
-#: How far a focused mesh's grid reaches beyond its triangles [m]: farther, the distance to
-#: their bounding box (≥ this) is the bound, above any planner margin.
-_FOCUS_GRID_MARGIN = 0.05
+                          FocusedCloud: 6}
 _ROW = 17
 _ONE = ctypes.c_int(1)
 
@@ -212,25 +208,12 @@ def _buffer(obstacles: Sequence[PlacedObstacle]) -> NDArray[np.float64]:
     for k, obstacle in enumerate(obstacles):
         if isinstance(obstacle.shape, Mesh | PointCloud):
             shape = obstacle.shape
-            grid = (mesh_grid(shape) if isinstance(shape, Mesh) else _cloud_grid(shape)).packed()
+            grid = (distance_grid(shape, cache=cache_dir() / "distance-grids") if isinstance(shape, Mesh)
+                    else _cloud_grid(shape)).packed()
             rows[k, 13] = end - _ROW * k
             grids.append(grid)
             end += grid.size
     return np.ascontiguousarray(np.concatenate([rows.reshape(-1), *grids]))
-
-
-def mesh_grid(mesh: Mesh) -> DistanceGrid:
-    """A mesh's grid, kept on disk; a focused mesh's at its pitch and a carved mesh's
-    (:mod:`dynfab.geometry.focused_mesh`: pieces of one problem's ends) in memory only."""
-    if isinstance(mesh, FocusedMesh):
-        return distance_grid(mesh, pitch=mesh.pitch, margin=_FOCUS_GRID_MARGIN)
-    whole = distance_grid(mesh, cache=cache_dir() / "distance-grids")
-    if isinstance(mesh, CarvedMesh):
-        grid = mesh.__dict__.get("_carved_grid")
-        if grid is None:
-            grid = mesh.__dict__["_carved_grid"] = carved_grid(whole, mesh.holes)
-        return grid
-    return whole
 
 
 def _cloud_grid(cloud: PointCloud) -> DistanceGrid:

@@ -9,9 +9,8 @@ kinematics turns into the configuration nearest the current one (free on the sph
 for goals millimetres from the scene, free on the robot's meshes:
 :mod:`dynfab.motion.mesh_goal_check`). The path is planned
 with OMPL among the obstacles given (:mod:`dynfab.motion.joint_planning`; where that finds
-no plan, again with a point cloud's points around the robot at the goal, or a mesh's surface
-near the robot at its start and goal, on a finer grid, :mod:`dynfab.motion.cloud_focus`,
-:mod:`dynfab.motion.mesh_focus`), against the
+no plan, again with a point cloud's points around the robot at the goal on a finer grid,
+:mod:`dynfab.motion.cloud_focus`), against the
 same spheres, shapes and self-collision pairs the fabric avoids, and timed within
 ``speed`` times the robot's velocity and acceleration limits
 (:mod:`dynfab.motion.joint_trajectory`): the rest of the limits is the fabric's, to track
@@ -31,9 +30,8 @@ from numpy.typing import NDArray
 from dynfab.fabric.leaves.surface_points import moving_spheres
 from dynfab.geometry.shapes import Mesh, PointCloud
 from dynfab.motion.cloud_focus import focused_obstacles
-from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle, mesh_grid
+from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.inverse_kinematics import AxisTarget, IkSettings, PointTarget, solve_ik
-from dynfab.motion.mesh_focus import focused_meshes
 from dynfab.motion.mesh_goal_check import MeshGoalCheck, endpoint_tests, robot_mesh_model
 from dynfab.perception.surfaces import surface_clearance
 from dynfab.motion.joint_planning import (ApproachTest, JointPath, JointPlannerSettings, NoPathError, approach_clear,
@@ -49,7 +47,7 @@ __all__ = ["GuidanceError", "GuidanceSettings", "JointGuidance", "JointTarget", 
 LIMIT_SLACK = 1e-6
 #: an approach shorter than this is none: the robot is at the goal [rad]
 SHORTEST_APPROACH = 1e-6
-#: failures a plan among point clouds or meshes makes again with them focused (:meth:`JointGuidance._focused`)
+#: failures a plan among point clouds makes again with the clouds focused around its goal
 _FOCUS_HELPS = frozenset({"start_in_collision", "goal_in_collision", "no_path"})
 #: failures of a blocked endpoint without an escape (its next test may find one)
 _ENDPOINT_FAILURES = frozenset({"start_in_collision", "goal_in_collision"})
@@ -117,8 +115,8 @@ class JointGuidance:
         self._single = ConfigurationChecker(robot)  # one obstacle at a time (allowances)
         self._ahead = ConfigurationChecker(robot)   # what moves (blocked_ahead)
         self._mesh_check: MeshGoalCheck | None | bool = False  # made on first use; None: no meshes
-        # the last focus made: the obstacles, their and the ends' key, the focused obstacles (None: no change)
-        self._focus: tuple[tuple[PlacedObstacle, ...], tuple, tuple[PlacedObstacle, ...] | None] | None = None
+        # the last focus made: the obstacles, the goal's bytes and the focused obstacles
+        self._focus: tuple[tuple[PlacedObstacle, ...], bytes, tuple[PlacedObstacle, ...]] | None = None
         self._leaf_spheres = list(moving_spheres(robot))  # those a nearest-point leaf acts on
         self._leaf_radii = np.asarray(robot.sphere_radii, dtype=float)[self._leaf_spheres]
         kin = robot.kinematics
@@ -172,9 +170,7 @@ class JointGuidance:
         point clouds, where the first ``cloud_focus.whole_attempts`` attempts find no path
         (or no escape of a blocked endpoint), every attempt is made again with the clouds
         focused around the goal (:mod:`dynfab.motion.cloud_focus`); without clouds or focus
-        (or after another failure) the rest of the attempts on the whole obstacles. Among
-        meshes, where all of them failed so, all again with the meshes focused around the
-        robot at both ends (:mod:`dynfab.motion.mesh_focus`).
+        (or after another failure) the rest of the attempts on the whole obstacles.
 
         Raises:
             GuidanceError: if every attempt failed (the last one's reason).
@@ -191,7 +187,7 @@ class JointGuidance:
         try:
             return self._attempts(start, target, tries[:first], began)
         except GuidanceError as failure:
-            focused = self._focused(obstacles, start, target) if failure.reason in _FOCUS_HELPS else None
+            focused = self._focused(obstacles, target) if failure.reason in _FOCUS_HELPS else None
             if focused is None:
                 if first == len(tries) or failure.reason == "timing":
                     raise
@@ -357,29 +353,25 @@ class JointGuidance:
         return time_path(segment, settings.approach_speed * limits.velocity,
                          settings.approach_speed * limits.acceleration, settings.timing)
 
-    def _focused(self, obstacles: Sequence[PlacedObstacle], start: NDArray[np.float64],
+    def _focused(self, obstacles: Sequence[PlacedObstacle],
                  target: NDArray[np.float64]) -> tuple[PlacedObstacle, ...] | None:
         """``obstacles`` with their point clouds focused around the robot at ``target``
-        (:mod:`dynfab.motion.cloud_focus`) and their meshes around it at ``target`` and
-        ``start`` (:mod:`dynfab.motion.mesh_focus`), None where nothing is focused; the last
-        result reused for the same obstacles and ends (a replan builds no new grids)."""
-        clouds = self.settings.cloud_focus if any(isinstance(o.shape, PointCloud) for o in obstacles) else None
-        meshes = self.settings.mesh_focus if any(isinstance(o.shape, Mesh) for o in obstacles) else None
-        places = tuple((id(o.shape), tuple(o.placement.position), tuple(o.placement.orientation))
-                       for o in obstacles)   # the shapes are kept alive with the key: their ids are theirs
-        key = (target.tobytes(), b"" if meshes is None else start.tobytes(), places)
-        if self._focus is not None and self._focus[1] == key:
-            return self._focus[2]
+        (:mod:`dynfab.motion.cloud_focus`), None without clouds or focus; the last result
+        reused for the same obstacles and goal (a replan builds no new grids)."""
+        focus = self.settings.cloud_focus
+        if focus is None or not any(isinstance(o.shape, PointCloud) for o in obstacles):
+            return None
+        key = target.tobytes()
+        last = self._focus
+        if (last is not None and last[1] == key and len(last[0]) == len(obstacles)
+                and all(a.shape is b.shape and np.array_equal(a.placement.position, b.placement.position)
+                        and np.array_equal(a.placement.orientation, b.placement.orientation)
+                        for a, b in zip(last[0], obstacles))):
+            return last[2]
         centres = np.asarray(self.robot.sphere_centers(target), dtype=float)
-        focused = tuple(obstacles)
-        if clouds is not None:
-            focused = focused_obstacles(focused, centres, np.asarray(self.robot.sphere_radii, dtype=float), clouds)
-        if meshes is not None:
-            ends = [np.asarray(self.robot.sphere_centers(q), dtype=float)[self._leaf_spheres] for q in (target, start)]
-            focused = focused_meshes(focused, ends, self._leaf_radii, mesh_grid, meshes)
-        unchanged = len(focused) == len(obstacles) and all(a is b for a, b in zip(focused, obstacles))
-        self._focus = (tuple(obstacles), key, None if unchanged else focused)
-        return self._focus[2]
+        focused = focused_obstacles(obstacles, centres, np.asarray(self.robot.sphere_radii, dtype=float), focus)
+        self._focus = (tuple(obstacles), key, focused)
+        return focused
 
     def _endpoint_tests(self, q: NDArray[np.float64]) -> tuple[ApproachTest | None, ...]:
         """The tests of a blocked endpoint's segment in the order tried

@@ -6,7 +6,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 from dynfab.motion.cloud_focus import CloudFocus
-from dynfab.motion.mesh_focus import MeshFocus
 from dynfab.motion.inverse_kinematics import IkSettings
 from dynfab.motion.joint_planning import WALL_FACTOR, JointPlannerSettings
 from dynfab.motion.joint_trajectory import TimingSettings
@@ -70,9 +69,6 @@ class GuidanceSettings:
             into the object (with the spheres' test, 2000 did: docs/results.md).
         cloud_focus: how the planner reads point clouds around the robot at its goal when
             it finds no plan on the whole clouds' grids (:mod:`dynfab.motion.cloud_focus`);
-            None: it does not try.
-        mesh_focus: how the planner reads meshes near the robot at its start and goal when
-            every attempt on the whole meshes' grids failed (:mod:`dynfab.motion.mesh_focus`);
             None: it does not try.
         timing: how the path is timed.
         speed: fraction of the velocity limits the reference uses [-].
@@ -169,7 +165,6 @@ class GuidanceSettings:
     approach_clearance: float = 0.005
     mesh_escape_samples: int = 1000
     cloud_focus: CloudFocus | None = CloudFocus()
-    mesh_focus: MeshFocus | None = MeshFocus()
     timing: TimingSettings = field(default_factory=TimingSettings)
     speed: float = 0.5
     acceleration: float = 0.25
