@@ -123,6 +123,12 @@ class ConfigurationChecker:
         self._library.clearances(self._q_pointer, 1, self._rows_pointer, len(self._obstacles), self._out_pointer)
         return float(self._out[0]), float(self._out[1])
 
+    def exact_free(self, q: NDArray[np.float64], margin: float, self_margin: float) -> bool:
+        """:meth:`free` on the exact distances (numpy: a mesh's triangles, not its grid;
+        milliseconds a configuration, for a few candidates such as goals)."""
+        obstacle, itself = self._numpy(np.asarray(q, dtype=float)[None])[0]
+        return bool(obstacle >= margin and itself >= self_margin)
+
     def batch(self, qs: NDArray[np.float64]) -> NDArray[np.float64]:
         """``(c_obs, c_self)`` at every row of ``qs`` (N, n), shape (N, 2)."""
         qs = np.ascontiguousarray(qs, dtype=float).reshape(-1, self._n)

@@ -147,8 +147,9 @@ class JointGuidance:
         if result.q is None:
             meshes = self._meshes()
 
-            def free(x: NDArray[np.float64]) -> bool:
-                return self.checker.free(x, 0.0, self_margin) or (meshes is not None and meshes.free(x))
+            def free(x: NDArray[np.float64]) -> bool:   # the grid, else the exact spheres, else the meshes
+                return (self.checker.free(x, 0.0, self_margin) or self.checker.exact_free(x, 0.0, self_margin)
+                        or (meshes is not None and meshes.free(x)))
 
             result = solve_ik(self.robot, list(goal), q, free, replace(self.settings.ik_retry, seed=seed),
                               self._lower, self._upper)
