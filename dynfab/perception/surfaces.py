@@ -51,7 +51,7 @@ from numpy.typing import NDArray
 from dynfab.fabric.leaves.surface_points import NearestSurfaceAvoidance
 from dynfab.fabric.parameters import LeafViews
 from dynfab.geometry.cloud_far_side import far_side_points
-from dynfab.geometry.mesh_distance import nearest_on_mesh
+from dynfab.geometry.mesh_distance import NearestPoints, nearest_on_mesh
 from dynfab.geometry.mesh_shape import Mesh
 from dynfab.geometry.point_cloud import PointCloud
 from dynfab.geometry.shapes import Placement
@@ -139,12 +139,7 @@ class SurfaceFeed:
         reach = self.cloud_reach(q, qdot) if clouds else self.reach
         for cloud, allowance in zip(clouds, allowances, strict=True):
             found = cloud.nearest(centres, max_distance=float(reach.max()) - allowance)
-            seen = found.distances + allowance
-            closer = found.found & (seen < best) & (seen <= reach)
-            best[closer] = seen[closer]
-            points[closer] = found.points[closer] - allowance * found.normals[closer]
-            normals[closer] = found.normals[closer]
-            velocities[closer] = 0.0
+            velocities[_keep_nearer(found, allowance, reach, best, points, normals)] = 0.0
         active = np.isfinite(best)
         normals[~active] = (0.0, 0.0, 1.0)
         if self.leaf.far_side:
@@ -169,13 +164,22 @@ class SurfaceFeed:
         best = np.full(count, np.inf)
         far_points, far_normals = np.zeros((count, 3)), np.tile((0.0, 0.0, 1.0), (count, 1))
         for cloud, allowance in zip(clouds, allowances, strict=True):
-            found = far_side_points(cloud, centres, points, normals, active, reach - allowance)
-            seen = found.distances + allowance
-            closer = found.found & (seen < best)
-            best[closer] = seen[closer]
-            far_points[closer] = found.points[closer] - allowance * found.normals[closer]
-            far_normals[closer] = found.normals[closer]
+            found = far_side_points(cloud, centres, points, normals, active, reach - allowance)  # within reach
+            _keep_nearer(found, allowance, np.inf, best, far_points, far_normals)
         return far_points, far_normals, np.isfinite(best)
+
+
+def _keep_nearer(found: NearestPoints, allowance: float, reach: NDArray[np.float64] | float,
+                 best: NDArray[np.float64], points: NDArray[np.float64], normals: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Write a cloud's points ``found`` where they are seen nearer than ``best`` and within
+    ``reach`` [m], seen ``allowance`` [m] farther (``c' = c − a n``, module docstring): into
+    ``best``, ``points`` and ``normals``; the rows written."""
+    seen = found.distances + allowance
+    closer = found.found & (seen < best) & (seen <= reach)
+    best[closer] = seen[closer]
+    points[closer] = found.points[closer] - allowance * found.normals[closer]
+    normals[closer] = found.normals[closer]
+    return closer
 
 
 def surface_clearance(centres: NDArray[np.float64], radii: NDArray[np.float64], surface: Mesh | PointCloud,
