@@ -67,10 +67,13 @@ class PlacedObstacle:
     Attributes:
         shape: its shape.
         placement: where its frame is (a plane: its point, and its normal as the frame's z).
+        velocity: its frame's velocity then [m/s] (zero for what does not move; plans see
+            a moving sphere as what it sweeps soon, :mod:`dynfab.motion.swept_obstacles`).
     """
 
     shape: Shape
     placement: Placement
+    velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
 class ConfigurationChecker:

@@ -89,6 +89,10 @@ class GuidanceSettings:
         lag_stop: tracking error at which it stops (the reference waits for the robot) [rad].
         check_period: how often the reference ahead is checked against what moves [s].
         check_horizon: how far ahead it is checked [s].
+        sweep_horizon: a moving sphere is, for a replan and for that check, the capsule it
+            sweeps over this long [s] (:mod:`dynfab.motion.swept_obstacles`): frozen where
+            it is, each replan put the reference back on its line (moving-sphere
+            bookshelf_tall/0063, problems 57-64). 1 s, ``check_horizon``, set before measuring.
         stall_window: time without progress after which the run has stalled [s].
         stall_rate: least mean rate of the reference's clock over ``stall_window`` while it
             runs [-].
@@ -175,6 +179,7 @@ class GuidanceSettings:
     lag_stop: float = 0.3
     check_period: float = 0.1
     check_horizon: float = 1.0
+    sweep_horizon: float = 1.0
     stall_window: float = 2.0
     stall_rate: float = 0.25
     stall_progress: float = 0.05

@@ -36,8 +36,9 @@ moving-sphere bookshelf_thin/0017 and 0019 stalled after 7-8 plans; with it stop
 everywhere, as-posed table_under_pick/0019 stalled in its approach; as here, all three
 reached their goals) when
 
-- the reference within ``check_horizon`` ahead meets an obstacle given as moving
-  (checked every ``check_period``, and not within ``blocked_interval`` of a replan for a
+- the reference within ``check_horizon`` ahead meets what an obstacle given as moving
+  sweeps within ``sweep_horizon`` (a sphere: a capsule along its velocity,
+  :mod:`dynfab.motion.swept_obstacles`; checked every ``check_period``, and not within ``blocked_interval`` of a replan for a
   blocked reference), or
 - the run stalls: while the reference runs, the robot has stayed more than ``lag_slow``
   behind it for ``stall_lag_time`` seconds (outside an approach), or the clock ``τ`` has
@@ -56,9 +57,10 @@ reached their goals) when
   (:meth:`~dynfab.motion.guidance.JointGuidance.approach_from`); else a plan as after a
   stall, whose way is followed closely.
 
-Replans plan among the static obstacles and the moving ones where they are now, except
-those that touch the goal configuration (they are passing it: a plan around where they
-are now would end in a needless escape of the goal; the fabric avoids them). A replan
+Replans plan among the static obstacles and what the moving ones sweep within
+``sweep_horizon`` from where they are now (:func:`~dynfab.motion.plan_requests.make_plan`),
+except those that touch the goal configuration (they are passing it: a plan around where
+they are now would end in a needless escape of the goal; the fabric avoids them). A replan
 after a stall on the way (not in an approach, nor after the reference ended) first tries
 to keep ``stall_margin`` from obstacles, so that it does not lead through the same tight
 passage again; a stall in a grasp's approach replans as before (training as-posed
@@ -99,6 +101,7 @@ from dynfab.motion.plan_joining import in_sight, join_time
 from dynfab.motion.reference_clock import approach_rate, run_progress, way_rate
 from dynfab.motion.plan_requests import PendingPlan, PlanRequest, plan_maker
 from dynfab.motion.straight_motion import StraightMotion
+from dynfab.motion.swept_obstacles import swept_obstacle
 
 __all__ = ["GuidanceStatus", "GuidedFabric", "guided_goal_config"]
 
@@ -295,7 +298,8 @@ class GuidedFabric:
             return "held" if running and not self._in_approach() else "stalled"
         if moving and t >= self._next_check:
             self._next_check = t + settings.check_period
-            if self.guidance.blocked_ahead(self._plan, self._tau, moving):
+            swept = [swept_obstacle(o, settings.sweep_horizon) for o in moving]
+            if self.guidance.blocked_ahead(self._plan, self._tau, swept):
                 self.status = replace(self.status, replans_blocked=self.status.replans_blocked + 1)
                 return "blocked"
         return None

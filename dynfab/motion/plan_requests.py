@@ -34,6 +34,7 @@ from numpy.typing import NDArray
 
 from dynfab.motion.configuration_checker import PlacedObstacle
 from dynfab.motion.guidance import GoalTargets, GuidanceError, JointGuidance, JointTarget, Plan
+from dynfab.motion.swept_obstacles import swept_obstacle
 
 __all__ = ["BackgroundPlans", "DelayedPlans", "PendingPlan", "PlanMaker", "PlanOutcome", "PlanRequest", "make_plan",
            "plan_maker"]
@@ -48,7 +49,8 @@ class PlanRequest:
         q: the robot's configuration then (n,) [rad].
         goal: the goal (a joint goal or task targets).
         static: the obstacles that do not move.
-        moving: the moving ones where they were at ``t`` (left out of a first plan).
+        moving: the moving ones where they were at ``t``, with their velocities (left out
+            of a first plan; a replan avoids what they sweep soon, :func:`make_plan`).
         previous_goal: the goal configuration of the plan being followed (n,) [rad], or
             None (a first plan): moving obstacles that touch it are passing the goal and
             are left out.
@@ -144,32 +146,61 @@ class PendingPlan:
 def make_plan(guidance: JointGuidance, request: PlanRequest,
               publish: Callable[[NDArray[np.float64]], None] = lambda q: None) -> PlanOutcome:
     """Plan for ``request`` with ``guidance`` (module docstring); ``publish`` gets the goal
-    configuration as soon as it is known. Never raises for a plan that cannot be made."""
+    configuration as soon as it is known. Never raises for a plan that cannot be made.
+
+    A replan avoids each moving sphere as the capsule it sweeps over ``sweep_horizon``
+    (:func:`~dynfab.motion.swept_obstacles.swept_obstacle`), so that the new reference
+    leaves its line rather than running ahead of it, unless that capsule touches the goal
+    configuration (the sphere itself then); if no plan around the capsules can be made,
+    around the spheres where they are."""
     began = time.perf_counter()
-    moving = request.moving
+    none = np.zeros((1, len(request.static)))
+    frozen = swept = ()
     if request.previous_goal is not None:   # what moves and touches the goal configuration is passing it
         margin = guidance.settings.path.margin
-        moving = tuple(o for o in moving if guidance.obstacle_clearance(request.previous_goal, o) >= margin)
-    obstacles = request.static + moving if request.previous_goal is not None else request.static
-    none = np.zeros((1, len(request.static)))
+        frozen = tuple(o for o in request.moving if guidance.obstacle_clearance(request.previous_goal, o) >= margin)
+        swept = tuple(_swept_clear_of(guidance, o, request.previous_goal, margin) for o in frozen)
     try:
-        guidance.checker.set_obstacles(obstacles)
-        plan = None
-        if request.after == "short" and request.previous_goal is not None:   # held short of an approach
-            plan = guidance.approach_from(request.q, request.previous_goal)
-        if plan is None and request.previous_goal is not None and not isinstance(request.goal, JointTarget):
-            plan = _replan_to(guidance, request, obstacles, publish)
-        if plan is None:
-            target = guidance.goal_configuration(request.goal, request.q, request.seed)
-            publish(target)
-            plan = guidance.plan(request.q, JointTarget(tuple(target)), obstacles, seed=request.seed,
-                                 wide=request.wide)
+        try:
+            plan = _plan_among(guidance, request, request.static + swept, publish)
+        except GuidanceError:
+            if swept == frozen:
+                raise
+            plan = _plan_among(guidance, request, request.static + frozen, publish)
     except GuidanceError as error:
         return PlanOutcome(None, error.reason, str(error), _ms_since(began), request.q[None], none)
     if plan.approach > 0:
         segment, table = guidance.approach_allowances(plan, request.static, request.buffers)
         return PlanOutcome(plan, None, None, _ms_since(began), segment, table)
     return PlanOutcome(plan, None, None, _ms_since(began), plan.goal[None], none)
+
+
+def _swept_clear_of(guidance: JointGuidance, obstacle: PlacedObstacle, goal: NDArray[np.float64],
+                    margin: float) -> PlacedObstacle:
+    """What ``obstacle`` sweeps over ``sweep_horizon`` if it keeps ``margin`` [m] from the
+    robot at ``goal``, else ``obstacle`` where it is (a plan must not end in it)."""
+    swept = swept_obstacle(obstacle, guidance.settings.sweep_horizon)
+    return swept if guidance.obstacle_clearance(goal, swept) >= margin else obstacle
+
+
+def _plan_among(guidance: JointGuidance, request: PlanRequest, obstacles: tuple[PlacedObstacle, ...],
+                publish: Callable[[NDArray[np.float64]], None]) -> Plan:
+    """The plan of ``request`` among ``obstacles`` (:func:`make_plan`).
+
+    Raises:
+        GuidanceError: if no plan can be made.
+    """
+    guidance.checker.set_obstacles(obstacles)
+    plan = None
+    if request.after == "short" and request.previous_goal is not None:   # held short of an approach
+        plan = guidance.approach_from(request.q, request.previous_goal)
+    if plan is None and request.previous_goal is not None and not isinstance(request.goal, JointTarget):
+        plan = _replan_to(guidance, request, obstacles, publish)
+    if plan is None:
+        target = guidance.goal_configuration(request.goal, request.q, request.seed)
+        publish(target)
+        plan = guidance.plan(request.q, JointTarget(tuple(target)), obstacles, seed=request.seed, wide=request.wide)
+    return plan
 
 
 def _replan_to(guidance: JointGuidance, request: PlanRequest, obstacles: tuple[PlacedObstacle, ...],

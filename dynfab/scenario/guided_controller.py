@@ -381,13 +381,17 @@ def _task_targets(goal: GoalSpec, robot: Robot, position: tuple[float, ...] | No
 
 
 def _placed(scenario: Scenario, references: References, t: float, static: bool) -> tuple[PlacedObstacle, ...]:
-    """The scenario's static (or moving) obstacles where they are at time ``t`` [s]."""
+    """The scenario's static (or moving) obstacles where they are at time ``t`` [s], with
+    their velocities then [m/s]."""
     indices = [k for k, obstacle in enumerate(scenario.obstacles) if (obstacle.trajectory is None) == static]
     if not indices:
         return ()
     centres = np.zeros((1, len(indices), 3))
+    velocities = np.zeros((len(indices), 3))
     for column, k in enumerate(indices):
-        position = references.obstacles[k].evaluate(t).position
-        centres[0, column, : position.size] = position
+        point = references.obstacles[k].evaluate(t)
+        centres[0, column, : point.position.size] = point.position
+        velocities[column, : point.velocity.size] = point.velocity
     shapes = obstacle_shapes([scenario.obstacles[k] for k in indices], centres)
-    return tuple(PlacedObstacle(shape.shape, shape.placements[0]) for shape in shapes)
+    return tuple(PlacedObstacle(shape.shape, shape.placements[0], tuple(float(v) for v in velocity))
+                 for shape, velocity in zip(shapes, velocities))

@@ -1,0 +1,46 @@
+"""What a moving obstacle covers soon: the capsule a sphere sweeps over the next seconds.
+
+A replan made with a moving sphere frozen where it is puts the new reference on the
+sphere's path again, a little ahead of it (moving-sphere MBM bookshelf_tall/0063: five
+``blocked`` replans in 2 s, the robot running ahead of the sphere along its line until
+cornered). A sphere of radius ``r`` at ``c`` moving at velocity ``v`` [m/s] covers, over
+``[0, T]``, the capsule of radius ``r`` about the segment from ``c`` to ``c + v T``:
+
+    S(c, v, T) = {x : min_{s ∈ [0, T]} ‖x − (c + v s)‖ ≤ r}                    [m]
+
+A plan that avoids it leaves the sphere's line sideways, and a reference that meets it
+is one the sphere is about to cross.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dynfab.geometry.shapes import Capsule, Placement, Sphere, quaternion_from_normal
+from dynfab.motion.configuration_checker import PlacedObstacle
+
+__all__ = ["SHORTEST_SWEEP", "swept_obstacle"]
+
+#: a sweep shorter than this is the sphere itself [m]
+SHORTEST_SWEEP = 1e-6
+
+
+def swept_obstacle(obstacle: PlacedObstacle, horizon: float) -> PlacedObstacle:
+    """The capsule ``S(c, v, T)`` of the module docstring that ``obstacle`` (a sphere at
+    ``c`` moving at ``obstacle.velocity``) sweeps over ``horizon`` = ``T`` [s]; a sphere
+    that sweeps less than :data:`SHORTEST_SWEEP`, or another shape, as it is.
+
+    Raises:
+        ValueError: ``horizon`` is negative or not finite.
+    """
+    if not np.isfinite(horizon) or horizon < 0.0:
+        raise ValueError(f"sweep horizon must be a finite number >= 0 s, got {horizon}")
+    if not isinstance(obstacle.shape, Sphere):
+        return obstacle
+    sweep = np.asarray(obstacle.velocity, dtype=float) * horizon
+    length = float(np.linalg.norm(sweep))
+    if length < SHORTEST_SWEEP:
+        return obstacle
+    middle = np.asarray(obstacle.placement.position, dtype=float) + sweep / 2
+    placement = Placement(tuple(middle), quaternion_from_normal(sweep))
+    return PlacedObstacle(Capsule(obstacle.shape.radius, length), placement, obstacle.velocity)
