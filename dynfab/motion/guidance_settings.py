@@ -93,6 +93,12 @@ class GuidanceSettings:
             sweeps over this long [s] (:mod:`dynfab.motion.swept_obstacles`): frozen where
             it is, each replan put the reference back on its line (moving-sphere
             bookshelf_tall/0063, problems 57-64). 1 s, ``check_horizon``, set before measuring.
+        sweep_detour: a replan around those capsules is taken unless it lasts more than
+            this many times the replan around the spheres where they are [-]: the capsule
+            foresees ``sweep_horizon`` only, and a detour around it can outlast the sphere's
+            passing (moving-sphere table_pick/0063 in problems 57-64: 17.7 s against 2.4 s,
+            the run ended first). 2, chosen there: the detours that cleared
+            bookshelf_tall/0063 and bookshelf_thin/0060 lasted 1.8 and 1.6 times as long.
         stall_window: time without progress after which the run has stalled [s].
         stall_rate: least mean rate of the reference's clock over ``stall_window`` while it
             runs [-].
@@ -180,6 +186,7 @@ class GuidanceSettings:
     check_period: float = 0.1
     check_horizon: float = 1.0
     sweep_horizon: float = 1.0
+    sweep_detour: float = 2.0
     stall_window: float = 2.0
     stall_rate: float = 0.25
     stall_progress: float = 0.05

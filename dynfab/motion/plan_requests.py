@@ -151,8 +151,9 @@ def make_plan(guidance: JointGuidance, request: PlanRequest,
     A replan avoids each moving sphere as the capsule it sweeps over ``sweep_horizon``
     (:func:`~dynfab.motion.swept_obstacles.swept_obstacle`), so that the new reference
     leaves its line rather than running ahead of it, unless that capsule touches the goal
-    configuration (the sphere itself then); if no plan around the capsules can be made,
-    around the spheres where they are."""
+    configuration (the sphere itself then); the plan around the spheres where they are
+    instead if none around the capsules can be made or it is shorter
+    (:func:`_swept_plan`)."""
     began = time.perf_counter()
     none = np.zeros((1, len(request.static)))
     frozen = swept = ()
@@ -161,12 +162,7 @@ def make_plan(guidance: JointGuidance, request: PlanRequest,
         frozen = tuple(o for o in request.moving if guidance.obstacle_clearance(request.previous_goal, o) >= margin)
         swept = tuple(_swept_clear_of(guidance, o, request.previous_goal, margin) for o in frozen)
     try:
-        try:
-            plan = _plan_among(guidance, request, request.static + swept, publish)
-        except GuidanceError:
-            if swept == frozen:
-                raise
-            plan = _plan_among(guidance, request, request.static + frozen, publish)
+        plan = _swept_plan(guidance, request, swept, frozen, publish)
     except GuidanceError as error:
         return PlanOutcome(None, error.reason, str(error), _ms_since(began), request.q[None], none)
     if plan.approach > 0:
@@ -181,6 +177,31 @@ def _swept_clear_of(guidance: JointGuidance, obstacle: PlacedObstacle, goal: NDA
     robot at ``goal``, else ``obstacle`` where it is (a plan must not end in it)."""
     swept = swept_obstacle(obstacle, guidance.settings.sweep_horizon)
     return swept if guidance.obstacle_clearance(goal, swept) >= margin else obstacle
+
+
+def _swept_plan(guidance: JointGuidance, request: PlanRequest, swept: tuple[PlacedObstacle, ...],
+                frozen: tuple[PlacedObstacle, ...], publish: Callable[[NDArray[np.float64]], None]) -> Plan:
+    """The plan of ``request`` around the static obstacles and the moving ones as ``swept``,
+    unless none can be made or it takes more than ``sweep_detour`` times as long as the
+    plan around them as ``frozen`` (where they are), then that one.
+
+    Raises:
+        GuidanceError: if no plan can be made either way.
+    """
+    try:
+        plan = _plan_among(guidance, request, request.static + swept, publish)
+    except GuidanceError:
+        if swept == frozen:
+            raise
+        return _plan_among(guidance, request, request.static + frozen, publish)
+    if swept == frozen:
+        return plan
+    try:
+        direct = _plan_among(guidance, request, request.static + frozen, publish)
+    except GuidanceError:
+        return plan
+    detour = guidance.settings.sweep_detour
+    return direct if plan.trajectory.duration > detour * direct.trajectory.duration else plan
 
 
 def _plan_among(guidance: JointGuidance, request: PlanRequest, obstacles: tuple[PlacedObstacle, ...],
