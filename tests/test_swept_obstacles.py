@@ -12,7 +12,7 @@ from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObst
 from dynfab.motion.guidance import JointGuidance, JointTarget
 from dynfab.motion.joint_planning import polyline_samples
 from dynfab.motion.plan_requests import PlanRequest, make_plan
-from dynfab.motion.swept_obstacles import swept_obstacle
+from dynfab.motion.swept_obstacles import swept_clear_of, swept_obstacle
 from dynfab.robots import load_robot
 from dynfab.scenario.guided_controller import make_scenario_controller
 from dynfab.scenario.references import scenario_references
@@ -60,12 +60,31 @@ def test_what_does_not_move_or_is_no_sphere_is_swept_as_it_is() -> None:
         swept_obstacle(still, -1.0)
 
 
+def test_a_capsule_the_robot_is_in_is_shortened_until_clear_of_it_else_the_sphere() -> None:
+    sphere = PlacedObstacle(Sphere(0.05), Placement((0.0, 0.0, 0.0)), (1.0, 0.0, 0.0))
+    robot_at = {"near": np.array([0.4]), "on": np.array([0.02])}   # a point robot on the x axis [m]
+
+    def clearance(q: np.ndarray, obstacle: PlacedObstacle) -> float:
+        return float(placed_distance(obstacle.shape, obstacle.placement, [[q[0], 0.0, 0.0]])[0])
+
+    shortened = swept_clear_of(sphere, 1.0, [robot_at["near"]], clearance, 0.01)
+    assert shortened.shape == Capsule(0.05, 0.25)   # 1 s and 0.5 s reach the robot, 0.25 s does not
+    assert swept_clear_of(sphere, 1.0, [robot_at["on"]], clearance, 0.01) is sphere   # inside: none clears it
+
+
+#: the reference's time [s] at which the sphere is placed half a check horizon ahead of it,
+#: the robot there clear of the whole capsule
+NOW = 1.2
+
+
 def test_the_reference_check_sees_a_sphere_about_to_cross_it(panda, wall_plan) -> None:
     guidance = JointGuidance(panda)
-    middle = wall_plan.trajectory.evaluate(0.5 * guidance.settings.check_horizon).position
-    sphere = _coming(panda, middle)
-    assert not guidance.blocked_ahead(wall_plan, 0.0, [sphere])   # where it is now, it is clear of the reference
-    assert guidance.blocked_ahead(wall_plan, 0.0, [swept_obstacle(sphere, guidance.settings.sweep_horizon)])
+    horizon = guidance.settings.sweep_horizon
+    sphere = _coming(panda, wall_plan.trajectory.evaluate(NOW + 0.5 * guidance.settings.check_horizon).position)
+    assert guidance.obstacle_clearance(wall_plan.trajectory.evaluate(NOW).position,
+                                       swept_obstacle(sphere, horizon)) > guidance.settings.path.margin
+    assert not guidance.blocked_ahead(wall_plan, NOW, [sphere])   # where it is now, it is clear of the reference
+    assert guidance.blocked_ahead(wall_plan, NOW, [swept_obstacle(sphere, horizon)])
 
 
 def _wall_controller(panda):
@@ -80,8 +99,13 @@ def _wall_controller(panda):
 def test_a_guided_fabric_replans_for_a_sphere_about_to_cross_its_reference(panda, speed, blocked) -> None:
     guided = _wall_controller(panda).guided
     guided.set_goal(JointTarget(tuple(GOAL)), 0.0, START)
-    middle = guided.plan.trajectory.evaluate(0.5 * guided.guidance.settings.check_horizon).position
-    guided.update(0.0, START, (_coming(panda, middle, speed * VELOCITY),))
+    plan, dt = guided.plan, 0.01
+    for step in range(int(round(NOW / dt))):   # the robot on its reference, nothing moving
+        guided.update(step * dt, guided.fabric.parameters.goal_position[0].copy())
+    q = guided.fabric.parameters.goal_position[0].copy()
+    ahead = plan.trajectory.evaluate(NOW + 0.5 * guided.guidance.settings.check_horizon).position
+    assert np.linalg.norm(q - plan.trajectory.evaluate(NOW).position) < 0.05   # the reference clock kept time
+    guided.update(NOW, q, (_coming(panda, ahead, speed * VELOCITY),))
     assert guided.status.replans_blocked == blocked
 
 

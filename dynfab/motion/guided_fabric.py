@@ -37,8 +37,8 @@ everywhere, as-posed table_under_pick/0019 stalled in its approach; as here, all
 reached their goals) when
 
 - the reference within ``check_horizon`` ahead meets what an obstacle given as moving
-  sweeps within ``sweep_horizon`` (a sphere: a capsule along its velocity,
-  :mod:`dynfab.motion.swept_obstacles`; checked every ``check_period``, and not within ``blocked_interval`` of a replan for a
+  sweeps within ``sweep_horizon`` (a sphere: a capsule along its velocity, unless the robot
+  is in it already, :func:`~dynfab.motion.swept_obstacles.swept_clear_of`; checked every ``check_period``, and not within ``blocked_interval`` of a replan for a
   blocked reference), or
 - the run stalls: while the reference runs, the robot has stayed more than ``lag_slow``
   behind it for ``stall_lag_time`` seconds (outside an approach), or the clock ``τ`` has
@@ -101,7 +101,7 @@ from dynfab.motion.plan_joining import in_sight, join_time
 from dynfab.motion.reference_clock import approach_rate, run_progress, way_rate
 from dynfab.motion.plan_requests import PendingPlan, PlanRequest, plan_maker
 from dynfab.motion.straight_motion import StraightMotion
-from dynfab.motion.swept_obstacles import swept_obstacle
+from dynfab.motion.swept_obstacles import swept_clear_of
 
 __all__ = ["GuidanceStatus", "GuidedFabric", "guided_goal_config"]
 
@@ -298,7 +298,8 @@ class GuidedFabric:
             return "held" if running and not self._in_approach() else "stalled"
         if moving and t >= self._next_check:
             self._next_check = t + settings.check_period
-            swept = [swept_obstacle(o, settings.sweep_horizon) for o in moving]
+            clearance, margin = self.guidance.obstacle_clearance, settings.path.margin
+            swept = [swept_clear_of(o, settings.sweep_horizon, (q,), clearance, margin) for o in moving]
             if self.guidance.blocked_ahead(self._plan, self._tau, swept):
                 self.status = replace(self.status, replans_blocked=self.status.replans_blocked + 1)
                 return "blocked"

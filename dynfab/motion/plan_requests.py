@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 
 from dynfab.motion.configuration_checker import PlacedObstacle
 from dynfab.motion.guidance import GoalTargets, GuidanceError, JointGuidance, JointTarget, Plan
-from dynfab.motion.swept_obstacles import swept_obstacle
+from dynfab.motion.swept_obstacles import swept_clear_of
 
 __all__ = ["BackgroundPlans", "DelayedPlans", "PendingPlan", "PlanMaker", "PlanOutcome", "PlanRequest", "make_plan",
            "plan_maker"]
@@ -150,8 +150,9 @@ def make_plan(guidance: JointGuidance, request: PlanRequest,
 
     A replan avoids each moving sphere as the capsule it sweeps over ``sweep_horizon``
     (:func:`~dynfab.motion.swept_obstacles.swept_obstacle`), so that the new reference
-    leaves its line rather than running ahead of it, unless that capsule touches the goal
-    configuration (the sphere itself then); the plan around the spheres where they are
+    leaves its line rather than running ahead of it, unless that capsule touches the robot
+    now or at the goal configuration (the sphere itself then,
+    :func:`~dynfab.motion.swept_obstacles.swept_clear_of`); the plan around the spheres where they are
     instead if none around the capsules can be made or it is shorter
     (:func:`_swept_plan`)."""
     began = time.perf_counter()
@@ -160,7 +161,9 @@ def make_plan(guidance: JointGuidance, request: PlanRequest,
     if request.previous_goal is not None:   # what moves and touches the goal configuration is passing it
         margin = guidance.settings.path.margin
         frozen = tuple(o for o in request.moving if guidance.obstacle_clearance(request.previous_goal, o) >= margin)
-        swept = tuple(_swept_clear_of(guidance, o, request.previous_goal, margin) for o in frozen)
+        ends = (request.q, request.previous_goal)   # a plan must not start nor end in a capsule
+        swept = tuple(swept_clear_of(o, guidance.settings.sweep_horizon, ends, guidance.obstacle_clearance, margin)
+                      for o in frozen)
     try:
         plan = _swept_plan(guidance, request, swept, frozen, publish)
     except GuidanceError as error:
@@ -169,14 +172,6 @@ def make_plan(guidance: JointGuidance, request: PlanRequest,
         segment, table = guidance.approach_allowances(plan, request.static, request.buffers)
         return PlanOutcome(plan, None, None, _ms_since(began), segment, table)
     return PlanOutcome(plan, None, None, _ms_since(began), plan.goal[None], none)
-
-
-def _swept_clear_of(guidance: JointGuidance, obstacle: PlacedObstacle, goal: NDArray[np.float64],
-                    margin: float) -> PlacedObstacle:
-    """What ``obstacle`` sweeps over ``sweep_horizon`` if it keeps ``margin`` [m] from the
-    robot at ``goal``, else ``obstacle`` where it is (a plan must not end in it)."""
-    swept = swept_obstacle(obstacle, guidance.settings.sweep_horizon)
-    return swept if guidance.obstacle_clearance(goal, swept) >= margin else obstacle
 
 
 def _swept_plan(guidance: JointGuidance, request: PlanRequest, swept: tuple[PlacedObstacle, ...],
