@@ -36,10 +36,9 @@ moving-sphere bookshelf_thin/0017 and 0019 stalled after 7-8 plans; with it stop
 everywhere, as-posed table_under_pick/0019 stalled in its approach; as here, all three
 reached their goals) when
 
-- the reference within ``check_horizon`` ahead meets what an obstacle given as moving
-  sweeps within ``sweep_horizon`` (a sphere: a capsule along its velocity, unless the robot
-  is in it already, :func:`~dynfab.motion.swept_obstacles.swept_clear_of`; checked every ``check_period``, and not within ``blocked_interval`` of a replan for a
-  blocked reference), or
+- the reference within ``check_horizon`` ahead meets what a moving obstacle sweeps within
+  ``sweep_horizon`` (:func:`~dynfab.motion.swept_obstacles.swept_clear_of`; checked every
+  ``check_period``, and not within ``blocked_interval`` of a blocked replan), or
 - the run stalls: while the reference runs, the robot has stayed more than ``lag_slow``
   behind it for ``stall_lag_time`` seconds (outside an approach), or the clock ``τ`` has
   not advanced by ``stall_rate · stall_window`` within ``stall_window`` seconds (the robot
