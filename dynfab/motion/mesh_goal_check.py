@@ -96,6 +96,17 @@ class MeshGoalCheck:
         :attr:`margin`) with no checked link pair touching."""
         return self.polyline_free(np.vstack([a, b]), step, floor)
 
+    def overshoot_free(self, free: NDArray[np.float64], goal: NDArray[np.float64], overshoot: float,
+                       step: float) -> bool:
+        """Whether the straight segment from ``goal`` on past it, away from ``free``, for
+        ``overshoot`` [rad] touches no obstacle on the meshes (``c_obs ≥ 0``, no checked link
+        pair touching): where the fabric may settle past a goal it approaches from ``free``."""
+        direction = np.asarray(goal, dtype=float) - np.asarray(free, dtype=float)
+        length = float(np.linalg.norm(direction))
+        if length < 1e-12 or overshoot <= 0.0:
+            return True
+        return self.segment_free(goal, goal + overshoot / length * direction, step, 0.0)
+
     def polyline_free(self, waypoints: NDArray[np.float64], step: float, floor: float | None = None) -> bool:
         """:meth:`segment_free` along every segment of the polyline ``waypoints`` (k, n)."""
         least = (self.margin if floor is None else floor) + self._lowering
@@ -104,7 +115,7 @@ class MeshGoalCheck:
 
 def endpoint_tests(q: NDArray[np.float64], checker: ConfigurationChecker,
                    mesh_check: Callable[[], MeshGoalCheck | None],
-                   settings: GuidanceSettings) -> tuple[ApproachTest | None, ...]:
+                   settings: GuidanceSettings, goal: bool = False) -> tuple[ApproachTest | None, ...]:
     """The tests of a blocked endpoint's segment (a goal's approach, a start's way out) in
     the order tried, on the robot's meshes (:meth:`MeshGoalCheck.segment_free`, every half
     ``path.resolution``): no deeper than the endpoint, nor closer than a floor where it
@@ -119,9 +130,14 @@ def endpoint_tests(q: NDArray[np.float64], checker: ConfigurationChecker,
     the meshes and without clouds, the meshes' alone: on the grids (up to ``h√3`` low)
     the spheres refused every way out of held-out kitchen/0012's start (14 mm into a
     cupboard its meshes clear by 11 mm); tried first, the meshes' alone lost
-    table_bars/0009 and 0011 (held out: nearer escapes, stalled). ``(None,)``: free on
-    the spheres, in collision on the meshes among shapes, no meshes, or the spheres'
-    test."""
+    table_bars/0009 and 0011 (held out: nearer escapes, stalled). A ``goal`` among meshes or
+    clouds nearer the meshes than ``mesh_margin`` has no room for the fabric settling
+    past it: its approach's straight continuation past the goal, for ``goal_overshoot``,
+    must not touch the meshes either (:meth:`MeshGoalCheck.overshoot_free`; development
+    kitchen/0013, seed 2: the robot lagged its approach by 13 mrad, then passed its goal,
+    2.0 mm from the cupboard, by 5.8 mrad along the approach and put ``panda_link5``
+    2.5 mm into it). ``(None,)``: free on the spheres, in collision on the meshes among
+    shapes, no meshes, or the spheres' test."""
     path = settings.path
     if checker.free(q, path.margin, path.self_margin):
         return (None,)
@@ -134,8 +150,12 @@ def endpoint_tests(q: NDArray[np.float64], checker: ConfigurationChecker,
     free_on_meshes = obstacle >= meshes.margin and itself > 0.0
     step = path.resolution / 2
 
+    overshoot = settings.goal_overshoot if goal and surfaces and obstacle < meshes.margin else 0.0
+
     def judged(floor: float, instead_of_spheres: bool) -> ApproachTest:
-        return ApproachTest(lambda free, end: meshes.segment_free(free, end, step, floor), instead_of_spheres)
+        return ApproachTest(lambda free, end: (meshes.segment_free(free, end, step, floor)
+                                               and meshes.overshoot_free(free, end, overshoot, step)),
+                            instead_of_spheres)
 
     alone = judged(min(settings.approach_clearance, obstacle), True)
     both = judged(min(meshes.margin, obstacle), False)
