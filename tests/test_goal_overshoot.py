@@ -11,10 +11,8 @@ import pytest
 
 from dynfab.motion.configuration_checker import ConfigurationChecker
 from dynfab.motion.guidance import GuidanceSettings
-from dynfab.motion.mesh_goal_check import MeshGoalCheck, endpoint_tests
+from dynfab.motion.mesh_goal_check import MeshGoalCheck, endpoint_tests, robot_mesh_model
 from dynfab.robots import load_robot
-from dynfab.robots.builtin_meshes import builtin_collision_meshes
-from dynfab.robots.mesh_collision import mesh_collision_model
 from wall_scene import MESH_WALL, START
 
 #: joint 1 turns the hand toward the wall as it grows (wall_scene)
@@ -30,11 +28,12 @@ def panda():
 
 @pytest.fixture(scope="module")
 def check(panda) -> MeshGoalCheck:
-    model = mesh_collision_model(panda.kinematics, panda.default_q, builtin_collision_meshes(panda))
+    """The Panda's meshes as guidance reads them, against the wall as a mesh."""
+    model = robot_mesh_model(panda)
     assert model is not None
-    check = MeshGoalCheck(model, 0.003)
-    check.set_obstacles((MESH_WALL,))
-    return check
+    wall = MeshGoalCheck(model, GuidanceSettings().mesh_margin)
+    wall.set_obstacles((MESH_WALL,))
+    return wall
 
 
 @pytest.fixture(scope="module")
