@@ -17,7 +17,7 @@ from dynfab.motion.inverse_kinematics import IkSettings
 from dynfab.motion.mesh_goal_check import MeshGoalCheck
 from dynfab.robots import load_robot
 from dynfab.robots.builtin_meshes import builtin_collision_meshes
-from dynfab.robots.mesh_collision import mesh_collision_model
+from dynfab.robots.mesh_collision import mesh_collision_model, moving_part
 from dynfab.robots.mesh_sweep import PlacedShape, sweep_meshes
 from wall_scene import hand_pose_targets
 
@@ -91,3 +91,19 @@ def test_a_segment_whose_middle_meets_a_box_is_not_free_though_its_ends_are(pand
     assert deepest < 0.0
     assert check.segment_free(a, b, 0.015, floor=deepest)   # a goal as deep as that may be approached
     assert not check.segment_free(a, b, 0.015, floor=deepest + 1e-4)
+
+
+def test_an_obstacle_beside_the_base_alone_blocks_no_configuration(panda, check) -> None:
+    """The base's distance is the same at every configuration (development kitchen/0015,
+    seed 1: the Panda's base 1.9 mm from a dishwasher door refused every goal solution)."""
+    base = check.model.links.index("panda_link0")
+    front = max(float(part.vertices[:, 0].max()) for part in builtin_collision_meshes(panda)["panda_link0"])
+    beside = PlacedObstacle(Box((0.02, 0.2, 0.05)), Placement((front + 0.001 + 0.01, 0.0, 0.03)))
+    full = sweep_meshes(check.model, Q[None], [PlacedShape("box", beside.shape, (beside.placement,))])
+    assert [c.first for c in full.obstacle_contacts] == [] and full.clearance == pytest.approx(0.001, abs=5e-4)
+    assert check.model.links[base] == "panda_link0" and "panda_link0" not in moving_part(check.model).links
+    check.set_obstacles((beside,))
+    assert check.clearance(Q)[0] > check.margin and check.free(Q)
+    assert check.segment_free(Q, Q + 0.05, 0.01)
+    check.set_obstacles((beside, BESIDE_LINK2))   # a moving link's obstacle still counts
+    assert check.clearance(Q)[0] < 0.03

@@ -214,7 +214,7 @@ class JointGuidance:
         found an escape among meshes (no clouds), the same attempts at ``tight_margin``
         (``tight``), each path kept only if clear on the meshes between its escapes
         (:meth:`_clear_on_meshes`)."""
-        goal_tests, start_tests = self._endpoint_tests(target), self._endpoint_tests(start)
+        goal_tests, start_tests = self._endpoint_tests(target, goal=True), self._endpoint_tests(start)
         modes = list(dict.fromkeys([(goal_tests[0], start_tests[0]), (goal_tests[-1], start_tests[-1])]))
         error: GuidanceError | None = None
         checks = 0
@@ -283,7 +283,7 @@ class JointGuidance:
         start = np.clip(np.asarray(q, dtype=float), self._lower, self._upper)
         length = float(np.linalg.norm(goal - start))
         if length < SHORTEST_APPROACH or not approach_clear(self.checker, start, goal, self.settings.path,
-                                                            self._endpoint_tests(goal)[0]):
+                                                            self._endpoint_tests(goal, goal=True)[0]):
             return None
         trajectory = PhasedTrajectory((self._approach_timed(np.vstack([start, goal])),))
         return Plan(trajectory, np.asarray(goal, dtype=float), time.perf_counter() - began, 0, length, 0.0)
@@ -373,10 +373,10 @@ class JointGuidance:
         self._focus = (tuple(obstacles), key, focused)
         return focused
 
-    def _endpoint_tests(self, q: NDArray[np.float64]) -> tuple[ApproachTest | None, ...]:
-        """The tests of a blocked endpoint's segment in the order tried
-        (:func:`~dynfab.motion.mesh_goal_check.endpoint_tests`)."""
-        return endpoint_tests(q, self.checker, self._meshes, self.settings)
+    def _endpoint_tests(self, q: NDArray[np.float64], goal: bool = False) -> tuple[ApproachTest | None, ...]:
+        """The tests of a blocked endpoint's segment (of a ``goal``'s approach, else of a
+        start's way out) in the order tried (:func:`~dynfab.motion.mesh_goal_check.endpoint_tests`)."""
+        return endpoint_tests(q, self.checker, self._meshes, self.settings, goal)
 
     def _meshes(self) -> MeshGoalCheck | None:
         """The mesh check against the checker's obstacles (made once); None without meshes."""

@@ -2,7 +2,8 @@
 goals millimetres from the scene, which the spheres refuse.
 
 The configuration checker (:mod:`dynfab.motion.configuration_checker`) sees the robot's
-collision spheres, which stick out of its meshes by up to 1-2 cm at the hand, against a
+collision spheres, which stick out of its meshes by up to 1 cm at the hand and 2 cm on the
+arm (at MBM kitchen goals ``panda_link5``'s and ``panda_link6``'s by 10-19 mm), against a
 lower bound of a mesh's or a cloud's distance (its grid, up to ``h√3`` below): at a goal a
 few millimetres from a mesh it reads −7 to −27 mm where the meshes are apart. This check
 measures the robot's meshes (:class:`~dynfab.robots.mesh_collision.MeshCollisionModel`)
@@ -11,7 +12,11 @@ against the exact obstacles with coal (:func:`~dynfab.robots.mesh_sweep.sweep_me
     free(q) ⇔ min_{l, k} d(link_l(q), obstacle_k) − δ ≥ margin   and   no checked link pair touches
 
 with ``δ`` the largest voxel half-diagonal of the point clouds among the obstacles (a cloud's
-kept points stand for raw points within ``δ`` of them; 0 without clouds) [m]. A goal it
+kept points stand for raw points within ``δ`` of them; 0 without clouds) [m], and ``l`` over
+the links some joint moves (:func:`~dynfab.robots.mesh_collision.moving_part`): a base's
+distance is the same at every configuration, so it cannot make one freer than another (the
+spheres' checker leaves the base out too); counted, the Panda's base 1.9 mm from a
+dishwasher door refused every configuration of development kitchen/0015 (seed 1). A goal it
 accepts and the spheres refuse is then planned as a blocked joint goal: escaped to a free
 configuration nearby and approached slowly (:mod:`dynfab.motion.joint_planning`). Where no
 solution is free, one free by the smaller ``mesh_goal_floor`` is kept
@@ -46,7 +51,7 @@ from dynfab.motion.guidance_settings import GuidanceSettings
 from dynfab.motion.joint_planning import ApproachTest, polyline_samples
 from dynfab.robots.builtin_meshes import builtin_collision_meshes
 from dynfab.robots.link_meshes import LinkMeshError
-from dynfab.robots.mesh_collision import MeshCollisionModel, mesh_collision_model
+from dynfab.robots.mesh_collision import MeshCollisionModel, mesh_collision_model, moving_part
 from dynfab.robots.robot import Robot
 from dynfab.robots.mesh_sweep import PlacedShape, meshes_clear, sweep_meshes
 
@@ -66,6 +71,7 @@ class MeshGoalCheck:
             raise ValueError(f"margin: must be finite and >= 0, got {margin}")
         self.model = model
         self.margin = margin
+        self._moving = moving_part(model)   # what obstacles are measured against
         self._shapes: tuple[PlacedShape, ...] = ()
         self._lowering = 0.0
 
@@ -78,9 +84,11 @@ class MeshGoalCheck:
         """``(c_obs, c_self)`` on the meshes at ``q`` [m]: the least obstacle distance less
         ``δ``, and the least distance of the checked link pairs (``inf`` where nothing is
         checked); of a stack of configurations (k, n), the least over them."""
-        sweep = sweep_meshes(self.model, np.atleast_2d(np.asarray(q, dtype=float)), self._shapes)
-        obstacle = np.inf if sweep.clearance is None else sweep.clearance - self._lowering
-        itself = np.inf if sweep.min_self_distance is None else sweep.min_self_distance
+        qs = np.atleast_2d(np.asarray(q, dtype=float))
+        moving = sweep_meshes(self._moving, qs, self._shapes)
+        obstacle = np.inf if moving.clearance is None else moving.clearance - self._lowering
+        pairs = sweep_meshes(self.model, qs, ()).min_self_distance
+        itself = np.inf if pairs is None else pairs
         return float(obstacle), float(itself)
 
     def free(self, q: NDArray[np.float64], floor: float | None = None) -> bool:
@@ -96,15 +104,28 @@ class MeshGoalCheck:
         :attr:`margin`) with no checked link pair touching."""
         return self.polyline_free(np.vstack([a, b]), step, floor)
 
+    def overshoot_free(self, free: NDArray[np.float64], goal: NDArray[np.float64], overshoot: float,
+                       step: float) -> bool:
+        """Whether the straight segment from ``goal`` on past it, away from ``free``, for
+        ``overshoot`` [rad] touches no obstacle on the meshes (``c_obs ≥ 0``, no checked link
+        pair touching): where the fabric may settle past a goal it approaches from ``free``."""
+        direction = np.asarray(goal, dtype=float) - np.asarray(free, dtype=float)
+        length = float(np.linalg.norm(direction))
+        if length < 1e-12 or overshoot <= 0.0:
+            return True
+        return self.segment_free(goal, goal + overshoot / length * direction, step, 0.0)
+
     def polyline_free(self, waypoints: NDArray[np.float64], step: float, floor: float | None = None) -> bool:
         """:meth:`segment_free` along every segment of the polyline ``waypoints`` (k, n)."""
         least = (self.margin if floor is None else floor) + self._lowering
-        return meshes_clear(self.model, polyline_samples(waypoints, step), self._shapes, least)
+        samples = polyline_samples(waypoints, step)
+        return (meshes_clear(self._moving, samples, self._shapes, least)
+                and meshes_clear(self.model, samples, (), least))   # the link pairs
 
 
 def endpoint_tests(q: NDArray[np.float64], checker: ConfigurationChecker,
                    mesh_check: Callable[[], MeshGoalCheck | None],
-                   settings: GuidanceSettings) -> tuple[ApproachTest | None, ...]:
+                   settings: GuidanceSettings, goal: bool = False) -> tuple[ApproachTest | None, ...]:
     """The tests of a blocked endpoint's segment (a goal's approach, a start's way out) in
     the order tried, on the robot's meshes (:meth:`MeshGoalCheck.segment_free`, every half
     ``path.resolution``): no deeper than the endpoint, nor closer than a floor where it
@@ -119,9 +140,14 @@ def endpoint_tests(q: NDArray[np.float64], checker: ConfigurationChecker,
     the meshes and without clouds, the meshes' alone: on the grids (up to ``h√3`` low)
     the spheres refused every way out of held-out kitchen/0012's start (14 mm into a
     cupboard its meshes clear by 11 mm); tried first, the meshes' alone lost
-    table_bars/0009 and 0011 (held out: nearer escapes, stalled). ``(None,)``: free on
-    the spheres, in collision on the meshes among shapes, no meshes, or the spheres'
-    test."""
+    table_bars/0009 and 0011 (held out: nearer escapes, stalled). A ``goal`` among meshes or
+    clouds nearer the meshes than ``mesh_margin`` has no room for the fabric settling
+    past it: its approach's straight continuation past the goal, for ``goal_overshoot``,
+    must not touch the meshes either (:meth:`MeshGoalCheck.overshoot_free`; development
+    kitchen/0013, seed 2: the robot lagged its approach by 13 mrad, then passed its goal,
+    2.0 mm from the cupboard, by 5.8 mrad along the approach and put ``panda_link5``
+    2.5 mm into it). ``(None,)``: free on the spheres, in collision on the meshes among
+    shapes, no meshes, or the spheres' test."""
     path = settings.path
     if checker.free(q, path.margin, path.self_margin):
         return (None,)
@@ -134,8 +160,12 @@ def endpoint_tests(q: NDArray[np.float64], checker: ConfigurationChecker,
     free_on_meshes = obstacle >= meshes.margin and itself > 0.0
     step = path.resolution / 2
 
+    overshoot = settings.goal_overshoot if goal and surfaces and obstacle < meshes.margin else 0.0
+
     def judged(floor: float, instead_of_spheres: bool) -> ApproachTest:
-        return ApproachTest(lambda free, end: meshes.segment_free(free, end, step, floor), instead_of_spheres)
+        return ApproachTest(lambda free, end: (meshes.segment_free(free, end, step, floor)
+                                               and meshes.overshoot_free(free, end, overshoot, step)),
+                            instead_of_spheres)
 
     alone = judged(min(settings.approach_clearance, obstacle), True)
     both = judged(min(meshes.margin, obstacle), False)

@@ -30,7 +30,7 @@ from dynfab.geometry.exact_collision import MeshSet, exact_distance, mesh_set
 from .kinematics import Kinematics
 from .link_meshes import link_collision_meshes
 
-__all__ = ["DEFAULT_CONTACT_MARGIN", "MeshCollisionModel", "adjacent_links", "mesh_collision_model"]
+__all__ = ["DEFAULT_CONTACT_MARGIN", "MeshCollisionModel", "adjacent_links", "mesh_collision_model", "moving_part"]
 
 #: Two links closer than this at the default configuration are never checked [m].
 DEFAULT_CONTACT_MARGIN = 1e-3
@@ -98,6 +98,17 @@ def mesh_collision_model(kinematics: Kinematics, default_q: ArrayLike,
         if frozenset((links[i], links[j])) not in adjacent
         and exact_distance(meshes[i], poses[i], meshes[j], poses[j]) > DEFAULT_CONTACT_MARGIN)
     return MeshCollisionModel(kinematics, tuple(links), tuple(meshes), pairs)
+
+
+def moving_part(model: MeshCollisionModel) -> MeshCollisionModel:
+    """``model``'s links that some joint moves (not welded to the root), without pairs: a
+    configuration's distances to obstacles that can differ from another's (a base link's
+    is the same at every configuration)."""
+    body = _bodies(model.kinematics)
+    root = body[model.kinematics.root_link]
+    kept = [i for i, link in enumerate(model.links) if body[link] != root]
+    return MeshCollisionModel(model.kinematics, tuple(model.links[i] for i in kept),
+                              tuple(model.meshes[i] for i in kept), ())
 
 
 def adjacent_links(kinematics: Kinematics, with_geometry: set[str]) -> set[frozenset[str]]:
