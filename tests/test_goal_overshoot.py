@@ -81,3 +81,31 @@ def test_a_goal_free_on_the_meshes_by_mesh_margin_is_not_asked_for_room_past_it(
     tests = endpoint_tests(goal, checker, lambda: check, settings, True)
     assert tests[0] is not None
     assert all(test is not None and test.accepts(goal - 0.05 * TOWARD_THE_WALL, goal) for test in tests)
+
+
+def test_a_goal_near_a_cloud_is_not_asked_for_room_past_it(panda, near_goal) -> None:
+    """Among clouds the bound lies δ below the measured points: the approach is judged as
+    a start's way out is, with nothing asked past the goal (points 81-88 lost 7 goals to it)."""
+    import trimesh
+
+    from dynfab.geometry.point_cloud import PointCloud
+    from dynfab.motion.configuration_checker import PlacedObstacle
+    from wall_scene import WALL
+
+    surface = trimesh.creation.box(extents=WALL.shape.size).sample(40000, return_index=False)
+    cloud = PlacedObstacle(PointCloud(np.asarray(surface), 0.01), WALL.placement)
+    model = robot_mesh_model(panda)
+    check = MeshGoalCheck(model, GuidanceSettings().mesh_margin)
+    check.set_obstacles((cloud,))
+    checker = ConfigurationChecker(panda, [cloud])
+    from_away = near_goal - 0.1 * TOWARD_THE_WALL
+    settings = replace(GuidanceSettings(), goal_overshoot=OVERSHOOT)
+
+    def accepted(goal: bool) -> bool:
+        tests = endpoint_tests(near_goal, checker, lambda: check, settings, goal)
+        assert tests[0] is not None
+        return tests[0].accepts(from_away, near_goal)
+
+    assert accepted(goal=False)
+    assert accepted(goal=True)
+    assert not check.overshoot_free(from_away, near_goal, OVERSHOOT, 0.005)   # it would have refused it
