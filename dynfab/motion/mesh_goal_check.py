@@ -147,7 +147,7 @@ def endpoint_tests(q: NDArray[np.float64], checker: ConfigurationChecker,
     kitchen/0013, seed 2: the robot lagged its approach by 13 mrad, then passed its goal,
     2.0 mm from the cupboard, by 5.8 mrad along the approach and put ``panda_link5``
     2.5 mm into it). Not among clouds: their bound already lies ``δ`` (8.7 mm for 1 cm
-    voxels) below the measured points, and asked there, the test refused 7 of 56 goals
+    voxels) below the measured points, and asked there, the test refused 6 of 56 goals
     of the points variant (problems 81-88) that the code without it reaches. ``(None,)``: free on the spheres, in collision on the meshes among
     shapes, no meshes, or the spheres' test."""
     path = settings.path
