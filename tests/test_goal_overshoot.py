@@ -92,7 +92,7 @@ def test_a_goal_near_a_cloud_is_not_asked_for_room_past_it(panda, near_goal) -> 
     from dynfab.motion.configuration_checker import PlacedObstacle
     from wall_scene import WALL
 
-    surface = trimesh.creation.box(extents=WALL.shape.size).sample(40000, return_index=False)
+    surface, _ = trimesh.sample.sample_surface(trimesh.creation.box(extents=WALL.shape.size), 40000, seed=0)
     cloud = PlacedObstacle(PointCloud(np.asarray(surface), 0.01), WALL.placement)
     model = robot_mesh_model(panda)
     check = MeshGoalCheck(model, GuidanceSettings().mesh_margin)
