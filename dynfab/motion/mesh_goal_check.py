@@ -141,15 +141,15 @@ def endpoint_tests(q: NDArray[np.float64], checker: ConfigurationChecker,
     the spheres refused every way out of held-out kitchen/0012's start (14 mm into a
     cupboard its meshes clear by 11 mm); tried first, the meshes' alone lost
     table_bars/0009 and 0011 (held out: nearer escapes, stalled). A ``goal`` among meshes
-    nearer them than ``mesh_margin`` has no room for the fabric settling
-    past it: its approach's straight continuation past the goal, for ``goal_overshoot``,
-    must not touch the meshes either (:meth:`MeshGoalCheck.overshoot_free`; development
-    kitchen/0013, seed 2: the robot lagged its approach by 13 mrad, then passed its goal,
-    2.0 mm from the cupboard, by 5.8 mrad along the approach and put ``panda_link5``
-    2.5 mm into it). Not among clouds: their bound already lies ``δ`` (8.7 mm for 1 cm
-    voxels) below the measured points, and asked there, the test refused 6 of 56 goals
-    of the points variant (problems 81-88) that the code without it reaches. ``(None,)``: free on the spheres, in collision on the meshes among
-    shapes, no meshes, or the spheres' test."""
+    nearer them than ``mesh_margin`` has no room for the fabric settling past it: its
+    approach's straight continuation past the goal, for ``goal_overshoot``, must not touch
+    the meshes either (:meth:`MeshGoalCheck.overshoot_free`; development kitchen/0013,
+    seed 2: the robot lagged its approach by 13 mrad, then passed its goal, 2.0 mm from
+    the cupboard, by 5.8 mrad along the approach and put ``panda_link5`` 2.5 mm into it).
+    Not among clouds: their bound already lies ``δ`` (8.7 mm for 1 cm voxels) below the
+    measured points, and asked there, the test refused 6 of 56 goals of the points variant
+    (problems 81-88) that the code without it reaches. ``(None,)``: free on the spheres,
+    in collision on the meshes among shapes, no meshes, or the spheres' test."""
     path = settings.path
     if checker.free(q, path.margin, path.self_margin):
         return (None,)
