@@ -41,7 +41,7 @@ from dynfab.motion.guidance_settings import GuidanceSettings
 from dynfab.motion.phased_trajectory import PhasedTrajectory
 from dynfab.robots.robot import Robot
 
-__all__ = ["GuidanceError", "GuidanceSettings", "JointGuidance", "JointTarget", "Plan"]
+__all__ = ["GuidanceError", "GuidanceSettings", "JointGuidance", "JointTarget", "Plan", "stall_replan_margin"]
 
 #: a value within this of a joint limit counts as at the limit [rad or m]
 LIMIT_SLACK = 1e-6
@@ -96,6 +96,17 @@ class Plan:
     approach: float = 0.0
     approach_start: float = 0.0
 
+
+
+def stall_replan_margin(settings: GuidanceSettings, held: float) -> float | None:
+    """The margin [m] of a replan's first attempt after the robot was held ``held`` [m]
+    from the obstacles (a stall): ``min(stall_margin, held)``, or None where that is not
+    more than the planner's margin (no such attempt). A path that keeps the room the
+    obstacle leaves held the robot at is one it can follow: as posed MBM
+    bookshelf_small/0100, held 13.5 mm from a can short of a corner of its reference
+    (planned at 1 cm), stalled after a 3 cm replan's 9 s detour; at 13.5 mm it was reached."""
+    margin = min(settings.stall_margin, held)
+    return margin if margin > settings.path.margin else None
 
 class JointGuidance:
     """Plans joint-space references for ``robot`` (module docstring).
@@ -166,7 +177,8 @@ class JointGuidance:
     def plan(self, q: NDArray[np.float64], goal: GoalTargets, obstacles: Sequence[PlacedObstacle],
              seed: int = 0, wide: bool = False) -> Plan:
         """A timed free reference from ``q`` (at rest) to ``goal`` among ``obstacles``; if
-        ``wide``, the first attempt keeps ``stall_margin`` (a replan after a stall). Among
+        ``wide``, the first attempt keeps the clearance the robot has at ``q``, at least the
+        planner's margin and at most ``stall_margin`` (a replan after a stall: :meth:`_tries`). Among
         point clouds, where the first ``cloud_focus.whole_attempts`` attempts find no path
         (or no escape of a blocked endpoint), every attempt is made again with the clouds
         focused around the goal (:mod:`dynfab.motion.cloud_focus`); without clouds or focus
@@ -179,7 +191,7 @@ class JointGuidance:
         self.checker.set_obstacles(obstacles)
         start = np.clip(np.asarray(q, dtype=float), self._lower, self._upper)
         target = self.goal_configuration(goal, start, seed)
-        tries = self._tries(seed, wide)
+        tries = self._tries(seed, self.checker.clearances(start)[0] if wide else None)
         focus = self.settings.cloud_focus
         first = len(tries)
         if focus is not None and any(isinstance(o.shape, PointCloud) for o in obstacles):
@@ -195,15 +207,16 @@ class JointGuidance:
         self.checker.set_obstacles(focused)  # the endpoints' tests are then made on the focus's grid
         return self._attempts(start, target, tries, began)
 
-    def _tries(self, seed: int, wide: bool) -> list[tuple[JointPlannerSettings, int]]:
+    def _tries(self, seed: int, held: float | None) -> list[tuple[JointPlannerSettings, int]]:
         """The planner's settings and seed of each attempt: each with the next seed and twice the
-        time limit, a ``wide`` one first (:meth:`plan`)."""
+        time limit; after a stall, where the robot was held ``held`` [m] from the obstacles,
+        first one of ``stall_margin_time`` at :func:`stall_replan_margin`."""
         path_settings = self.settings.path
         tries = [(replace(path_settings, time_limit=path_settings.time_limit * 2**attempt), seed + attempt)
                  for attempt in range(self.settings.attempts)]
-        if wide and self.settings.stall_margin > path_settings.margin:
-            tries.insert(0, (replace(path_settings, margin=self.settings.stall_margin,
-                                     time_limit=self.settings.stall_margin_time), seed))
+        wide = None if held is None else stall_replan_margin(self.settings, held)
+        if wide is not None:
+            tries.insert(0, (replace(path_settings, margin=wide, time_limit=self.settings.stall_margin_time), seed))
         return tries
 
     def _attempts(self, start: NDArray[np.float64], target: NDArray[np.float64],

@@ -113,10 +113,11 @@ class GuidanceSettings:
             reference (outside an approach) before the run counts as stalled [s]: held by
             the obstacle leaves in a tight passage, the reference's clock still creeps for
             seconds before ``stall_rate`` notices (chosen on training problems 10-16).
-        stall_margin: planning margin [m] a replan after a stall on the way tries first (one attempt
-            of ``stall_margin_time``), before ``path.margin``: a path that keeps more
+        stall_margin: largest planning margin [m] a replan after a stall on the way tries first
+            (one attempt of ``stall_margin_time``, at the clearance the robot was held at, if that
+            is more than ``path.margin``), before ``path.margin``: a path that keeps more
             clearance where the stalled one went through a tight passage (chosen on
-            training problems 10-16).
+            training problems 10-16; the held clearance below it on as-posed bookshelf_small/0100).
         stall_margin_time: time limit of that attempt [s].
         goal_clearance: clearance [m] the fabric's obstacle leaves should still see at a
             goal closer to an obstacle than the planner's margin (a grasp: the spheres,
