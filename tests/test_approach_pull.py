@@ -89,6 +89,14 @@ def test_in_the_approach_the_reference_is_shifted_across_by_the_pull(panda, gras
     shift = guided.fabric.parameters.goal_position[0] - plan.trajectory.evaluate(guided._tau).position
     assert np.linalg.norm(shift) == pytest.approx(settings.approach_pull * 0.05 + settings.approach_pull_limit,
                                                   rel=1e-6)
+    # once the reference has ended the integral is gone: only the proportional step and one tick's
+    for _ in range(int(round(plan.trajectory.duration / DT)) + 1):   # beside, but the clock runs
+        t += DT
+        guided.update(t, plan.trajectory.evaluate(guided._tau).position + beside * side)
+    assert guided._tau >= plan.trajectory.duration
+    shift = guided.fabric.parameters.goal_position[0] - grasp
+    np.testing.assert_allclose(shift, -(settings.approach_pull + settings.approach_pull_rate * DT) * beside * side,
+                               atol=1e-9)
 
 
 def _pushed_run(panda, grasp, settings: GuidanceSettings, push: float):

@@ -38,3 +38,18 @@ def test_a_robot_held_beside_a_can_replans_at_the_room_it_was_held_at_and_reache
     assert metrics["goal_reached"] and metrics["guided"], (metrics["failure"], metrics["final_distance"])
     assert metrics["plans"] <= 3 and metrics["fallbacks"] == 0
     assert check["collisions"] == [] and check["self_collisions"] == [] and check["joint_limit_violations"] == []
+
+
+def test_a_grasp_a_third_of_a_millimetre_from_a_cage_wall_is_reached_without_touching_it() -> None:
+    """As posed cage/0076 (shared set): the goal is 0.29 mm clear of a wall on the meshes. The
+    approach's pull had integrated 5.7 mrad by the time the reference ended, and kept the robot
+    up to 2 mrad past the segment's line for seconds (decaying in 3 s): a finger 0.65 mm into
+    the wall. With the integral dropped once the reference has ended it settles at the goal."""
+    problem = next(p for p in load_problems(["cage"], per_type=1, skip=67) if p.number == 76)
+    case = prepare_case(problem, "as-posed", franka())
+    assert case.invalid is None
+    outcome = run_case(case.mapping)
+    metrics, check = outcome["metrics"], outcome["check"]
+    assert metrics["goal_reached"] and metrics["guided"], (metrics["failure"], metrics["final_distance"])
+    assert check["collisions"] == [] and check["self_collisions"] == [] and check["joint_limit_violations"] == []
+    assert check["clearance"] > 0.0

@@ -247,6 +247,8 @@ class GuidedFabric:
             rate = way_rate(settings, lag, close=self._close or self._entering())
         self._tau += rate * dt
         following = in_approach and self._approaching
+        if following and self._tau >= self._plan.trajectory.duration:
+            self._pull.reset()   # the reference has ended: no integral past the goal (approach_pull)
         self._write(self._tau, rate, self._pull.shift(self._segment, q, dt) if following else None)
 
     def compute(self, t: float, q: NDArray[np.float64], qdot: NDArray[np.float64],
