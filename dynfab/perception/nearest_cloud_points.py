@@ -84,6 +84,8 @@ class NearestCloudPoints:
         self.index: NDArray[np.integer] = np.zeros(count, dtype=np.int64)
         self._count = count
         self._far_side = leaf.far_side
+        self._grows = leaf.barrier.braking is not None   # the reach depends on q̇
+        self._static_reach = float(self.reach.max()) if count else 0.0
         self._q = np.zeros(robot.kinematics.dof)
         self._qdot = np.zeros(robot.kinematics.dof)
         # writer input z = [x (3K, row-major), reach (K), c (3K), f (K), δ]; x and reach evaluated into it
@@ -140,12 +142,13 @@ class NearestCloudPoints:
         if self._count == 0:
             return
         self._q[:] = q
-        self._qdot[:] = 0.0 if qdot is None else qdot
+        if self._grows:
+            self._qdot[:] = 0.0 if qdot is None else qdot
         self._evaluate_centres()
         if cloud.empty:
             self._found[:] = 0.0
         else:
-            bound = float(self._reach.max()) + cloud.lowering
+            bound = (float(self._reach.max()) if self._grows else self._static_reach) + cloud.lowering
             gaps, self.index = cloud.tree.query(self._centres, distance_upper_bound=bound)
             np.take(cloud.points, self.index, axis=0, out=self._nearest, mode="clip")
             np.isfinite(gaps, out=self._found, casting="unsafe")
