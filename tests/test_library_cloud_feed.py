@@ -11,8 +11,9 @@ from dynfab.fabric.c_backend import find_compiler
 from dynfab.fabric.leaves.barrier import Barrier
 from dynfab.fabric.leaves.surface_points import NearestSurfaceAvoidance, moving_spheres
 from dynfab.fabric.planner import FabricPlanner, GoalConfig, PlannerConfig
-from dynfab.geometry.point_cloud import PointCloud
 from dynfab.perception.camera_feed import CameraFeed
+from dynfab.perception.camera_spec import CameraSpec
+from dynfab.perception.depth_camera import DepthCamera
 from dynfab.perception.point_clouds import PointCloudFeed
 from dynfab.perception.surfaces import SurfaceFeed
 from dynfab.robots.builtin import load_robot
@@ -127,7 +128,6 @@ def test_the_feed_refuses_a_qdot_of_the_wrong_length(panda_far_side: tuple) -> N
 
 def test_a_cameras_feed_refuses_a_far_side_leaf(panda_far_side: tuple) -> None:
     robot, leaf, views, _ = panda_far_side
-    feed = CameraFeed.__new__(CameraFeed)
-    feed._leaf = feed._views = None
+    feed = CameraFeed(robot, DepthCamera(CameraSpec(position=(1.5, 0.0, 1.0), look_at=(0.0, 0.0, 0.3)), robot))
     with pytest.raises(ValueError, match="far_side"):
         feed.attach(leaf, views)
