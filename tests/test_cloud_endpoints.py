@@ -64,7 +64,8 @@ def test_the_tight_round_among_clouds_comes_on_the_focus_after_it_failed_at_the_
     cloud = PointCloud.from_points(_wall(np.random.default_rng(8)), voxel=0.01)
     seen: list[tuple[bool, float]] = []
 
-    def blocked(checker, start, goal, lower, upper, settings, seed, approach, leave=None):  # type: ignore[no-untyped-def]
+    def blocked(checker, start, goal, lower, upper, settings, seed, approach,  # type: ignore[no-untyped-def]
+                leave=None):
         seen.append((any(isinstance(o.shape, FocusedCloud) for o in checker.obstacles), settings.margin))
         raise NoPathError("goal_in_collision", "no escape")
 
@@ -88,7 +89,8 @@ def test_without_a_focus_no_tight_round_is_made_among_clouds(panda, monkeypatch:
     cloud = PointCloud.from_points(_wall(np.random.default_rng(8)), voxel=0.01)
     margins: list[float] = []
 
-    def blocked(checker, start, goal, lower, upper, settings, seed, approach, leave=None):  # type: ignore[no-untyped-def]
+    def blocked(checker, start, goal, lower, upper, settings, seed, approach,  # type: ignore[no-untyped-def]
+                leave=None):
         margins.append(settings.margin)
         raise NoPathError("goal_in_collision", "no escape")
 
