@@ -18,7 +18,10 @@ Measured, as wall-clock medians (and p95) over ``--ticks`` ticks of a closed-loo
 - per tick, a scenario's feed of a ``points`` obstacle (``SurfaceFeed``, the guided fabric's
   braking leaf): as on e94d6d6 (one slot per sphere, reach without the spheres' speeds) and
   now (a far-side slot per sphere, :mod:`dynfab.geometry.cloud_far_side`, and the reach grown
-  by each sphere's stopping distance), write and step each.
+  by each sphere's stopping distance), write and step each;
+- per tick, the library's feed (``NearestCloudPoints``, compiled on ``--backend c``) of the same
+  two leaves given ``q̇``: the reach grown by the speeds alone, then with the far side, write
+  and step each and their sum against the primitives' step.
 
     .venv/bin/python bench/bench_point_clouds.py [--points 100000] [--ticks 1000] [--backend c|vm]
 """
@@ -126,14 +129,18 @@ def main() -> None:
     print(f"per tick, cloud write + step: {summary(ticks)}")
     print(f"ratio cloud step / primitives step:         {statistics.median(cloud_steps) / statistics.median(primitive_steps):.2f}")
     print(f"ratio cloud (write + step) / primitives step: {statistics.median(ticks) / statistics.median(primitive_steps):.2f}")
-    scenario_feed(robot, goals, feed.cloud, args)
+    scenario_feed(robot, goals, feed.cloud, args, statistics.median(primitive_steps))
 
 
-def scenario_feed(robot, goals, cloud, args: argparse.Namespace) -> None:
-    """A scenario's feed of ``cloud`` (module docstring), as on e94d6d6 and now."""
+def scenario_feed(robot, goals, cloud, args: argparse.Namespace, primitive_step: float) -> None:
+    """A scenario's feed of ``cloud`` (module docstring), as on e94d6d6 and now, and the
+    library's per-tick feed (``NearestCloudPoints``) of the same leaves given ``q̇``: its reach
+    alone, then with the far side; each tick against the primitives' median step
+    ``primitive_step`` [µs]."""
     from dynfab.fabric.leaves.barrier import Barrier
     from dynfab.fabric.leaves.surface_points import NearestSurfaceAvoidance, moving_spheres
     from dynfab.fabric.planner import FabricPlanner, PlannerConfig
+    from dynfab.perception.nearest_cloud_points import NearestCloudPoints
     from dynfab.perception.surfaces import SurfaceFeed
     from dynfab.scenario import guided_controller as guided
 
@@ -154,6 +161,14 @@ def scenario_feed(robot, goals, cloud, args: argparse.Namespace) -> None:
         print(f"per tick, scenario feed, {name}: write {summary(writes)}")
         print(f"per tick, scenario feed, {name}: step  {summary(steps)}")
         medians[far_side] = statistics.median([a + b for a, b in zip(writes, steps)])
+        library = NearestCloudPoints(robot, leaf, planner.parameters.leaves[leaf.name], args.backend)
+        writes, steps = closed_loop(planner, args.ticks, lambda q, qdot: library.write(q, cloud, qdot))
+        name = "far side + speeds" if far_side else "speeds only     "
+        print(f"per tick, library feed,  {name}: write {summary(writes)}")
+        print(f"per tick, library feed,  {name}: step  {summary(steps)}")
+        ticks = [a + b for a, b in zip(writes, steps)]
+        print(f"per tick, library feed,  {name}: write + step {summary(ticks)}; "
+              f"/ primitives step {statistics.median(ticks) / primitive_step:.2f}")
     print(f"ratio scenario tick (write + step), now / e94d6d6: {medians[True] / medians[False]:.2f}")
 
 

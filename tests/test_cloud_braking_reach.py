@@ -140,7 +140,7 @@ def test_a_far_wall_beyond_the_reach_is_not_written() -> None:
     assert not far.found[0]
 
 
-def test_the_scenario_leaf_of_a_cloud_has_a_far_side_slot_per_sphere_and_the_cloud_writer_refuses_it(
+def test_the_scenario_leaf_of_a_cloud_has_a_far_side_slot_per_sphere_and_the_cloud_writer_writes_it_too(
         arm: dynfab.Robot) -> None:
     from dynfab.perception.nearest_cloud_points import NearestCloudPoints
 
@@ -157,5 +157,9 @@ def test_the_scenario_leaf_of_a_cloud_has_a_far_side_slot_per_sphere_and_the_clo
     active, normals = views["active"], views["normals"].reshape(-1, 3)
     assert active[2] == 1.0 and active[5] == 1.0
     assert normals[2] @ (0.0, 0.0, 1.0) > 0.98 and normals[5] @ (0.0, -1.0, 0.0) > 0.95
-    with pytest.raises(ValueError, match="far_side"):
-        NearestCloudPoints(arm, leaf, views, backend="vm")
+    written = {key: views[key].copy() for key in ("points", "normals", "velocities", "active")}
+    for key in written:
+        views[key][:] = 0.0
+    NearestCloudPoints(arm, leaf, views, backend="vm").write(q, PointCloud(corner, 0.01))
+    for key, expected in written.items():
+        np.testing.assert_allclose(views[key], expected, rtol=0.0, atol=1e-12, err_msg=key)

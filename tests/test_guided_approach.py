@@ -313,3 +313,16 @@ def test_on_the_approach_the_clock_waits_for_a_robot_beside_the_segment(panda, g
     expected = float(np.clip((settings.approach_offset_stop - beside)
                              / (settings.approach_offset_stop - settings.approach_offset_slow), 0.0, 1.0))
     assert guided._tau - before == pytest.approx(expected * DT, abs=1e-9)
+
+
+def test_obstacles_replaced_on_the_approach_get_no_allowance_and_do_not_crash(panda, grasp) -> None:
+    """A camera's scene is replaced every guidance period, also on an approach: the new
+    obstacles' allowances are zero at every approach sample (a one-row table once made
+    ``allowances`` reduce an empty slice: thrown seed 27 under a camera)."""
+    guided = _guided(panda, grasp)
+    t, held = _held_short(guided, grasp)
+    guided.update(t + DT, held)
+    guided.update(t + 2 * DT, grasp)   # at the goal: the table's last rows ahead
+    assert guided.approaching and guided.allowances()[0] > 0.0
+    guided.set_obstacles(guided._static)
+    assert guided.allowances().tolist() == [0.0] * len(guided._static)

@@ -53,8 +53,9 @@ class GuidanceSettings:
             than ``mesh_margin`` its approach must be clear too (:func:`~dynfab.motion.mesh_goal_check.endpoint_tests`):
             the fabric settling at such a goal passed it by 5.8 mrad along its approach
             (development kitchen/0013, seed 2); 0.01 chosen on that run.
-        tight_margin: ``path.margin`` of a last round of attempts among meshes (no point
-            clouds) when no attempt found an escape of a blocked endpoint; each path of that
+        tight_margin: ``path.margin`` of a last round of attempts among meshes (or on a point
+            cloud's focus, after it: :meth:`JointGuidance._tight_applies`) when no attempt
+            found an escape of a blocked endpoint; each path of that
             round is kept only if it keeps ``mesh_margin`` on the robot's meshes between its
             escapes (:meth:`JointGuidance._attempts`). 0 (the spheres merely clear of the grid):
             training kitchen/0009's goal, 15 mm inside a cupboard on the spheres (16 mm clear on

@@ -179,10 +179,12 @@ class GuidedFabric:
         self._maker.close()
 
     def set_obstacles(self, obstacles: Sequence[PlacedObstacle]) -> None:
-        """The obstacles plans avoid (those that do not move; moving ones go to :meth:`update`)."""
+        """The obstacles plans avoid (those that do not move; moving ones go to :meth:`update`);
+        the new obstacles get no allowance along an approach under way (a row per sample: a
+        camera's scene replaced mid-approach once crashed :meth:`allowances`)."""
         self._static = tuple(obstacles)
         self._sight.set_obstacles([o for o in self._static if not isinstance(o.shape, Mesh | PointCloud)])  # in_sight
-        self._table = np.zeros((1, len(self._static)))
+        self._table = np.zeros((len(self._segment), len(self._static)))
 
     @property
     def approaching(self) -> bool:

@@ -55,7 +55,13 @@ from dynfab.robots.mesh_collision import MeshCollisionModel, mesh_collision_mode
 from dynfab.robots.robot import Robot
 from dynfab.robots.mesh_sweep import PlacedShape, meshes_clear, sweep_meshes
 
-__all__ = ["MeshGoalCheck", "endpoint_tests", "robot_mesh_model"]
+__all__ = ["ROUNDING", "MeshGoalCheck", "endpoint_tests", "robot_mesh_model"]
+
+#: Slack [m] of :meth:`MeshGoalCheck.polyline_free`'s floor: a clearance read less ``δ`` and
+#: given back as a floor plus ``δ`` can come back an ulp above the raw distance, so that an
+#: endpoint failed its own "no deeper than the endpoint" test among point clouds (every
+#: approach of MBM points cage/0056 refused at its goal sample).
+ROUNDING = 1e-9
 
 
 class MeshGoalCheck:
@@ -117,7 +123,7 @@ class MeshGoalCheck:
 
     def polyline_free(self, waypoints: NDArray[np.float64], step: float, floor: float | None = None) -> bool:
         """:meth:`segment_free` along every segment of the polyline ``waypoints`` (k, n)."""
-        least = (self.margin if floor is None else floor) + self._lowering
+        least = (self.margin if floor is None else floor) + self._lowering - ROUNDING
         samples = polyline_samples(waypoints, step)
         return (meshes_clear(self._moving, samples, self._shapes, least)
                 and meshes_clear(self.model, samples, (), least))   # the link pairs

@@ -67,9 +67,17 @@ class CameraFeed:
 
     def attach(self, leaf: NearestSurfaceAvoidance, views: LeafViews) -> None:
         """Write ``leaf`` (of a planner whose parameters hold ``views``) from now on; the
-        latest cloud carries over."""
+        latest cloud carries over.
+
+        Raises:
+            ValueError: ``leaf`` has far-side slots (the camera's velocities are estimated at
+                each sphere's nearest point only).
+        """
         if leaf is self._leaf and views is self._views:
             return
+        if leaf.far_side:
+            raise ValueError(f"leaf {leaf.name!r}: a camera's feed writes one slot a sphere (its velocity "
+                             "estimate is per nearest point); build the leaf with far_side=False")
         self._leaf, self._views = leaf, views
         self._feed = PointCloudFeed(self._robot, leaf, views, backend=self._backend)
         if self.latest is not None:

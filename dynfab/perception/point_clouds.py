@@ -19,6 +19,12 @@ kept point ``c`` within the leaf's reach and writes the point ``c + δ n``, the 
 (:class:`~dynfab.fabric.leaves.surface_points.NearestSurfaceAvoidance`), ``δ = h√3/2``: the
 leaf's clearance ``‖p − c‖ − δ − r`` never exceeds the distance to a measured point; one
 KD-tree query and two buffer evaluations (:mod:`dynfab.perception.nearest_cloud_points`).
+The representation is the scenario's (:class:`~dynfab.perception.surfaces.SurfaceFeed`):
+given ``q̇``, a braking leaf's reach grows by each sphere's stopping distance, and a leaf
+with ``far_side`` gets a second point per sphere on another side
+(:mod:`dynfab.geometry.cloud_far_side`; two more queries). Both are the caller's choice
+(the leaf it builds, the ``qdot`` it passes); their cost is measured by
+``bench/bench_point_clouds.py``.
 An empty cloud (or one the filter empties) leaves every sphere inactive: no cloud obstacle.
 
 The global planner reads the same kept points: pass ``feed.cloud`` to the guided fabric as
@@ -129,6 +135,8 @@ class PointCloudFeed:
         self.cloud = cloud
         return CloudUpdate(len(raw), cloud.dropped, on_robot, len(cloud.points), cloud.voxel)
 
-    def write(self, q: NDArray[np.float64]) -> None:
-        """Write the leaf's nearest points for configuration ``q`` (every tick)."""
-        self.nearest.write(q, self.cloud)
+    def write(self, q: NDArray[np.float64], qdot: NDArray[np.float64] | None = None) -> None:
+        """Write the leaf's nearest points for configuration ``q`` (every tick); with a
+        braking leaf and ``qdot`` [rad/s] given, each sphere's reach grown by its stopping
+        distance (:mod:`dynfab.perception.nearest_cloud_points`)."""
+        self.nearest.write(q, self.cloud, qdot)
