@@ -32,6 +32,7 @@ from dynfab.geometry.shapes import Mesh, PointCloud
 from dynfab.motion.cloud_focus import focused_obstacles
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.inverse_kinematics import AxisTarget, IkSettings, PointTarget, solve_ik
+from dynfab.motion.mesh_escape_plan import escape_plan
 from dynfab.motion.mesh_goal_check import MeshGoalCheck, endpoint_tests, robot_mesh_model
 from dynfab.perception.surfaces import surface_clearance
 from dynfab.motion.joint_planning import (ApproachTest, JointPath, JointPlannerSettings, NoPathError, approach_clear,
@@ -241,7 +242,13 @@ class JointGuidance:
         if tight or error.reason not in _ENDPOINT_FAILURES or not self._tight_applies():
             raise error
         margin = self.settings.tight_margin
-        return self._attempts(start, target, [(replace(s, margin=margin), k) for s, k in tries], began, True)
+        try:
+            return self._attempts(start, target, [(replace(s, margin=margin), k) for s, k in tries], began, True)
+        except GuidanceError:   # a goal still without escape: one on the meshes (mesh_escape_plan)
+            escaped = escape_plan(self, start, target, tries, began) if error.reason == "goal_in_collision" else None
+            if escaped is None:
+                raise
+            return escaped
 
     def _tight_applies(self) -> bool:
         """Whether a plan with no escape may be tried again at ``tight_margin``: among meshes

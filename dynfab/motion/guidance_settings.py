@@ -9,6 +9,7 @@ from dynfab.motion.cloud_focus import CloudFocus
 from dynfab.motion.inverse_kinematics import IkSettings
 from dynfab.motion.joint_planning import WALL_FACTOR, JointPlannerSettings
 from dynfab.motion.joint_trajectory import TimingSettings
+from dynfab.motion.mesh_escape import MeshEscapeSettings
 
 __all__ = ["SIMULATION_CHECK_RATE", "GuidanceSettings", "counted_checks"]
 
@@ -65,6 +66,10 @@ class GuidanceSettings:
             free on them (or a start's way out) keeps where the endpoint is farther (the
             endpoint's own where it is nearer;
             :meth:`JointGuidance._endpoint_tests`).
+        mesh_escape: the tree grown from a goal no attempt escaped, among meshes (no
+            point clouds), through configurations free on the robot's meshes until the
+            spheres accept one (:mod:`dynfab.motion.mesh_escape`); the robot follows that
+            escape backwards as its approach. None: none.
         mesh_escape_samples: ``path.escape_samples`` for a goal whose approach the meshes
             judge (:meth:`JointGuidance._endpoint_tests`) [-]: 400 found no escape for as-posed
             table_pick/0032 (problems 29-32, which chose it), its hand between a table and a cube
@@ -179,6 +184,7 @@ class GuidanceSettings:
     tight_margin: float = 0.0
     approach_clearance: float = 0.005
     mesh_escape_samples: int = 1000
+    mesh_escape: MeshEscapeSettings | None = field(default_factory=MeshEscapeSettings)
     cloud_focus: CloudFocus | None = CloudFocus()
     timing: TimingSettings = field(default_factory=TimingSettings)
     speed: float = 0.5
