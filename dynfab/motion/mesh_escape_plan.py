@@ -17,23 +17,27 @@ spheres need not.
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from dynfab.geometry.shapes import PointCloud
-from dynfab.motion.joint_planning import JointPlannerSettings, NoPathError, plan_joint_path
+from dynfab.motion.joint_planning import JointPlannerSettings
 from dynfab.motion.joint_trajectory import TimingError, time_path
-from dynfab.motion.mesh_escape import mesh_escape
+from dynfab.motion.mesh_escape import SpheresOrMeshes, mesh_path
 from dynfab.motion.phased_trajectory import PhasedTrajectory
 from dynfab.robots.mesh_contact import MeshContactCheck
 
 if TYPE_CHECKING:
     from dynfab.motion.guidance import JointGuidance, Plan
 
-__all__ = ["escape_plan"]
+__all__ = ["END_SHARE", "escape_plan"]
+
+#: the share of the nearer end's clearance on the meshes the path keeps where that is
+#: nearer than ``mesh_margin`` (an end at exactly the margin would touch it) [-]
+END_SHARE = 0.9
 
 
 def escape_plan(guidance: JointGuidance, start: NDArray[np.float64], target: NDArray[np.float64],
@@ -57,26 +61,43 @@ def escape_plan(guidance: JointGuidance, start: NDArray[np.float64], target: NDA
             or any(isinstance(o.shape, PointCloud) for o in guidance.checker.obstacles)):
         return None
     path, limits = guidance.settings.path, guidance.robot.limits
-    contact = MeshContactCheck(meshes.model, max(0.0, min(meshes.margin, meshes.clearance(target)[0])))
+    ends = min(meshes.clearance(target)[0], meshes.clearance(start)[0])
+    margin = max(0.0, min(meshes.margin, END_SHARE * ends))
+    contact = MeshContactCheck(meshes.model, margin)
     contact.set_obstacles(guidance.checker.obstacles)
-    escape = mesh_escape(contact, target, lambda q: guidance.checker.free(q, 0.0, path.self_margin),
-                         guidance._lower, guidance._upper, settings, tries[0][1])
-    if escape is None or not meshes.polyline_free(escape, path.resolution / 2, contact.margin / 2):
+    validity = SpheresOrMeshes(guidance.checker, contact, settings.coverage, path.self_margin, start.size)
+    for _, seed in tries:
+        way = mesh_path(validity, start, target, guidance._lower, guidance._upper, settings, seed)
+        if way is not None:
+            break
+    if way is None or not meshes.polyline_free(way, path.resolution / 2, margin / 2):
         return None
-    for leave in dict.fromkeys(guidance._endpoint_tests(start)):
-        for attempt, seed in tries:
-            try:
-                way = plan_joint_path(guidance.checker, start, escape[-1], guidance._lower, guidance._upper,
-                                      attempt, seed, None, leave)
-                kept = len(way.waypoints) - int(way.escaped_goal)   # the end's own escape joins the approach
-                way_in = np.vstack([way.waypoints[kept - 1:], escape[-2::-1]])
-                trajectory = PhasedTrajectory((time_path(way.waypoints[:kept], guidance.settings.speed * limits.velocity,
-                                                         guidance.settings.acceleration * limits.acceleration,
-                                                         guidance.settings.timing),
-                                               guidance._approach_timed(way_in)))
-            except (NoPathError, TimingError):
-                continue
-            length = float(np.sum(np.linalg.norm(np.diff(way_in, axis=0), axis=1)))
-            return Plan(trajectory, target, time.perf_counter() - began, way.checks + contact.checks, length,
-                        float(trajectory.starts[-1]))
-    return None
+    cruise, approach = _split(way, lambda q: guidance.checker.free(q, path.margin, path.self_margin),
+                              path.resolution / 2)
+    try:
+        phases = (() if cruise is None else
+                  (time_path(cruise, guidance.settings.speed * limits.velocity,
+                             guidance.settings.acceleration * limits.acceleration, guidance.settings.timing),))
+        trajectory = PhasedTrajectory(phases + (guidance._approach_timed(approach),))
+    except TimingError:
+        return None
+    length = float(np.sum(np.linalg.norm(np.diff(approach, axis=0), axis=1)))
+    return Plan(trajectory, target, time.perf_counter() - began, validity.checks, length,
+                float(trajectory.starts[-1]))
+
+
+def _split(way: NDArray[np.float64], accept: Callable[[NDArray[np.float64]], bool], step: float
+           ) -> tuple[NDArray[np.float64] | None, NDArray[np.float64]]:
+    """``way`` (k, n) cut at its last configuration (of those ``step`` [rad] apart on it)
+    that ``accept`` takes: the way there (None if that is its start) and the rest, the
+    approach."""
+    for piece in range(len(way) - 2, -1, -1):
+        a, b = way[piece], way[piece + 1]
+        count = max(1, int(np.ceil(float(np.linalg.norm(b - a)) / step)))
+        for k in range(count, -1, -1):
+            q = a + (b - a) * k / count
+            if accept(q):
+                if piece == 0 and k == 0:
+                    return None, way
+                return np.vstack([way[:piece + 1], q[None]]), np.vstack([q[None], way[piece + 1:]])
+    return None, way
