@@ -50,8 +50,7 @@ LIMIT_SLACK = 1e-6
 SHORTEST_APPROACH = 1e-6
 #: failures a plan among point clouds makes again with the clouds focused around its goal
 _FOCUS_HELPS = frozenset({"start_in_collision", "goal_in_collision", "no_path"})
-#: failures of a blocked endpoint without an escape (its next test may find one)
-_ENDPOINT_FAILURES = frozenset({"start_in_collision", "goal_in_collision"})
+_ENDPOINT_FAILURES = frozenset({"start_in_collision", "goal_in_collision"})   # (its next test may find an escape)
 
 
 @dataclass(frozen=True)
@@ -209,12 +208,11 @@ class JointGuidance:
 
     def _attempts(self, start: NDArray[np.float64], target: NDArray[np.float64],
                   tries: Sequence[tuple[JointPlannerSettings, int]], began: float, tight: bool = False) -> Plan:
-        """The plan from ``start`` to ``target`` among the checker's obstacles: the first of
-        ``tries`` (planner settings, seed) that finds one; in an attempt whose endpoint finds
-        no escape, the endpoints' next tests (:meth:`_endpoint_tests`). Where no attempt
-        found an escape among meshes (no clouds), the same attempts at ``tight_margin``
-        (``tight``), each path kept only if clear on the meshes between its escapes
-        (:meth:`_clear_on_meshes`)."""
+        """The plan from ``start`` to ``target`` among the checker's obstacles: the first of ``tries`` (planner
+        settings, seed) that finds one; in an attempt whose endpoint finds no escape, the endpoints' next tests
+        (:meth:`_endpoint_tests`). Where no attempt found an escape among meshes (no clouds), the same attempts
+        at ``tight_margin`` (``tight``), each path kept only if clear on the meshes between its escapes
+        (:meth:`_clear_on_meshes`); then, as where none found a path, the meshes' plan (:mod:`.mesh_escape_plan`)."""
         goal_tests, start_tests = self._endpoint_tests(target, goal=True), self._endpoint_tests(start)
         modes = list(dict.fromkeys([(goal_tests[0], start_tests[0]), (goal_tests[-1], start_tests[-1])]))
         error: GuidanceError | None = None
@@ -239,13 +237,15 @@ class JointGuidance:
                     break
                 return self._plan_of(path, target, began, checks)
         assert error is not None
-        if tight or error.reason not in _ENDPOINT_FAILURES or not self._tight_applies():
+        if tight or error.reason not in _ENDPOINT_FAILURES | {"no_path"} or not self._tight_applies():
             raise error
-        margin = self.settings.tight_margin
         try:
-            return self._attempts(start, target, [(replace(s, margin=margin), k) for s, k in tries], began, True)
-        except GuidanceError:   # a goal still without escape: one on the meshes (mesh_escape_plan)
-            escaped = escape_plan(self, start, target, tries, began) if error.reason == "goal_in_collision" else None
+            if error.reason == "no_path":
+                raise error
+            tightened = [(replace(s, margin=self.settings.tight_margin), k) for s, k in tries]
+            return self._attempts(start, target, tightened, began, True)
+        except GuidanceError:   # a goal without escape, or no path: one on the meshes (mesh_escape_plan)
+            escaped = escape_plan(self, start, target, tries, began) if error.reason != "start_in_collision" else None
             if escaped is None:
                 raise
             return escaped
