@@ -66,10 +66,10 @@ class GuidanceSettings:
             free on them (or a start's way out) keeps where the endpoint is farther (the
             endpoint's own where it is nearer;
             :meth:`JointGuidance._endpoint_tests`).
-        mesh_escape: the tree grown from a goal no attempt escaped, among meshes (no
-            point clouds), through configurations free on the robot's meshes until the
-            spheres accept one (:mod:`dynfab.motion.mesh_escape`); the robot follows that
-            escape backwards as its approach. None: none.
+        mesh_escape: the search, among meshes (no point clouds), where no attempt found an
+            escape of the goal or a path: judged on the robot's meshes wherever the spheres
+            refuse (:mod:`dynfab.motion.mesh_escape`), its part the spheres refuse followed
+            as an approach (:mod:`dynfab.motion.mesh_escape_plan`). None: none.
         mesh_escape_samples: ``path.escape_samples`` for a goal whose approach the meshes
             judge (:meth:`JointGuidance._endpoint_tests`) [-]: 400 found no escape for as-posed
             table_pick/0032 (problems 29-32, which chose it), its hand between a table and a cube
