@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from dynfab.geometry.shapes import Box, Placement
-from dynfab.motion.approach_segment import across_segment, along_segment, segment_offset
+from dynfab.motion.approach_segment import across_segment, allowances_ahead, along_segment, segment_offset
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.mesh_escape import MeshEscapeSettings, SpheresOrMeshes, mesh_path
 from dynfab.motion.mesh_escape_plan import _split
@@ -89,6 +89,15 @@ def test_a_bent_approach_is_measured_on_its_nearest_piece() -> None:
     assert along_segment(bent, on_second) == pytest.approx(0.75)
     assert segment_offset(bent, on_second) == pytest.approx(0.2)
     np.testing.assert_allclose(across_segment(bent, on_second), [-0.2, 0.0])   # not toward the chord
+
+
+def test_a_bent_approach_allows_only_what_is_near_the_robot() -> None:
+    bent = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [2.0, 1.0], [2.0, 2.0], [2.0, 3.0], [2.0, 4.0]])
+    table = np.array([[0.0], [0.01], [0.0], [0.0], [0.0], [0.0], [0.05]])   # (k, one obstacle) [m]
+    assert allowances_ahead(bent, table, np.array([0.1, 0.0]))[0] == pytest.approx(0.01)   # not the end's 5 cm
+    assert allowances_ahead(bent, table, np.array([2.0, 3.9]))[0] == pytest.approx(0.05)
+    straight = np.linspace([0.0, 0.0], [6.0, 0.0], 7)
+    assert allowances_ahead(straight, table, np.array([0.1, 0.0]))[0] == pytest.approx(0.05)   # as before
 
 
 def test_bad_settings_are_refused_by_name() -> None:
