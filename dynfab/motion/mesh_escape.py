@@ -47,6 +47,8 @@ class MeshEscapeSettings:
         wall_time: most wall time of the search, and of the simplification [s].
         resolution: largest distance between checked configurations of a motion [rad].
         step: RRT-Connect's range [rad].
+        end_radius: how far from an end nearer the meshes than ``m`` its own smaller margin
+            holds [rad] (``m`` elsewhere).
     """
 
     coverage: float = 0.005
@@ -55,9 +57,10 @@ class MeshEscapeSettings:
     wall_time: float = 60.0
     resolution: float = 0.01
     step: float = 0.5
+    end_radius: float = 0.3
 
     def __post_init__(self) -> None:
-        for name in ("checks", "simplify_checks", "wall_time", "resolution", "step"):
+        for name in ("checks", "simplify_checks", "wall_time", "resolution", "step", "end_radius"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"mesh_escape.{name}: must be finite and > 0, got {value}")
@@ -66,23 +69,34 @@ class MeshEscapeSettings:
 
 
 class SpheresOrMeshes:
-    """The validity of the module docstring, for OMPL.
+    """The validity of the module docstring, for OMPL; within ``end_radius`` [rad] of an end
+    nearer the meshes than ``m``, that end's own check (a smaller margin) also accepts.
 
     Attributes:
         meshes: the meshes' check (its margin is ``m``), its obstacles set.
+        ends: each end nearer the meshes (n,) [rad] and its check, its obstacles set.
         checks: configurations checked, spheres' tests and meshes' together [-].
     """
 
     def __init__(self, checker: ConfigurationChecker, meshes: MeshContactCheck, coverage: float,
-                 self_margin: float, n: int) -> None:
-        self.meshes = meshes
+                 self_margin: float, n: int,
+                 ends: tuple[tuple[NDArray[np.float64], MeshContactCheck], ...] = (), end_radius: float = 0.0) -> None:
+        self.meshes, self.ends = meshes, ends
         self.checks = 0
         self._checker, self._clear, self._self_margin, self._n = checker, coverage + meshes.margin, self_margin, n
+        self._end_radius = end_radius
+
+    @property
+    def mesh_checks(self) -> int:
+        """Configurations checked on the meshes, by every check [-]."""
+        return self.meshes.checks + sum(check.checks for _, check in self.ends)
 
     def free(self, q: NDArray[np.float64]) -> bool:
         """Whether ``q`` (n,) is valid."""
         self.checks += 1
-        return self._checker.free(q, self._clear, self._self_margin) or self.meshes.free(q)
+        if self._checker.free(q, self._clear, self._self_margin) or self.meshes.free(q):
+            return True
+        return any(float(np.linalg.norm(q - end)) <= self._end_radius and check.free(q) for end, check in self.ends)
 
     def motion_free(self, a: NDArray[np.float64], b: NDArray[np.float64], step: float) -> bool:
         """Whether every configuration from ``a`` to ``b`` (``b`` included), at most ``step``
@@ -102,7 +116,6 @@ def mesh_path(validity: SpheresOrMeshes, start: NDArray[np.float64], goal: NDArr
     if not (validity.free(start) and validity.free(goal)):
         return None
     n = start.size
-    meshes = validity.meshes
 
     def motion(a: ob.State, b: ob.State) -> bool:
         return validity.motion_free(np.array(a[0:n]), np.array(b[0:n]), settings.resolution)
@@ -116,7 +129,7 @@ def mesh_path(validity: SpheresOrMeshes, start: NDArray[np.float64], goal: NDArr
     ou.setLogLevel(ou.LOG_NONE)
     try:
         ou.RNG.setSeed(seed % 2**31 + 1)
-        budget = CheckBudget(lambda: meshes.checks, settings.checks, settings.simplify_checks)
+        budget = CheckBudget(lambda: validity.mesh_checks, settings.checks, settings.simplify_checks)
         waypoints, _ = solve_in_box(validity.state_free, start, goal, lower, upper,
                                     settings.resolution / float(np.linalg.norm(upper - lower)),
                                     partial(planner, settings.step), settings.wall_time, settings.wall_time,

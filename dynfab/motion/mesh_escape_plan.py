@@ -71,11 +71,18 @@ def escape_plan(guidance: JointGuidance, start: NDArray[np.float64], target: NDA
     path, limits = guidance.settings.path, guidance.robot.limits
     if path.check_rate is not None:   # simulated: its checks bound it, the wall time far beyond (the same at any load)
         settings = replace(settings, wall_time=settings.wall_time * WALL_FACTOR)
-    ends = min(meshes.clearance(target)[0], meshes.clearance(start)[0])
-    margin = max(0.0, min(meshes.margin, END_SHARE * ends))
-    contact = MeshContactCheck(meshes.model, margin)
+    ends = []
+    for end in (start, target):   # an end nearer the meshes than mesh_margin: its own margin near it
+        clearance = meshes.clearance(end)[0]
+        if clearance < meshes.margin:
+            check = MeshContactCheck(meshes.model, max(0.0, END_SHARE * clearance))
+            check.set_obstacles(guidance.checker.obstacles)
+            ends.append((end, check))
+    contact = MeshContactCheck(meshes.model, meshes.margin)
     contact.set_obstacles(guidance.checker.obstacles)
-    validity = SpheresOrMeshes(guidance.checker, contact, settings.coverage, path.self_margin, start.size)
+    margin = min([contact.margin] + [check.margin for _, check in ends])
+    validity = SpheresOrMeshes(guidance.checker, contact, settings.coverage, path.self_margin, start.size,
+                               tuple(ends), settings.end_radius)
     for _, seed in tries:
         way = mesh_path(validity, start, target, guidance._lower, guidance._upper, settings, seed)
         if way is not None:
