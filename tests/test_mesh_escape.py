@@ -53,6 +53,20 @@ def test_the_meshes_decide_where_the_spheres_refuse(panda, model) -> None:
     assert validity.checks == 2
 
 
+def test_an_end_nearer_the_meshes_keeps_its_own_margin_only_near_it(panda, model) -> None:
+    obstacles = (BESIDE_LINK2,)
+    wide, narrow = MeshContactCheck(model, 0.03), MeshContactCheck(model, 0.003)
+    for check in (wide, narrow):
+        check.set_obstacles(obstacles)
+    checker = ConfigurationChecker(panda, obstacles)
+    near = SpheresOrMeshes(checker, wide, 0.005, 0.0, 7, ((Q, narrow),), 0.3)
+    assert near.free(Q)   # 1.7 cm from the cube: refused at 3 cm, accepted near its end at 3 mm
+    away = Q + np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.5])
+    far = SpheresOrMeshes(checker, wide, 0.005, 0.0, 7, ((away, narrow),), 0.3)
+    assert not far.free(Q)
+    assert (wide.checks, narrow.checks) == (2, 1) and near.mesh_checks == 3   # the shared checks, each asked
+
+
 def test_a_path_from_a_goal_only_the_meshes_accept_keeps_the_meshes_clear(panda, model) -> None:
     obstacles = (BESIDE_LINK2,)
     validity = _validity(panda, model, obstacles, 0.003)
