@@ -13,7 +13,8 @@ bound of the exact one), ``coverage`` how far a point of a link's mesh may lie o
 spheres (5 mm for the built-in Panda: :mod:`dynfab.robots.panda_spheres`), so that the first
 test already keeps the meshes ``m`` clear, and ``free_meshes`` the boolean check of the
 meshes with security margin ``m`` (:class:`~dynfab.robots.mesh_contact.MeshContactCheck`),
-made only where the spheres' test fails. RRT-Connect (OMPL) searches with every straight
+made only where the spheres' test fails; within ``end_radius`` of an end nearer the meshes
+than ``m``, that end's own smaller margin (:class:`SpheresOrMeshes`). RRT-Connect (OMPL) searches with every straight
 motion checked every ``resolution`` [rad], until the meshes were checked ``checks`` times
 (a bound independent of the load; the cheap tests are not counted) or ``wall_time`` passed.
 """

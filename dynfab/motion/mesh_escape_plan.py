@@ -3,9 +3,11 @@ a blocked goal (``goal_in_collision``, also at ``tight_margin``) or a path (``no
 path judged on the robot's meshes wherever its spheres refuse
 (:func:`~dynfab.motion.mesh_escape.mesh_path`), from the start to the goal.
 
-It keeps ``m = min(mesh_margin, 0.9 min(c(start), c(goal)))`` on the meshes (``c`` an end's
-clearance on them), and is checked again with the exact mesh distances every half
-``path.resolution`` at ``m / 2``
+It keeps ``mesh_margin`` on the meshes, but within ``mesh_escape.end_radius`` of an end
+nearer them ``0.9 c`` (``c`` that end's clearance on them: an end at exactly its margin would
+touch it; kept everywhere, seed-4 kitchen/0008's 0.4 mm start made a path the robot strayed
+off into the cupboard), and is checked again with the exact mesh distances every half
+``path.resolution`` at half its least margin
 (:meth:`~dynfab.motion.mesh_goal_check.MeshGoalCheck.polyline_free`): the search sampled
 every ``mesh_escape.resolution``. It is cut at its last configuration the spheres accept by
 the planner's margin (:func:`_split`): the way there is timed as any plan's, the rest is the
@@ -16,9 +18,9 @@ straight approach (:mod:`dynfab.motion.approach_segment` measures a polyline on 
 piece). Simulated (``path.check_rate`` set), the search is bounded by its mesh checks, its
 wall time only at ``WALL_FACTOR`` times ``mesh_escape.wall_time``.
 
-Cost (development kitchen/0005, seed 1, load 7): 52 s of wall time for the plan, of which two
-searches of 30 000 mesh checks; the simulated run does not wait for it (a plan's latency is
-fixed), a robot in real time would.
+Cost (development kitchen, seeds 0-4, load 6-8): 30-300 s of wall time for a plan that
+runs it (kitchen/0005, seed 1: 66 s); a simulated run does not wait for it (a plan's
+latency is fixed), a robot in real time would.
 """
 
 from __future__ import annotations
