@@ -14,10 +14,8 @@ from dynfab.robots import load_robot
 from dynfab.robots.builtin_meshes import builtin_collision_meshes
 from dynfab.robots.mesh_collision import mesh_collision_model
 from dynfab.robots.mesh_contact import MeshContactCheck
+from test_mesh_goal_check import BESIDE_LINK2, Q   # a cube the spheres touch at Q, the meshes clear by 1.7 cm
 
-Q = np.array([1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0])
-#: a 2 cm cube that touches panda_link2's sphere at Q and clears its mesh by 1.7 cm
-BESIDE_LINK2 = PlacedObstacle(Box((0.02, 0.02, 0.02)), Placement((-0.01947183, -0.08098174, 0.47577751)))
 #: a table-top slab under the hand's reach
 SLAB = PlacedObstacle(Box((0.6, 0.6, 0.05)), Placement((0.5, 0.0, 0.25)))
 

@@ -7,9 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dynfab.geometry.shapes import Box, Placement
 from dynfab.motion.approach_segment import across_segment, allowances_ahead, along_segment, segment_offset
-from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
+from dynfab.motion.configuration_checker import ConfigurationChecker
 from dynfab.motion.mesh_escape import MeshEscapeSettings, SpheresOrMeshes, mesh_path
 from dynfab.motion.mesh_escape_plan import _split
 from dynfab.motion.mesh_goal_check import MeshGoalCheck
@@ -17,10 +16,8 @@ from dynfab.robots import load_robot
 from dynfab.robots.builtin_meshes import builtin_collision_meshes
 from dynfab.robots.mesh_collision import mesh_collision_model
 from dynfab.robots.mesh_contact import MeshContactCheck
+from test_mesh_goal_check import BESIDE_LINK2, Q   # a cube the spheres touch at Q, the meshes clear by 1.7 cm
 
-Q = np.array([1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0])
-#: a 2 cm cube that touches panda_link2's sphere at Q and clears its mesh by 1.7 cm
-BESIDE_LINK2 = PlacedObstacle(Box((0.02, 0.02, 0.02)), Placement((-0.01947183, -0.08098174, 0.47577751)))
 
 
 @pytest.fixture(scope="module")
