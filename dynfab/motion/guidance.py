@@ -33,6 +33,7 @@ from dynfab.geometry.shapes import Mesh, PointCloud
 from dynfab.motion.cloud_focus import focused_obstacles
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.inverse_kinematics import AxisTarget, IkSettings, PointTarget, solve_ik
+from dynfab.motion.mesh_escape_plan import escape_plan
 from dynfab.motion.mesh_goal_check import MeshGoalCheck, endpoint_tests, robot_mesh_model
 from dynfab.perception.surfaces import surface_clearance
 from dynfab.motion.joint_planning import (ApproachTest, JointPath, JointPlannerSettings, NoPathError, approach_clear,
@@ -50,8 +51,7 @@ LIMIT_SLACK = 1e-6
 SHORTEST_APPROACH = 1e-6
 #: failures a plan among point clouds makes again with the clouds focused around its goal
 _FOCUS_HELPS = frozenset({"start_in_collision", "goal_in_collision", "no_path"})
-#: failures of a blocked endpoint without an escape (its next test may find one)
-_ENDPOINT_FAILURES = frozenset({"start_in_collision", "goal_in_collision"})
+_ENDPOINT_FAILURES = frozenset({"start_in_collision", "goal_in_collision"})   # (its next test may find an escape)
 
 
 @dataclass(frozen=True)
@@ -227,7 +227,8 @@ class JointGuidance:
         no escape, the endpoints' next tests (:meth:`_endpoint_tests`). Where no attempt
         found an escape among meshes (or on a cloud's focus: :meth:`_tight_applies`), the
         same attempts at ``tight_margin`` (``tight``), each path kept only if clear on the
-        meshes between its escapes (:meth:`_clear_on_meshes`)."""
+        meshes between its escapes (:meth:`_clear_on_meshes`); then, among meshes without
+        clouds, as where no attempt found a path, the meshes' plan (:mod:`.mesh_escape_plan`)."""
         goal_tests, start_tests = self._endpoint_tests(target, goal=True), self._endpoint_tests(start)
         modes = list(dict.fromkeys([(goal_tests[0], start_tests[0]), (goal_tests[-1], start_tests[-1])]))
         error: GuidanceError | None = None
@@ -252,10 +253,18 @@ class JointGuidance:
                     break
                 return self._plan_of(path, target, began, checks)
         assert error is not None
-        if tight or error.reason not in _ENDPOINT_FAILURES or not self._tight_applies():
+        if tight or error.reason not in _ENDPOINT_FAILURES | {"no_path"} or not self._tight_applies():
             raise error
-        margin = self.settings.tight_margin
-        return self._attempts(start, target, [(replace(s, margin=margin), k) for s, k in tries], began, True)
+        try:
+            if error.reason == "no_path":
+                raise error
+            tightened = [(replace(s, margin=self.settings.tight_margin), k) for s, k in tries]
+            return self._attempts(start, target, tightened, began, True)
+        except GuidanceError:   # a goal without escape, or no path: one on the meshes (mesh_escape_plan)
+            escaped = escape_plan(self, start, target, tries, began) if error.reason != "start_in_collision" else None
+            if escaped is None:
+                raise
+            return escaped
 
     def _tight_applies(self) -> bool:
         """Whether a plan with no escape may be tried again at ``tight_margin`` (a robot with

@@ -9,6 +9,7 @@ from dynfab.motion.cloud_focus import CloudFocus
 from dynfab.motion.inverse_kinematics import IkSettings
 from dynfab.motion.joint_planning import WALL_FACTOR, JointPlannerSettings
 from dynfab.motion.joint_trajectory import TimingSettings
+from dynfab.motion.mesh_escape import MeshEscapeSettings
 
 __all__ = ["SIMULATION_CHECK_RATE", "GuidanceSettings", "counted_checks"]
 
@@ -66,6 +67,10 @@ class GuidanceSettings:
             free on them (or a start's way out) keeps where the endpoint is farther (the
             endpoint's own where it is nearer;
             :meth:`JointGuidance._endpoint_tests`).
+        mesh_escape: the search, among meshes (no point clouds), where no attempt found an
+            escape of the goal or a path: judged on the robot's meshes wherever the spheres
+            refuse (:mod:`dynfab.motion.mesh_escape`), its part the spheres refuse followed
+            as an approach (:mod:`dynfab.motion.mesh_escape_plan`). None: none.
         mesh_escape_samples: ``path.escape_samples`` for a goal whose approach the meshes
             judge (:meth:`JointGuidance._endpoint_tests`) [-]: 400 found no escape for as-posed
             table_pick/0032 (problems 29-32, which chose it), its hand between a table and a cube
@@ -181,6 +186,7 @@ class GuidanceSettings:
     tight_margin: float = 0.0
     approach_clearance: float = 0.005
     mesh_escape_samples: int = 1000
+    mesh_escape: MeshEscapeSettings | None = field(default_factory=MeshEscapeSettings)
     cloud_focus: CloudFocus | None = CloudFocus()
     timing: TimingSettings = field(default_factory=TimingSettings)
     speed: float = 0.5
