@@ -8,7 +8,8 @@ import pytest
 
 from dynfab.geometry.shapes import Box, Placement, Sphere
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
-from dynfab.motion.guidance import JointGuidance, JointTarget, stall_replan_margin
+from dynfab.motion.guidance import JointGuidance, JointTarget
+from dynfab.motion.guidance_settings import stall_replan_margin
 from dynfab.motion.joint_planning import polyline_samples
 from dynfab.robots import load_robot
 from dynfab.scenario.guided_controller import GUIDED_MOVING_MARGIN, SIMULATED_PLAN_LATENCY, make_scenario_controller

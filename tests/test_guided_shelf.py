@@ -29,7 +29,7 @@ def test_a_robot_held_beside_a_can_replans_at_the_room_it_was_held_at_and_reache
     """As posed bookshelf_small/0100 (shared set): the robot is held 13.5 mm from a can short
     of a corner of its first reference (planned at 1 cm); a replan at ``stall_margin`` (3 cm)
     took a 9 s detour that stalled elsewhere and the run ended 0.54 rad short; at the room it
-    was held at (:func:`~dynfab.motion.guidance.stall_replan_margin`) it reaches the grasp."""
+    was held at (:func:`~dynfab.motion.guidance_settings.stall_replan_margin`) it reaches the grasp."""
     problem = next(p for p in load_problems(["bookshelf_small"], per_type=1, skip=91) if p.number == 100)
     case = prepare_case(problem, "as-posed", franka())
     assert case.invalid is None

@@ -39,11 +39,11 @@ from dynfab.perception.surfaces import surface_clearance
 from dynfab.motion.joint_planning import (ApproachTest, JointPath, JointPlannerSettings, NoPathError, approach_clear,
                                           plan_joint_path, polyline_samples)
 from dynfab.motion.joint_trajectory import JointTrajectory, TimingError, time_path
-from dynfab.motion.guidance_settings import GuidanceSettings
+from dynfab.motion.guidance_settings import GuidanceSettings, stall_replan_margin
 from dynfab.motion.phased_trajectory import PhasedTrajectory
 from dynfab.robots.robot import Robot
 
-__all__ = ["GuidanceError", "GuidanceSettings", "JointGuidance", "JointTarget", "Plan", "stall_replan_margin"]
+__all__ = ["GuidanceError", "GuidanceSettings", "JointGuidance", "JointTarget", "Plan"]
 
 #: a value within this of a joint limit counts as at the limit [rad or m]
 LIMIT_SLACK = 1e-6
@@ -99,15 +99,6 @@ class Plan:
 
 
 
-def stall_replan_margin(settings: GuidanceSettings, held: float) -> float | None:
-    """The margin [m] of a replan's first attempt after the robot was held ``held`` [m]
-    from the obstacles (a stall): ``min(stall_margin, held)``, or None where that is not
-    more than the planner's margin (no such attempt). A path that keeps the room the
-    obstacle leaves held the robot at is one it can follow: as posed MBM
-    bookshelf_small/0100, held 13.5 mm from a can short of a corner of its reference
-    (planned at 1 cm), stalled after a 3 cm replan's 9 s detour; at 13.5 mm it was reached."""
-    margin = min(settings.stall_margin, held)
-    return margin if margin > settings.path.margin else None
 
 class JointGuidance:
     """Plans joint-space references for ``robot`` (module docstring).

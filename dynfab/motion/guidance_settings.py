@@ -11,7 +11,7 @@ from dynfab.motion.joint_planning import WALL_FACTOR, JointPlannerSettings
 from dynfab.motion.joint_trajectory import TimingSettings
 from dynfab.motion.mesh_escape import MeshEscapeSettings
 
-__all__ = ["SIMULATION_CHECK_RATE", "GuidanceSettings", "counted_checks"]
+__all__ = ["SIMULATION_CHECK_RATE", "GuidanceSettings", "counted_checks", "stall_replan_margin"]
 
 #: The check rate [configurations/s] that turns planning times into budgets of checks in the
 #: simulators (:func:`counted_checks`): below what this project's 2-core machine checks
@@ -233,3 +233,14 @@ def counted_checks(settings: GuidanceSettings, rate: float = SIMULATION_CHECK_RA
     return replace(settings, path=replace(settings.path, check_rate=rate),
                    ik=replace(settings.ik, time_limit=settings.ik.time_limit * WALL_FACTOR),
                    ik_retry=replace(settings.ik_retry, time_limit=settings.ik_retry.time_limit * WALL_FACTOR))
+
+
+def stall_replan_margin(settings: GuidanceSettings, held: float) -> float | None:
+    """The margin [m] of a replan's first attempt after the robot was held ``held`` [m]
+    from the obstacles (a stall): ``min(stall_margin, held)``, or None where that is not
+    more than the planner's margin (no such attempt). A path that keeps the room the
+    obstacle leaves held the robot at is one it can follow: as posed MBM
+    bookshelf_small/0100, held 13.5 mm from a can short of a corner of its reference
+    (planned at 1 cm), stalled after a 3 cm replan's 9 s detour; at 13.5 mm it was reached."""
+    margin = min(settings.stall_margin, held)
+    return margin if margin > settings.path.margin else None

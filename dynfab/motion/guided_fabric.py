@@ -62,7 +62,7 @@ except those that touch the goal configuration (they are passing it: a plan arou
 they are now would end in a needless escape of the goal; the fabric avoids them). A replan
 after a stall on the way (not in an approach, nor after the reference ended) first tries
 to keep the clearance the robot was held at, up to ``stall_margin``, from obstacles
-(:func:`~dynfab.motion.guidance.stall_replan_margin`), so that it does not lead through the
+(:func:`~dynfab.motion.guidance_settings.stall_replan_margin`), so that it does not lead through the
 same tight passage again; a stall in a grasp's approach replans as before (training as-posed
 table_pick/0014: replans at 3 cm there stalled 5 times in the approach).
 
