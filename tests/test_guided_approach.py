@@ -15,7 +15,7 @@ import pytest
 from dynfab.geometry.shapes import Box, Placement
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 import dynfab.motion.guidance as guidance_module
-from dynfab.motion.approach_segment import along_segment, segment_offset
+from dynfab.motion.approach_segment import along_segment, leaf_buffers, segment_offset
 from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance, JointTarget
 from dynfab.motion.joint_planning import (ApproachTest, JointPlannerSettings, NoPathError, approach_clear,
                                           plan_joint_path)
@@ -146,7 +146,7 @@ def test_a_robot_held_short_of_the_approach_approaches_from_where_it_is(panda, g
     np.testing.assert_allclose(plan.trajectory.evaluate(0.0).position, held, atol=1e-9)
     guided.update(t + DT, held)
     assert guided.approaching
-    segment, table = guided.guidance.approach_allowances(plan, guided._static, guided._buffers())
+    segment, table = guided.guidance.approach_allowances(plan, guided._static, leaf_buffers(guided.fabric.config, guided._static))
     np.testing.assert_allclose(guided.allowances(), table.max(axis=0))   # at the start: the whole segment's
     guided.update(t + 2 * DT, grasp)
     np.testing.assert_allclose(guided.allowances(), table[-2:].max(axis=0))   # at the goal: what is left of it

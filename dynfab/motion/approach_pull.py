@@ -10,7 +10,7 @@ no harm), ``k_p, k_i, p_max`` = ``approach_pull``, ``approach_pull_rate``,
 ``approach_pull_limit`` [-, 1/s, rad]. What pushes the robot sideways (the root's damping
 near the object, the obstacle leaves) then does not hold it beside the segment, where the
 reference's clock waits for it (:mod:`dynfab.motion.reference_clock`). Once the reference has
-ended the guided fabric drops the integral (:meth:`ApproachPull.reset` every tick): wound up
+ended the integral is dropped (``ended`` of :meth:`ApproachPull.shift`): wound up
 in the approach, it kept the robot past the segment's line at the goal for seconds (decaying
 with ``(1 + k_p)/k_i``, 3 s), and a goal 0.29 mm from a wall on the meshes (as posed MBM
 cage/0076) was touched 0.65 mm deep. What it gives up: the
@@ -42,12 +42,14 @@ class ApproachPull:
         """Start the integral again (a new plan)."""
         self._summed = np.zeros_like(self._summed)
 
-    def shift(self, segment: NDArray[np.float64], q: NDArray[np.float64], dt: float) -> NDArray[np.float64]:
+    def shift(self, segment: NDArray[np.float64], q: NDArray[np.float64], dt: float,
+              ended: bool = False) -> NDArray[np.float64]:
         """The shift [rad] for the robot at ``q`` on the approach's configurations ``segment``
-        (k, n), ``dt`` [s] after the last one."""
+        (k, n), ``dt`` [s] after the last one; ``ended``: the reference has ended, the integral
+        starts again from zero (module docstring)."""
         settings = self._settings
         across = across_segment(segment, q)
-        summed = self._summed + settings.approach_pull_rate * dt * across
+        summed = (0.0 if ended else self._summed) + settings.approach_pull_rate * dt * across
         length = float(np.linalg.norm(summed))
         if length > settings.approach_pull_limit:
             summed *= settings.approach_pull_limit / length

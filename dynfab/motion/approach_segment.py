@@ -16,10 +16,19 @@ hulls' depth, for 0.26 s)."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["POLYLINE_AHEAD", "allowances_ahead", "along_segment", "across_segment", "segment_offset"]
+from dynfab.geometry.shapes import Sphere
+
+if TYPE_CHECKING:
+    from dynfab.fabric.planner_config import PlannerConfig
+    from dynfab.motion.configuration_checker import PlacedObstacle
+
+__all__ = ["POLYLINE_AHEAD", "allowances_ahead", "along_segment", "across_segment", "leaf_buffers", "segment_offset"]
 
 #: configurations of a polyline approach beyond the robot's whose allowances count [-]
 POLYLINE_AHEAD = 2
@@ -94,3 +103,12 @@ def _nearest_piece(segment: NDArray[np.float64], q: NDArray[np.float64]) -> tupl
     fractions = np.clip(np.einsum("ij,ij->i", q - starts, pieces) / squared, 0.0, 1.0)
     piece = int(np.argmin(np.linalg.norm(starts + fractions[:, None] * pieces - q, axis=1)))
     return piece, float(fractions[piece])
+
+
+def leaf_buffers(config: PlannerConfig, obstacles: Sequence[PlacedObstacle]) -> tuple[float, ...]:
+    """Per obstacle, the clearance [m] a fabric of ``config`` keeps from it (its leaves'
+    barrier offset: the sphere leaves' for a sphere, the shape leaves' otherwise, 0 without
+    such leaves): what an approach's allowances add to (:meth:`~dynfab.motion.guidance.JointGuidance.approach_allowances`)."""
+    spheres, shapes = config.obstacle_avoidance, config.shape_avoidance
+    return tuple((spheres.barrier.offset if spheres else 0.0) if isinstance(o.shape, Sphere)
+                 else (shapes.barrier.offset if shapes else 0.0) for o in obstacles)

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -32,7 +32,7 @@ from dynfab.geometry.focused_cloud import FocusedCloud
 from dynfab.geometry.shapes import Mesh, PointCloud
 from dynfab.motion.cloud_focus import focused_obstacles
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
-from dynfab.motion.inverse_kinematics import AxisTarget, IkSettings, PointTarget, solve_ik
+from dynfab.motion.inverse_kinematics import IkSettings, solve_ik
 from dynfab.motion.mesh_escape_plan import escape_plan
 from dynfab.motion.mesh_goal_check import MeshGoalCheck, endpoint_tests, robot_mesh_model
 from dynfab.perception.surfaces import surface_clearance
@@ -41,9 +41,10 @@ from dynfab.motion.joint_planning import (ApproachTest, JointPath, JointPlannerS
 from dynfab.motion.joint_trajectory import JointTrajectory, TimingError, time_path
 from dynfab.motion.guidance_settings import GuidanceSettings, stall_replan_margin
 from dynfab.motion.phased_trajectory import PhasedTrajectory
+from dynfab.motion.plan_values import GoalTargets, GuidanceError, JointTarget, Plan
 from dynfab.robots.robot import Robot
 
-__all__ = ["GuidanceError", "GuidanceSettings", "JointGuidance", "JointTarget", "Plan"]
+__all__ = ["GoalTargets", "GuidanceError", "GuidanceSettings", "JointGuidance", "JointTarget", "Plan"]
 
 #: a value within this of a joint limit counts as at the limit [rad or m]
 LIMIT_SLACK = 1e-6
@@ -52,50 +53,6 @@ SHORTEST_APPROACH = 1e-6
 #: failures a plan among point clouds makes again with the clouds focused around its goal
 _FOCUS_HELPS = frozenset({"start_in_collision", "goal_in_collision", "no_path"})
 _ENDPOINT_FAILURES = frozenset({"start_in_collision", "goal_in_collision"})   # (its next test may find an escape)
-
-
-@dataclass(frozen=True)
-class JointTarget:
-    """A goal configuration (n,) [rad or m]."""
-
-    q: tuple[float, ...]
-
-
-GoalTargets = JointTarget | Sequence[PointTarget | AxisTarget]
-
-
-class GuidanceError(RuntimeError):
-    """No plan: ``reason`` is ``goal_outside_limits``, ``no_ik_solution``,
-    ``start_in_collision``, ``goal_in_collision``, ``no_path`` or ``timing``."""
-
-    def __init__(self, reason: str, message: str) -> None:
-        super().__init__(message)
-        self.reason = reason
-
-
-@dataclass(frozen=True)
-class Plan:
-    """A timed reference to a goal configuration.
-
-    Attributes:
-        trajectory: ``q_r`` from its start at time 0 (rest at both ends); with an approach,
-            two phases (:class:`PhasedTrajectory`), at rest between them.
-        goal: the goal configuration [rad].
-        time_s: wall time of inverse kinematics, planning and timing [s].
-        checks: configurations checked [-].
-        approach: joint-space length of the last segment, which the planner checked only
-            against going deeper than the goal itself (the goal was closer to obstacles
-            than its margin); 0 if the goal was free [rad].
-        approach_start: when the approach begins on the reference's clock [s] (its
-            duration without one).
-    """
-
-    trajectory: JointTrajectory | PhasedTrajectory
-    goal: NDArray[np.float64]
-    time_s: float
-    checks: int
-    approach: float = 0.0
-    approach_start: float = 0.0
 
 
 

@@ -90,10 +90,10 @@ from numpy.typing import NDArray
 
 from dynfab.fabric.leaves.goal import GoalAttractor
 from dynfab.fabric.planner import FabricPlanner, GoalConfig
-from dynfab.geometry.shapes import Mesh, PointCloud, Sphere
+from dynfab.geometry.shapes import Mesh, PointCloud
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.approach_pull import ApproachPull
-from dynfab.motion.approach_segment import allowances_ahead, segment_offset
+from dynfab.motion.approach_segment import allowances_ahead, leaf_buffers, segment_offset
 from dynfab.motion.guidance import GoalTargets, GuidanceSettings, JointGuidance, Plan
 from dynfab.motion.guidance_settings import counted_checks
 from dynfab.motion.guidance_status import GuidanceStatus
@@ -249,9 +249,8 @@ class GuidedFabric:
             rate = way_rate(settings, lag, close=self._close or self._entering())
         self._tau += rate * dt
         following = in_approach and self._approaching
-        if following and self._tau >= self._plan.trajectory.duration:
-            self._pull.reset()   # the reference has ended: no integral past the goal (approach_pull)
-        self._write(self._tau, rate, self._pull.shift(self._segment, q, dt) if following else None)
+        ended = self._tau >= self._plan.trajectory.duration
+        self._write(self._tau, rate, self._pull.shift(self._segment, q, dt, ended) if following else None)
 
     def compute(self, t: float, q: NDArray[np.float64], qdot: NDArray[np.float64],
                 moving: Sequence[PlacedObstacle] = ()) -> NDArray[np.float64]:
@@ -315,7 +314,7 @@ class GuidedFabric:
         assert self._goal is not None
         request = PlanRequest(t, np.array(q, dtype=float), self._goal, self._static, tuple(moving),
                               None if after is None or self._plan is None else self._plan.goal.copy(),
-                              self._seed, after in ("held", "short"), tuple(self._buffers()), after)
+                              self._seed, after in ("held", "short"), leaf_buffers(self.fabric.config, self._static), after)
         self._seed += self._settings.attempts
         self._pending = self._maker.submit(request)
 
@@ -384,13 +383,6 @@ class GuidedFabric:
         assert self._plan is not None
         point = self._plan.trajectory.evaluate(tau)
         self._set_reference(point.position, rate * point.velocity, rate**2 * point.acceleration, pull)
-
-    def _buffers(self) -> list[float]:
-        """Per static obstacle, the clearance its fabric leaves keep (their barrier's offset) [m]."""
-        config = self.fabric.config
-        spheres, shapes = config.obstacle_avoidance, config.shape_avoidance
-        return [(spheres.barrier.offset if spheres else 0.0) if isinstance(o.shape, Sphere)
-                else (shapes.barrier.offset if shapes else 0.0) for o in self._static]
 
     def _set_reference(self, position: NDArray[np.float64], velocity: NDArray[np.float64] | float,
                        acceleration: NDArray[np.float64] | float, pull: NDArray[np.float64] | None = None) -> None:

@@ -38,10 +38,11 @@ from dynfab.motion.joint_planning import WALL_FACTOR, JointPlannerSettings
 from dynfab.motion.joint_trajectory import TimingError, time_path
 from dynfab.motion.mesh_escape import SpheresOrMeshes, mesh_path
 from dynfab.motion.phased_trajectory import PhasedTrajectory
+from dynfab.motion.plan_values import Plan
 from dynfab.robots.mesh_contact import MeshContactCheck
 
 if TYPE_CHECKING:
-    from dynfab.motion.guidance import JointGuidance, Plan
+    from dynfab.motion.guidance import JointGuidance
 
 __all__ = ["END_SHARE", "escape_plan"]
 
@@ -64,8 +65,6 @@ def escape_plan(guidance: JointGuidance, start: NDArray[np.float64], target: NDA
         tries: the attempts' settings and seeds.
         began: when the plan began (``time.perf_counter()``) [s].
     """
-    from dynfab.motion.guidance import Plan   # guidance imports this module
-
     meshes, settings = guidance._meshes(), guidance.settings.mesh_escape
     if (meshes is None or settings is None
             or any(isinstance(o.shape, PointCloud) for o in guidance.checker.obstacles)):
