@@ -9,7 +9,6 @@ import pytest
 from dynfab.geometry.shapes import Box, Placement, Sphere
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.guidance import JointGuidance, JointTarget
-from dynfab.motion.guidance_settings import stall_replan_margin
 from dynfab.motion.joint_planning import polyline_samples
 from dynfab.robots import load_robot
 from dynfab.scenario.guided_controller import GUIDED_MOVING_MARGIN, SIMULATED_PLAN_LATENCY, make_scenario_controller
@@ -94,10 +93,3 @@ def test_the_guided_fabric_sees_a_moving_sphere_larger_than_it_is(panda) -> None
     radius = controller.inner.planner.parameters.obstacle_radius[0]
     assert radius == pytest.approx(0.06 + GUIDED_MOVING_MARGIN)
 
-
-def test_a_replan_after_a_stall_keeps_the_room_the_robot_was_held_at_up_to_the_stall_margin() -> None:
-    settings = JointGuidance(load_robot("panda")).settings
-    between = 0.5 * (settings.path.margin + settings.stall_margin)
-    assert stall_replan_margin(settings, between) == pytest.approx(between)
-    assert stall_replan_margin(settings, 2 * settings.stall_margin) == settings.stall_margin
-    assert stall_replan_margin(settings, settings.path.margin) is None   # no wider attempt than the others

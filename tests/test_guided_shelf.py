@@ -36,15 +36,6 @@ def test_a_reference_between_a_shelfs_floor_roof_and_side_is_followed_to_the_gra
     assert metrics["plans"] <= 2 and metrics["fallbacks"] == 0
 
 
-def test_a_robot_held_beside_a_can_replans_at_the_room_it_was_held_at_and_reaches_the_grasp() -> None:
-    """bookshelf_small/0100: the robot is held 13.5 mm from a can short of a corner of its first
-    reference (planned at 1 cm); a replan at ``stall_margin`` (3 cm) took a 9 s detour that
-    stalled elsewhere and the run ended 0.54 rad short; at the room it was held at
-    (:func:`~dynfab.motion.guidance_settings.stall_replan_margin`) it reaches the grasp."""
-    metrics = _reached_clean("bookshelf_small", 100)
-    assert metrics["plans"] <= 3 and metrics["fallbacks"] == 0
-
-
 def test_a_grasp_a_third_of_a_millimetre_from_a_cage_wall_is_reached_without_touching_it() -> None:
     """cage/0076: the goal is 0.29 mm clear of a wall on the meshes. The approach's pull had
     integrated 5.7 mrad by the time the reference ended, and kept the robot up to 2 mrad past

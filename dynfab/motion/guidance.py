@@ -39,7 +39,7 @@ from dynfab.perception.surfaces import surface_clearance
 from dynfab.motion.joint_planning import (ApproachTest, JointPath, JointPlannerSettings, NoPathError, approach_clear,
                                           plan_joint_path, polyline_samples)
 from dynfab.motion.joint_trajectory import JointTrajectory, TimingError, time_path
-from dynfab.motion.guidance_settings import GuidanceSettings, stall_replan_margin
+from dynfab.motion.guidance_settings import GuidanceSettings
 from dynfab.motion.phased_trajectory import PhasedTrajectory
 from dynfab.motion.plan_values import GoalTargets, GuidanceError, JointTarget, Plan
 from dynfab.robots.robot import Robot
@@ -126,8 +126,7 @@ class JointGuidance:
     def plan(self, q: NDArray[np.float64], goal: GoalTargets, obstacles: Sequence[PlacedObstacle],
              seed: int = 0, wide: bool = False) -> Plan:
         """A timed free reference from ``q`` (at rest) to ``goal`` among ``obstacles``; if
-        ``wide``, the first attempt keeps the clearance the robot has at ``q``, at least the
-        planner's margin and at most ``stall_margin`` (a replan after a stall: :meth:`_tries`). Among
+        ``wide``, the first attempt keeps ``stall_margin`` (a replan after a stall). Among
         point clouds, where the first ``cloud_focus.whole_attempts`` attempts find no path
         (or no escape of a blocked endpoint), every attempt is made again with the clouds
         focused around the goal (:mod:`dynfab.motion.cloud_focus`); without clouds or focus
@@ -140,7 +139,7 @@ class JointGuidance:
         self.checker.set_obstacles(obstacles)
         start = np.clip(np.asarray(q, dtype=float), self._lower, self._upper)
         target = self.goal_configuration(goal, start, seed)
-        tries = self._tries(seed, self.checker.clearances(start)[0] if wide else None)
+        tries = self._tries(seed, wide)
         focus = self.settings.cloud_focus
         first = len(tries)
         if focus is not None and any(isinstance(o.shape, PointCloud) for o in obstacles):
@@ -156,16 +155,15 @@ class JointGuidance:
         self.checker.set_obstacles(focused)  # the endpoints' tests are then made on the focus's grid
         return self._attempts(start, target, tries, began)
 
-    def _tries(self, seed: int, held: float | None) -> list[tuple[JointPlannerSettings, int]]:
+    def _tries(self, seed: int, wide: bool) -> list[tuple[JointPlannerSettings, int]]:
         """The planner's settings and seed of each attempt: each with the next seed and twice the
-        time limit; after a stall, where the robot was held ``held`` [m] from the obstacles,
-        first one of ``stall_margin_time`` at :func:`stall_replan_margin`."""
+        time limit, a ``wide`` one first (:meth:`plan`)."""
         path_settings = self.settings.path
         tries = [(replace(path_settings, time_limit=path_settings.time_limit * 2**attempt), seed + attempt)
                  for attempt in range(self.settings.attempts)]
-        wide = None if held is None else stall_replan_margin(self.settings, held)
-        if wide is not None:
-            tries.insert(0, (replace(path_settings, margin=wide, time_limit=self.settings.stall_margin_time), seed))
+        if wide and self.settings.stall_margin > path_settings.margin:
+            tries.insert(0, (replace(path_settings, margin=self.settings.stall_margin,
+                                     time_limit=self.settings.stall_margin_time), seed))
         return tries
 
     def _attempts(self, start: NDArray[np.float64], target: NDArray[np.float64],

@@ -11,7 +11,7 @@ from dynfab.motion.joint_planning import WALL_FACTOR, JointPlannerSettings
 from dynfab.motion.joint_trajectory import TimingSettings
 from dynfab.motion.mesh_escape import MeshEscapeSettings
 
-__all__ = ["SIMULATION_CHECK_RATE", "GuidanceSettings", "counted_checks", "stall_replan_margin"]
+__all__ = ["SIMULATION_CHECK_RATE", "GuidanceSettings", "counted_checks"]
 
 #: The check rate [configurations/s] that turns planning times into budgets of checks in the
 #: simulators (:func:`counted_checks`): below what this project's 2-core machine checks
@@ -124,11 +124,12 @@ class GuidanceSettings:
             reference (outside an approach) before the run counts as stalled [s]: held by
             the obstacle leaves in a tight passage, the reference's clock still creeps for
             seconds before ``stall_rate`` notices (chosen on training problems 10-16).
-        stall_margin: largest planning margin [m] a replan after a stall on the way tries first
-            (one attempt of ``stall_margin_time``, at the clearance the robot was held at, if that
-            is more than ``path.margin``), before ``path.margin``: a path that keeps more
+        stall_margin: planning margin [m] a replan after a stall on the way tries first (one attempt
+            of ``stall_margin_time``), before ``path.margin``: a path that keeps more
             clearance where the stalled one went through a tight passage (chosen on
-            training problems 10-16; the held clearance below it on as-posed bookshelf_small/0100).
+            training problems 10-16). Planning at the clearance the robot was held at instead
+            (up to this) was tried in session 13 and reverted: chosen on as-posed
+            bookshelf_small/0100, it lost two runs on fresh sets and won none.
         stall_margin_time: time limit of that attempt [s].
         goal_clearance: clearance [m] the fabric's obstacle leaves should still see at a
             goal closer to an obstacle than the planner's margin (a grasp: the spheres,
@@ -239,13 +240,3 @@ def counted_checks(settings: GuidanceSettings, rate: float = SIMULATION_CHECK_RA
                    ik=replace(settings.ik, time_limit=settings.ik.time_limit * WALL_FACTOR),
                    ik_retry=replace(settings.ik_retry, time_limit=settings.ik_retry.time_limit * WALL_FACTOR))
 
-
-def stall_replan_margin(settings: GuidanceSettings, held: float) -> float | None:
-    """The margin [m] of a replan's first attempt after the robot was held ``held`` [m]
-    from the obstacles (a stall): ``min(stall_margin, held)``, or None where that is not
-    more than the planner's margin (no such attempt). A path that keeps the room the
-    obstacle leaves held the robot at is one it can follow: as posed MBM
-    bookshelf_small/0100, held 13.5 mm from a can short of a corner of its reference
-    (planned at 1 cm), stalled after a 3 cm replan's 9 s detour; at 13.5 mm it was reached."""
-    margin = min(settings.stall_margin, held)
-    return margin if margin > settings.path.margin else None

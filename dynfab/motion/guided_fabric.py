@@ -61,9 +61,8 @@ Replans plan among the static obstacles and what the moving ones sweep within
 except those that touch the goal configuration (they are passing it: a plan around where
 they are now would end in a needless escape of the goal; the fabric avoids them). A replan
 after a stall on the way (not in an approach, nor after the reference ended) first tries
-to keep the clearance the robot was held at, up to ``stall_margin``, from obstacles
-(:func:`~dynfab.motion.guidance_settings.stall_replan_margin`), so that it does not lead through the
-same tight passage again; a stall in a grasp's approach replans as before (training as-posed
+to keep ``stall_margin`` from obstacles, so that it does not lead through the same tight
+passage again; a stall in a grasp's approach replans as before (training as-posed
 table_pick/0014: replans at 3 cm there stalled 5 times in the approach).
 
 A goal closer to a static obstacle than the planner's margin (a grasp, where the
