@@ -20,6 +20,7 @@ class GuidanceStatus:
         plan_times_ms: wall time of every plan [ms].
         replans_blocked: replans because the reference ahead was blocked [-].
         replans_stalled: replans because progress stalled [-].
+        refuges: plans to a refuge from what moves through the goal (:mod:`dynfab.motion.making_way`) [-].
         failure: why the last plan failed (:class:`~dynfab.motion.guidance.GuidanceError`
             reasons); None if it did not.
     """
@@ -31,4 +32,5 @@ class GuidanceStatus:
     plan_times_ms: tuple[float, ...] = ()
     replans_blocked: int = 0
     replans_stalled: int = 0
+    refuges: int = 0
     failure: str | None = None

@@ -96,6 +96,7 @@ from dynfab.motion.approach_segment import allowances_ahead, leaf_buffers, segme
 from dynfab.motion.guidance import GoalTargets, GuidanceSettings, JointGuidance, Plan
 from dynfab.motion.guidance_settings import counted_checks
 from dynfab.motion.guidance_status import GuidanceStatus
+from dynfab.motion.making_way import sweeps
 from dynfab.motion.plan_joining import in_sight, join_time
 from dynfab.motion.reference_clock import approach_rate, run_progress, way_rate
 from dynfab.motion.plan_requests import PendingPlan, PlanRequest, plan_maker
@@ -161,6 +162,7 @@ class GuidedFabric:
         self._lagging_since: float | None = None
         self._short_since: float | None = None
         self._close = False
+        self._home: NDArray[np.float64] | None = None      # the goal configuration while at a refuge
 
     @property
     def plan(self) -> Plan | None:
@@ -209,7 +211,7 @@ class GuidedFabric:
         self._seed = 0
         self._plan = None
         self._approaching = False
-        self._interim = None
+        self._interim = self._home = None
         self._request(t, q, moving, after=None)
         self._receive(t, q, moving)   # a plan without latency arrives at once
         if self._plan is None and self._pending is not None:
@@ -271,8 +273,9 @@ class GuidedFabric:
                        moving: Sequence[PlacedObstacle]) -> str | None:
         """``held`` if progress stalled on the way (the reference running, not in an
         approach), ``short`` if the robot is held short of the approach's start,
-        ``stalled`` if it stalled elsewhere, ``blocked`` if the reference is blocked ahead
-        by something moving, else None (module docstring); ``lag``: ``‖q − q_r‖`` [rad]."""
+        ``stalled`` if it stalled elsewhere, ``return`` to the goal from a refuge no longer
+        needed, ``refuge`` if what moves sweeps the robot holding its goal, ``blocked`` if the
+        reference is blocked ahead by something moving, else None (module docstring); ``lag``: ``‖q − q_r‖`` [rad]."""
         assert self._plan is not None
         settings = self._settings
         running = self._tau < self._plan.trajectory.duration
@@ -300,6 +303,11 @@ class GuidedFabric:
             return "held" if running and not self._in_approach() else "stalled"
         if moving and t >= self._next_check:
             self._next_check = t + settings.check_period
+            if self._home is not None and not sweeps(self.guidance, self._home, moving):
+                return "return"
+            if sweeps(self.guidance, self._plan.goal if self._home is None else q, moving):   # the goal; at a refuge, itself
+                self.status = replace(self.status, refuges=self.status.refuges + 1)
+                return "refuge"
             clearance, margin = self.guidance.obstacle_clearance, settings.path.margin
             swept = [swept_clear_of(o, settings.sweep_horizon, (q,), clearance, margin) for o in moving]
             if self.guidance.blocked_ahead(self._plan, self._tau, swept):
@@ -311,8 +319,9 @@ class GuidedFabric:
                  after: str | None) -> None:
         """Ask for a plan from ``q`` at time ``t`` [s]; ``after``: why (:meth:`_replan_reason`), None at first."""
         assert self._goal is not None
+        home = self._home if self._home is not None else None if self._plan is None else self._plan.goal.copy()
         request = PlanRequest(t, np.array(q, dtype=float), self._goal, self._static, tuple(moving),
-                              None if after is None or self._plan is None else self._plan.goal.copy(),
+                              None if after is None else home,
                               self._seed, after in ("held", "short"), leaf_buffers(self.fabric.config, self._static), after)
         self._seed += self._settings.attempts
         self._pending = self._maker.submit(request)
@@ -334,7 +343,7 @@ class GuidedFabric:
                               plan_times_ms=status.plan_times_ms + (outcome.elapsed_ms,), failure=outcome.failure)
         self.failure_message = outcome.message
         self._best, self._best_time, self._stage = np.inf, t, None
-        self._next_check = t + (self._settings.blocked_interval if request.after == "blocked" else 0.0)
+        self._next_check = t + (self._settings.blocked_interval if request.after in ("blocked", "refuge") else 0.0)
         self._lagging_since = self._short_since = None
         plan = outcome.plan
         if plan is None:
@@ -346,6 +355,7 @@ class GuidedFabric:
             distance = float(np.linalg.norm(request.q - plan.goal))
             self._progress_needed = max(self._settings.stall_floor, self._settings.stall_progress * distance)
         self._plan = plan
+        self._home = request.previous_goal if request.after == "refuge" else None
         self._close = request.after == "short"
         self._approaching = False
         self._segment, self._table = outcome.segment, outcome.table

@@ -34,6 +34,7 @@ from numpy.typing import NDArray
 
 from dynfab.motion.configuration_checker import PlacedObstacle
 from dynfab.motion.guidance import GoalTargets, GuidanceError, JointGuidance, JointTarget, Plan
+from dynfab.motion.making_way import refuge_plan
 from dynfab.motion.swept_obstacles import swept_clear_of
 
 __all__ = ["BackgroundPlans", "DelayedPlans", "PendingPlan", "PlanMaker", "PlanOutcome", "PlanRequest", "make_plan",
@@ -57,8 +58,9 @@ class PlanRequest:
         seed: the first planning seed [-].
         wide: keep the stall margin first (a replan after a stall on the way).
         buffers: per static obstacle, the clearance its fabric leaves keep [m].
-        after: why the plan is asked for (``held``, ``short``, ``stalled``, ``blocked``), None
-            at first; after ``short`` the straight approach from ``q`` to ``previous_goal`` is
+        after: why the plan is asked for (``held``, ``short``, ``stalled``, ``blocked``,
+            ``refuge``, ``return``), None at first; after ``refuge`` the plan is to a refuge
+            from what the moving obstacles sweep (:mod:`dynfab.motion.making_way`); after ``short`` the straight approach from ``q`` to ``previous_goal`` is
             tried first (:meth:`~dynfab.motion.guidance.JointGuidance.approach_from`). A
             replan of task goals plans to ``previous_goal`` first, and solves inverse
             kinematics again only if no plan to it can be made.
@@ -147,6 +149,7 @@ def make_plan(guidance: JointGuidance, request: PlanRequest,
               publish: Callable[[NDArray[np.float64]], None] = lambda q: None) -> PlanOutcome:
     """Plan for ``request`` with ``guidance`` (module docstring); ``publish`` gets the goal
     configuration as soon as it is known. Never raises for a plan that cannot be made.
+    After ``refuge``: the plan to a refuge (:func:`~dynfab.motion.making_way.refuge_plan`).
 
     A replan avoids each moving sphere as the capsule it sweeps over ``sweep_horizon``
     (:func:`~dynfab.motion.swept_obstacles.swept_obstacle`), so that the new reference
@@ -157,6 +160,12 @@ def make_plan(guidance: JointGuidance, request: PlanRequest,
     (:func:`_swept_plan`)."""
     began = time.perf_counter()
     none = np.zeros((1, len(request.static)))
+    if request.after == "refuge":
+        try:
+            plan = refuge_plan(guidance, request.q, request.static, request.moving, request.seed)
+        except GuidanceError as error:
+            return PlanOutcome(None, error.reason, str(error), _ms_since(began), request.q[None], none)
+        return PlanOutcome(plan, None, None, _ms_since(began), plan.goal[None], none)
     frozen = swept = ()
     if request.previous_goal is not None:   # what moves and touches the goal configuration is passing it
         margin = guidance.settings.path.margin

@@ -45,7 +45,7 @@ def with_outcome(metrics: Metrics, controller: Controller | None, goal_positions
         fell_back = controller.fallback is not None   # the first plan failed
         outcome.update(guided=status.guided and not fell_back,
                        plans=status.plans + recoveries, plan_time_ms=status.plan_time_ms,
-                       recovered=status.replans_blocked + status.replans_stalled + recoveries,
+                       recovered=status.replans_blocked + status.replans_stalled + status.refuges + recoveries,
                        fallbacks=controller.fallback_count + fell_back)
         if fell_back and not metrics.success:
             outcome["failure"] = status.failure
