@@ -63,7 +63,9 @@ they are now would end in a needless escape of the goal; the fabric avoids them)
 after a stall on the way (not in an approach, nor after the reference ended) first tries
 to keep ``stall_margin`` from obstacles, so that it does not lead through the same tight
 passage again; a stall in a grasp's approach replans as before (training as-posed
-table_pick/0014: replans at 3 cm there stalled 5 times in the approach).
+table_pick/0014: replans at 3 cm there stalled 5 times in the approach). While what a moving
+sphere sweeps comes near the goal configuration, the robot waits at a refuge out of its
+way and returns once it has passed (:mod:`dynfab.motion.making_way`).
 
 A goal closer to a static obstacle than the planner's margin (a grasp, where the
 spheres overlap what the meshes clear) ends the plan with a segment the planner checked
@@ -96,12 +98,11 @@ from dynfab.motion.approach_segment import allowances_ahead, leaf_buffers, segme
 from dynfab.motion.guidance import GoalTargets, GuidanceSettings, JointGuidance, Plan
 from dynfab.motion.guidance_settings import counted_checks
 from dynfab.motion.guidance_status import GuidanceStatus
-from dynfab.motion.making_way import sweeps
+from dynfab.motion.making_way import moving_reason
 from dynfab.motion.plan_joining import in_sight, join_time
 from dynfab.motion.reference_clock import approach_rate, run_progress, way_rate
 from dynfab.motion.plan_requests import PendingPlan, PlanRequest, plan_maker
 from dynfab.motion.straight_motion import StraightMotion
-from dynfab.motion.swept_obstacles import swept_clear_of
 
 __all__ = ["GuidanceStatus", "GuidedFabric", "guided_goal_config"]
 
@@ -273,9 +274,8 @@ class GuidedFabric:
                        moving: Sequence[PlacedObstacle]) -> str | None:
         """``held`` if progress stalled on the way (the reference running, not in an
         approach), ``short`` if the robot is held short of the approach's start,
-        ``stalled`` if it stalled elsewhere, ``return`` to the goal from a refuge no longer
-        needed, ``refuge`` if what moves sweeps the robot holding its goal, ``blocked`` if the
-        reference is blocked ahead by something moving, else None (module docstring); ``lag``: ``‖q − q_r‖`` [rad]."""
+        ``stalled`` if it stalled elsewhere, else what moves asks for (``return``, ``refuge``,
+        ``blocked``: :func:`~dynfab.motion.making_way.moving_reason`) or None; ``lag``: ``‖q − q_r‖`` [rad]."""
         assert self._plan is not None
         settings = self._settings
         running = self._tau < self._plan.trajectory.duration
@@ -303,16 +303,11 @@ class GuidedFabric:
             return "held" if running and not self._in_approach() else "stalled"
         if moving and t >= self._next_check:
             self._next_check = t + settings.check_period
-            if self._home is not None and not sweeps(self.guidance, self._home, moving):
-                return "return"
-            if sweeps(self.guidance, self._plan.goal if self._home is None else q, moving):   # the goal; at a refuge, itself
-                self.status = replace(self.status, refuges=self.status.refuges + 1)
-                return "refuge"
-            clearance, margin = self.guidance.obstacle_clearance, settings.path.margin
-            swept = [swept_clear_of(o, settings.sweep_horizon, (q,), clearance, margin) for o in moving]
-            if self.guidance.blocked_ahead(self._plan, self._tau, swept):
-                self.status = replace(self.status, replans_blocked=self.status.replans_blocked + 1)
-                return "blocked"
+            reason = moving_reason(self.guidance, self._plan, self._tau, q, self._home, moving)
+            if reason in ("refuge", "blocked"):
+                count = "refuges" if reason == "refuge" else "replans_blocked"
+                self.status = replace(self.status, **{count: getattr(self.status, count) + 1})
+            return reason
         return None
 
     def _request(self, t: float, q: NDArray[np.float64], moving: Sequence[PlacedObstacle],

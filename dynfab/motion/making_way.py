@@ -1,24 +1,27 @@
-"""Making way for what moves through the goal: a refuge beside it until it has passed.
+"""Making way for what moves through the goal: a refuge out of its way until it has passed.
 
 A replan leaves out a moving sphere that touches the goal configuration: it is passing
 the goal, and a plan around it would end in a needless escape (:mod:`dynfab.motion.plan_requests`).
-Once the robot holds its goal, such a sphere is the fabric's alone to avoid, and where
-the goal is among static obstacles its leaves can only push the arm into them: on
-moving-sphere MBM bookshelf_thin/0087 (``--seed 1``, problems 81-96) a sphere of 5.6 cm
-at 0.42 m/s swept the forearm of an arm holding a grasp inside a shelf, and the sphere's
-leaf swung the hand through a 4 cm shelf wall (53.7 mm deep on the meshes) at 3 rad/s.
-No weighting of the two leaves kept it clear (tried: the shapes' energy 0 to 0.5, their
-range 10 cm, the sphere's braking 1 m/s² or none, its gain 1, its margin 1.5 cm).
+At the goal such a sphere is the fabric's alone to avoid, and where the goal is among
+static obstacles its leaves can only push the arm into them: on moving-sphere MBM
+bookshelf_thin/0087 (``--seed 1``, problems 81-96) a sphere of 5.6 cm at 0.42 m/s swept
+the forearm of an arm holding a grasp inside a shelf, and the sphere's leaf swung the hand
+through a 4 cm shelf wall (53.7 mm deep on the meshes) at 3 rad/s. No weighting of the two
+leaves kept it clear (tried: the shapes' energy 0 to 0.5, their range 10 cm, the sphere's
+braking 1 m/s² or none, its gain 1, its margin 1.5 cm), and a refuge sought only once the
+robot held the goal was 1 rad away and too late.
 
-A guided fabric holding its goal therefore asks for a *refuge* when the capsule a moving
+So a guided fabric does not wait at its goal for the sphere: while the capsule a moving
 sphere sweeps over ``sweep_horizon`` (:func:`~dynfab.motion.swept_obstacles.swept_obstacle`)
-comes within the planner's margin of the robot: among configurations sampled about the
-robot's at growing joint-space radii :data:`REFUGE_RADII`, the nearest that keeps the
-margin from the static obstacles and from every such capsule and whose straight way
-keeps it from the static obstacles and the spheres where they are, reached at the robot's
-full limits (:func:`refuge_plan`). It returns to
-its goal once no capsule comes within the margin of the goal configuration
-(:func:`sweeps`), by a replan.
+comes within the planner's margin of the goal configuration (:func:`sweeps`), it asks for
+a *refuge* (:func:`moving_reason`): the robot's own configuration if no such capsule comes
+within the margin of it, else, among configurations sampled about it at growing
+joint-space radii :data:`REFUGE_RADII`, the nearest that keeps the margin from every such
+capsule and from the static obstacles (no less than the robot keeps now: a grasp is
+closer than the margin) and whose straight way keeps them from the static obstacles and
+the spheres where they are; the way is timed at the robot's full limits
+(:func:`refuge_plan`). At the refuge it seeks another if a capsule comes at the robot,
+and it replans to the goal once none comes within the margin of the goal configuration.
 """
 
 from __future__ import annotations
@@ -32,9 +35,9 @@ from numpy.typing import NDArray
 from dynfab.motion.configuration_checker import PlacedObstacle
 from dynfab.motion.guidance import GuidanceError, JointGuidance, Plan
 from dynfab.motion.joint_trajectory import TimingError, time_path
-from dynfab.motion.swept_obstacles import swept_obstacle
+from dynfab.motion.swept_obstacles import swept_clear_of, swept_obstacle
 
-__all__ = ["REFUGE_RADII", "REFUGE_SAMPLES", "refuge", "refuge_plan", "sweeps"]
+__all__ = ["REFUGE_RADII", "REFUGE_SAMPLES", "moving_reason", "refuge", "refuge_plan", "sweeps"]
 
 #: joint-space distances [rad] from the robot at which refuges are sampled, nearest first
 REFUGE_RADII = (0.15, 0.3, 0.6, 1.0)
@@ -51,13 +54,32 @@ def sweeps(guidance: JointGuidance, q: NDArray[np.float64],
     return tuple(c for c in capsules if guidance.obstacle_clearance(q, c) < settings.path.margin)
 
 
+def moving_reason(guidance: JointGuidance, plan: Plan, tau: float, q: NDArray[np.float64],
+                  home: NDArray[np.float64] | None, moving: Sequence[PlacedObstacle]) -> str | None:
+    """Why the ``moving`` obstacles ask a guided fabric following ``plan`` (its clock at
+    ``tau`` [s], the robot at ``q`` [rad]) for a new plan: ``return`` to ``home`` (the goal
+    configuration, while at a refuge) once nothing sweeps it; ``refuge`` while something
+    sweeps the goal configuration (at a refuge: the robot); ``blocked`` if the reference
+    within ``check_horizon`` meets what they sweep (each capsule shortened until it clears
+    the robot, :func:`~dynfab.motion.swept_obstacles.swept_clear_of`); else None."""
+    if home is not None and not sweeps(guidance, home, moving):
+        return "return"
+    if sweeps(guidance, plan.goal if home is None else q, moving):
+        return "refuge"
+    settings = guidance.settings
+    swept = [swept_clear_of(o, settings.sweep_horizon, (q,), guidance.obstacle_clearance, settings.path.margin)
+             for o in moving]
+    return "blocked" if guidance.blocked_ahead(plan, tau, swept) else None
+
+
 def refuge(guidance: JointGuidance, q: NDArray[np.float64], static: Sequence[PlacedObstacle],
            capsules: Sequence[PlacedObstacle], moving: Sequence[PlacedObstacle], seed: int) -> NDArray[np.float64] | None:
-    """The configuration nearest ``q`` [rad] among :data:`REFUGE_SAMPLES` at each radius of
+    """``q`` [rad] if it keeps the planner's margin from ``capsules``, else the configuration
+    nearest it among :data:`REFUGE_SAMPLES` at each radius of
     :data:`REFUGE_RADII` (uniform directions, within the joint limits; ``seed``) that keeps
-    the planner's margin and self-collision margin from ``static`` and ``capsules``, and
-    whose straight way from ``q`` keeps them from ``static`` and the ``moving`` spheres
-    where they are; None if none does."""
+    the planner's margin from ``capsules``, from ``static`` no less than ``q`` does up to the
+    margin, and the self-collision margin, and whose straight way from ``q`` keeps them from
+    ``static`` and the ``moving`` spheres where they are; None if none does."""
     settings = guidance.settings.path
     kinematics = guidance.robot.kinematics
     lower = np.where(np.isfinite(kinematics.lower), kinematics.lower, -np.pi)
@@ -96,7 +118,8 @@ def refuge_plan(guidance: JointGuidance, q: NDArray[np.float64], static: Sequenc
     """
     began = time.perf_counter()
     start = np.asarray(q, dtype=float)
-    target = refuge(guidance, start, static, sweeps(guidance, start, moving), moving, seed)
+    capsules = tuple(swept_obstacle(o, guidance.settings.sweep_horizon) for o in moving)
+    target = refuge(guidance, start, static, capsules, moving, seed)
     if target is None:
         raise GuidanceError("no_refuge", f"no configuration within {REFUGE_RADII[-1]} rad of the robot keeps "
                                          f"{guidance.settings.path.margin} m from what the moving obstacles sweep")
