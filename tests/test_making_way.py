@@ -91,3 +91,8 @@ def test_a_sphere_sweeping_an_arm_at_its_goal_in_a_shelf_is_let_pass_from_a_refu
     assert metrics["goal_reached"] and metrics["guided"], (metrics["failure"], metrics["final_distance"])
     assert check["collisions"] == [] and check["self_collisions"] == [] and check["joint_limit_violations"] == []
     assert metrics["recovered"] >= 1
+
+
+def test_a_sphere_at_rest_sweeps_nothing(guidance) -> None:
+    resting = _sphere_toward(guidance, READY, 0.05, 0.0)
+    assert sweeps(guidance, READY, [resting]) == ()

@@ -48,10 +48,12 @@ REFUGE_SAMPLES = 64
 def sweeps(guidance: JointGuidance, q: NDArray[np.float64],
            moving: Sequence[PlacedObstacle]) -> tuple[PlacedObstacle, ...]:
     """The capsules the ``moving`` spheres sweep over ``sweep_horizon`` that come within the
-    planner's margin of the robot at ``q`` [rad]."""
+    planner's margin of the robot at ``q`` [rad] (a sphere at rest sweeps none: one resting
+    on the goal is not passing it, and the fabric avoids it there)."""
     settings = guidance.settings
     capsules = (swept_obstacle(o, settings.sweep_horizon) for o in moving)
-    return tuple(c for c in capsules if guidance.obstacle_clearance(q, c) < settings.path.margin)
+    return tuple(c for c, o in zip(capsules, moving)
+                 if c is not o and guidance.obstacle_clearance(q, c) < settings.path.margin)
 
 
 def moving_reason(guidance: JointGuidance, plan: Plan, tau: float, q: NDArray[np.float64],
