@@ -13,6 +13,7 @@ from dynfab.benchmarks.mbm.variants import prepare_case
 from dynfab.geometry.shapes import Box, Placement, Sphere
 from dynfab.motion.configuration_checker import PlacedObstacle
 from dynfab.motion.guidance import JointGuidance, JointTarget
+from dynfab.motion.guidance_status import GuidanceStatus
 from dynfab.motion.making_way import REFUGE_RADII, moving_reason, refuge, refuge_plan, sweeps
 from dynfab.motion.swept_obstacles import swept_obstacle
 from dynfab.robots import load_robot
@@ -96,3 +97,28 @@ def test_a_sphere_sweeping_an_arm_at_its_goal_in_a_shelf_is_let_pass_from_a_refu
 def test_a_sphere_at_rest_sweeps_nothing(guidance) -> None:
     resting = _sphere_toward(guidance, READY, 0.05, 0.0)
     assert sweeps(guidance, READY, [resting]) == ()
+
+
+def test_a_robot_at_a_refuge_goes_back_even_after_its_replans_are_spent() -> None:
+    """The replan budget bounds the plans to the goal; a refuge is off that way, so the
+    return to the goal is asked for even after the last replan was spent on the refuge."""
+    from dynfab.scenario.guided_controller import make_scenario_controller
+    from dynfab.scenario.references import scenario_references
+    from dynfab.scenario.schema import scenario_from_dict, validate_for_robot
+    panda = load_robot("panda")
+    goal = READY + 0.2
+    data = {"robot": "panda", "planner": "dynamic-fabric", "dt": 0.01, "duration": 5.0,
+            "initial_state": {"q": READY.tolist()}, "goal": [{"type": "joint", "position": goal.tolist()}]}
+    scenario = validate_for_robot(scenario_from_dict(data), panda)
+    guided = make_scenario_controller(scenario, panda, scenario_references(scenario, panda), plan_latency=0.0).guided
+    guided.set_goal(JointTarget(tuple(goal)), 0.0, READY)
+    settings = guided.guidance.settings
+    hand = np.asarray(panda.link_position(goal, "panda_hand"), dtype=float)
+    passing = PlacedObstacle(Sphere(0.06), Placement(tuple(hand + [0.0, 0.3, 0.0])), (0.0, -0.4, 0.0))
+    gone = PlacedObstacle(Sphere(0.06), Placement(tuple(hand + [0.0, -2.0, 0.0])), (0.0, -0.4, 0.0))
+    guided.status = GuidanceStatus(guided=True, plans=settings.replans)   # the budget spent but one
+    guided.update(0.1, READY, (passing,))
+    assert guided.status.refuges == 1 and guided.status.plans == settings.replans + 1   # the refuge: the last one
+    guided.update(0.7, READY, (gone,))
+    assert guided.status.plans == settings.replans + 2   # back to the goal all the same
+    assert np.allclose(guided.plan.goal, goal)

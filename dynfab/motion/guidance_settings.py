@@ -95,7 +95,8 @@ class GuidanceSettings:
             is tried again too (the next seed draws other escape samples).
         replans: plans at most in one run after the first [-]. 10: with 4 (the value
             before), all 8 failures of training moving-sphere problems 10-16 had used them
-            all.
+            all. A robot at a refuge (:mod:`dynfab.motion.making_way`) replans beyond them
+            until it has left it: it is off its way to the goal.
         blocked_interval: least time between a replan for a blocked reference and the
             next check of what moves against the new one [s]: checking at once replanned
             4 times in 0.13 s on training moving-sphere bookshelf_tall/0014 as the sphere

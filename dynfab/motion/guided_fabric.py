@@ -231,7 +231,8 @@ class GuidedFabric:
         settings = self._settings
         self._q = np.array(q, dtype=float)
         lag = float(np.linalg.norm(q - self._reference))   # the reference at τ, written last tick
-        if self._pending is None and self.status.plans + self.status.failed_plans <= settings.replans:
+        budget = self.status.plans + self.status.failed_plans <= settings.replans or self._home is not None   # away: back
+        if self._pending is None and budget:
             reason = self._replan_reason(t, q, lag, moving)
             if reason is not None:
                 self._request(t, q, moving, after=reason)
