@@ -33,7 +33,7 @@ from dynfab.geometry.shapes import Mesh, PointCloud
 from dynfab.motion.cloud_focus import focused_obstacles
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.inverse_kinematics import IkSettings, solve_ik
-from dynfab.motion.mesh_escape_plan import escape_plan
+from dynfab.motion.mesh_escape_plan import EscapeScene, escape_plan
 from dynfab.motion.mesh_goal_check import MeshGoalCheck, endpoint_tests, robot_mesh_model
 from dynfab.perception.surfaces import surface_clearance
 from dynfab.motion.joint_planning import (ApproachTest, JointPath, JointPlannerSettings, NoPathError, approach_clear,
@@ -209,7 +209,10 @@ class JointGuidance:
             tightened = [(replace(s, margin=self.settings.tight_margin), k) for s, k in tries]
             return self._attempts(start, target, tightened, began, True)
         except GuidanceError:   # a goal without escape, or no path: one on the meshes (mesh_escape_plan)
-            escaped = escape_plan(self, start, target, tries, began) if error.reason != "start_in_collision" else None
+            meshes = self._meshes()
+            escaped = (None if meshes is None or error.reason == "start_in_collision" else escape_plan(
+                EscapeScene(self.checker, meshes, self.settings, self.robot.limits, self._lower, self._upper,
+                            self._approach_timed), start, target, [k for _, k in tries], began))
             if escaped is None:
                 raise
             return escaped

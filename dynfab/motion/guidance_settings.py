@@ -191,7 +191,7 @@ class GuidanceSettings:
     tight_margin: float = 0.0
     approach_clearance: float = 0.005
     mesh_escape_samples: int = 1000
-    mesh_escape: MeshEscapeSettings | None = None
+    mesh_escape: MeshEscapeSettings | None = MeshEscapeSettings()
     cloud_focus: CloudFocus | None = CloudFocus()
     timing: TimingSettings = field(default_factory=TimingSettings)
     speed: float = 0.5

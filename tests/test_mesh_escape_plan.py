@@ -1,0 +1,77 @@
+"""Guidance's last resort among meshes (issue 20): the margins it searches, wider first, the
+budget of wall time it keeps, and the plan it makes keeping the wider margin on the meshes."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+import dynfab.motion.mesh_escape_plan as escape_module
+from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance
+from dynfab.motion.mesh_escape import MeshEscapeSettings
+from dynfab.motion.mesh_escape_plan import EscapeScene, escape_plan, search_margins
+from dynfab.robots import load_robot
+from test_mesh_goal_check import BESIDE_LINK2, Q   # a cube the spheres touch at Q, the meshes clear by 1.7 cm
+
+START = Q + np.array([0.3, 0.8, 0.0, 0.2, 0.0, 0.0, 0.0])
+
+
+@pytest.fixture(scope="module")
+def panda():
+    return load_robot("panda")
+
+
+def _scene(panda, escape: MeshEscapeSettings) -> EscapeScene:
+    guidance = JointGuidance(panda, GuidanceSettings(mesh_escape=escape))
+    guidance.checker.set_obstacles((BESIDE_LINK2,))
+    meshes = guidance._meshes()
+    assert meshes is not None
+    return EscapeScene(guidance.checker, meshes, guidance.settings, panda.limits, panda.kinematics.lower,
+                       panda.kinematics.upper, guidance._approach_timed)
+
+
+def test_the_wider_margins_come_first_and_mesh_margin_last() -> None:
+    assert search_margins(MeshEscapeSettings(), 0.003) == (0.006, 0.003)
+    assert search_margins(MeshEscapeSettings(clearances=(0.005, 0.008, 0.002)), 0.003) == (0.008, 0.005, 0.003)
+    assert search_margins(MeshEscapeSettings(clearances=()), 0.003) == (0.003,)
+
+
+def test_the_wider_margin_is_searched_first_then_mesh_margin_with_every_seed(panda, monkeypatch) -> None:
+    margins = []
+
+    def finding_none(validity, start, goal, lower, upper, settings, seed, seconds):
+        margins.append((validity.meshes.margin, seed))
+        assert 0.0 < seconds <= settings.budget
+        return None
+
+    monkeypatch.setattr(escape_module, "mesh_path", finding_none)
+    scene = _scene(panda, MeshEscapeSettings())
+    assert escape_plan(scene, START, Q, (4, 5, 6), time.perf_counter()) is None
+    assert margins == [(0.006, 4), (0.003, 4), (0.003, 5), (0.003, 6)]   # the wider one with the first seed
+    margins.clear()
+    scene = _scene(panda, MeshEscapeSettings(wide_searches=2))
+    assert escape_plan(scene, START, Q, (4, 5, 6), time.perf_counter()) is None
+    assert margins == [(0.006, 4), (0.006, 5), (0.003, 4), (0.003, 5), (0.003, 6)]
+
+
+def test_a_spent_budget_fails_by_name(panda, monkeypatch) -> None:
+    monkeypatch.setattr(escape_module, "mesh_path", lambda *args: pytest.fail("searched after the budget"))
+    scene = _scene(panda, MeshEscapeSettings(budget=5.0))
+    with pytest.raises(GuidanceError, match="budget of 5 s") as failure:
+        escape_plan(scene, START, Q, (0,), time.perf_counter() - 6.0)
+    assert failure.value.reason == "mesh_escape_budget"
+
+
+def test_the_plan_keeps_the_wider_margin_on_the_meshes(panda) -> None:
+    scene = _scene(panda, MeshEscapeSettings(checks=2000, clearances=(0.012,)))
+    plan = escape_plan(scene, START, Q, (1,), time.perf_counter())
+    assert plan is not None
+    np.testing.assert_allclose(plan.goal, Q)
+    times = np.linspace(0.0, plan.trajectory.duration, 400)
+    reference = plan.trajectory.sample(times)[0]
+    np.testing.assert_allclose(reference[0], START, atol=1e-9)
+    np.testing.assert_allclose(reference[-1], Q, atol=1e-9)
+    # searched at 12 mm (checked every 10 mrad), the timed spline near its polyline: well beyond 3 mm
+    assert scene.meshes.clearance(reference)[0] > 0.009
