@@ -4,12 +4,14 @@ budget of wall time it keeps, and the plan it makes keeping the wider margin on 
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 import dynfab.motion.mesh_escape_plan as escape_module
 from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance
+from dynfab.motion.guidance_settings import counted_checks
 from dynfab.motion.mesh_escape import MeshEscapeSettings
 from dynfab.motion.mesh_escape_plan import EscapeScene, escape_plan, search_margins
 from dynfab.robots import load_robot
@@ -56,12 +58,32 @@ def test_the_wider_margin_is_searched_first_then_mesh_margin_with_every_seed(pan
     assert margins == [(0.006, 4), (0.006, 5), (0.003, 4), (0.003, 5), (0.003, 6)]
 
 
-def test_a_spent_budget_fails_by_name(panda, monkeypatch) -> None:
+def test_a_spent_budget_of_time_fails_by_name(panda, monkeypatch) -> None:
     monkeypatch.setattr(escape_module, "mesh_path", lambda *args: pytest.fail("searched after the budget"))
     scene = _scene(panda, MeshEscapeSettings(budget=5.0))
-    with pytest.raises(GuidanceError, match="budget of 5 s") as failure:
+    with pytest.raises(GuidanceError, match="5 s;") as failure:
         escape_plan(scene, START, Q, (0,), time.perf_counter() - 6.0)
     assert failure.value.reason == "mesh_escape_budget"
+    simulated = _scene(panda, MeshEscapeSettings(budget=5.0))   # bounded by checks: ten times the time
+    simulated = replace(simulated, settings=counted_checks(simulated.settings))
+    monkeypatch.setattr(escape_module, "mesh_path", lambda *args: None)
+    assert escape_plan(simulated, START, Q, (0,), time.perf_counter() - 6.0) is None
+
+
+def test_the_searches_share_one_budget_of_mesh_checks(panda, monkeypatch) -> None:
+    given = []
+
+    def spending(validity, start, goal, lower, upper, settings, seed, seconds):
+        given.append(settings.checks)
+        validity.meshes.checks += 700   # as if the search checked 700 configurations on the meshes
+        return None
+
+    monkeypatch.setattr(escape_module, "mesh_path", spending)
+    scene = _scene(panda, MeshEscapeSettings(checks=1000, total_checks=2000))
+    with pytest.raises(GuidanceError, match="2000 mesh checks") as failure:
+        escape_plan(scene, START, Q, (0, 1, 2), time.perf_counter())
+    assert failure.value.reason == "mesh_escape_budget"
+    assert given == [1000, 1000, 600]   # the third search is given what is left
 
 
 def test_the_plan_keeps_the_wider_margin_on_the_meshes(panda) -> None:

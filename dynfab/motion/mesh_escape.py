@@ -50,14 +50,19 @@ class MeshEscapeSettings:
             0.1 mm into the kitchen on a path kept 3 mm clear), so a path kept 6 mm clear
             leaves it room; where none is found within its checks, the next margin.
         wide_searches: searches at each of ``clearances`` (the first of guidance's seeds
-            on) [-]: where a 6 mm path existed on development kitchen seeds 0-4 the first
-            search found it; where none did (a start in a pocket) each search spent its
-            ``checks`` (20-40 s at load 1-3).
+            on) [-]: on development kitchen seeds 0-4 (seed 1 kitchen/0004, 0014, 0017, seed
+            2 kitchen/0001, seed 4 kitchen/0008) the first 6 mm search found a path where
+            any did; where none did (seed 1 kitchen/0005, its start 0.65 mm from the meshes)
+            each spent its ``checks`` (17-39 s at load 1-3).
         checks: most mesh checks of one search [-].
         simplify_checks: most mesh checks of one simplification [-].
-        budget: most wall time of the whole plan, every search, simplification and check
-            included [s]; spent, the plan fails (``mesh_escape_budget``), at any load and
-            in the simulators too.
+        total_checks: most mesh checks of all searches and simplifications together [-]:
+            spent, the plan fails (``mesh_escape_budget``); the same at any load.
+        budget: most wall time of the whole plan, from its start (guidance's attempts
+            before it included) [s]; spent, the plan fails (``mesh_escape_budget``). In the
+            simulators (``path.check_rate`` set) ``WALL_FACTOR`` times as much: their
+            plans are bounded by checks, the same at any load (under load 8-9 a 150 s
+            limit cut development seed-3 kitchen/0019's search, which found a path at load 7).
         resolution: largest distance between checked configurations of a motion [rad].
         step: RRT-Connect's range [rad].
         end_radius: how far from an end nearer the meshes than ``m`` its own smaller margin
@@ -69,13 +74,14 @@ class MeshEscapeSettings:
     wide_searches: int = 1
     checks: int = 30_000
     simplify_checks: int = 2_000
+    total_checks: int = 90_000
     budget: float = 150.0
     resolution: float = 0.01
     step: float = 0.5
     end_radius: float = 0.3
 
     def __post_init__(self) -> None:
-        for name in ("checks", "simplify_checks", "wide_searches", "budget", "resolution", "step", "end_radius"):
+        for name in ("checks", "simplify_checks", "total_checks", "wide_searches", "budget", "resolution", "step", "end_radius"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"mesh_escape.{name}: must be finite and > 0, got {value}")

@@ -18,18 +18,19 @@ plan's approach, timed at ``approach_speed`` and followed closely, the obstacles
 the allowances the spheres need along it
 (:meth:`~dynfab.motion.guidance.JointGuidance.approach_allowances`), as for a grasp's
 straight approach (:mod:`dynfab.motion.approach_segment` measures a polyline on its nearest
-piece). Each search is bounded by its mesh checks (``mesh_escape.checks``) and all of them
-together by ``mesh_escape.budget`` seconds of wall time from the plan's start (the searches
-of guidance's attempts before it included): spent, the plan fails with
-``mesh_escape_budget``; a simulated run does not wait for it (a plan's latency is fixed), a
-robot in real time would.
+piece). Each search is bounded by its mesh checks (``mesh_escape.checks``), all of them
+together by ``mesh_escape.total_checks`` and by ``mesh_escape.budget`` seconds of wall time
+from the plan's start (guidance's attempts before it included; in the simulators, whose
+plans are bounded by checks at any load, ``WALL_FACTOR`` times as long): spent, the plan
+fails with ``mesh_escape_budget``. A simulated run does not wait for it (a plan's latency
+is fixed), a robot in real time would.
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -37,6 +38,7 @@ from numpy.typing import NDArray
 from dynfab.geometry.shapes import PointCloud
 from dynfab.motion.configuration_checker import ConfigurationChecker
 from dynfab.motion.guidance_settings import GuidanceSettings
+from dynfab.motion.joint_planning import WALL_FACTOR
 from dynfab.motion.joint_trajectory import JointTrajectory, TimingError, time_path
 from dynfab.motion.mesh_escape import MeshEscapeSettings, SpheresOrMeshes, mesh_path
 from dynfab.motion.mesh_goal_check import MeshGoalCheck
@@ -97,23 +99,28 @@ def escape_plan(scene: EscapeScene, start: NDArray[np.float64], target: NDArray[
         began: when the plan began (``time.perf_counter()``) [s].
 
     Raises:
-        GuidanceError: ``mesh_escape_budget``, its budget of wall time spent.
+        GuidanceError: ``mesh_escape_budget``, its budget spent (``total_checks`` mesh
+            checks, or ``budget`` seconds from ``began``: ``WALL_FACTOR`` times as many
+            where ``path.check_rate`` is set).
     """
     settings, path = scene.settings.mesh_escape, scene.settings.path
     if settings is None or any(isinstance(o.shape, PointCloud) for o in scene.checker.obstacles):
         return None
-    deadline = began + settings.budget
-    searched = 0
+    wall = settings.budget * (1.0 if path.check_rate is None else WALL_FACTOR)
+    spent, searched = 0, 0
     for margin in search_margins(settings, scene.meshes.margin):
         validity = _validity(scene, start, target, margin)
         least = min([margin] + [check.margin for _, check in validity.ends])
         for seed in seeds if margin == scene.meshes.margin else seeds[:settings.wide_searches]:
-            left = deadline - time.perf_counter()
-            if left <= 0.0:
-                raise GuidanceError("mesh_escape_budget", f"the meshes' plan found no path within its budget of "
-                                                          f"{settings.budget:g} s ({searched} searches)")
-            way = mesh_path(validity, start, target, scene.lower, scene.upper, settings, seed, left)
-            searched += 1
+            left = began + wall - time.perf_counter()
+            if left <= 0.0 or spent >= settings.total_checks:
+                raise GuidanceError("mesh_escape_budget", f"the meshes' plan found no path within its budget "
+                                    f"({settings.total_checks} mesh checks, {wall:g} s; {searched} searches, "
+                                    f"{spent} checks, {time.perf_counter() - began:.1f} s spent)")
+            before = validity.mesh_checks
+            this = replace(settings, checks=min(settings.checks, settings.total_checks - spent))
+            way = mesh_path(validity, start, target, scene.lower, scene.upper, this, seed, left)
+            spent, searched = spent + validity.mesh_checks - before, searched + 1
             if way is not None and scene.meshes.polyline_free(way, path.resolution / 2, least / 2):
                 return _timed_plan(scene, way, target, began, validity.checks)
     return None
