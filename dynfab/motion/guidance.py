@@ -33,7 +33,7 @@ from dynfab.geometry.shapes import Mesh, PointCloud
 from dynfab.motion.cloud_focus import focused_obstacles
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.inverse_kinematics import IkSettings, solve_ik
-from dynfab.motion.mesh_escape_plan import EscapeScene, escape_plan
+from dynfab.motion.mesh_escape_plan import EscapeScene, escape_plan, mesh_allowances
 from dynfab.motion.mesh_goal_check import MeshGoalCheck, endpoint_tests, robot_mesh_model
 from dynfab.perception.surfaces import surface_clearance
 from dynfab.motion.joint_planning import (ApproachTest, JointPath, JointPlannerSettings, NoPathError, approach_clear,
@@ -277,11 +277,18 @@ class JointGuidance:
         matters only until the robot is past it (:meth:`GuidedFabric.allowances`)."""
         if not isinstance(plan.trajectory, PhasedTrajectory):
             raise ValueError("approach_allowances: the plan has no approach")
-        segment = polyline_samples(plan.trajectory.phases[-1].waypoints, self.settings.path.resolution)
+        waypoints = plan.trajectory.phases[-1].waypoints
+        segment = polyline_samples(waypoints, self.settings.path.resolution)
         clearances = np.empty((len(segment), len(obstacles)))
         for k, obstacle in enumerate(obstacles):
             self._single.set_obstacles((obstacle,))
             clearances[:, k] = self._single.batch(segment)[:, 0]
+        meshes = self._meshes()
+        if len(waypoints) > 2 and meshes is not None and not any(isinstance(o.shape, PointCloud) for o in obstacles):
+            # the meshes' plan's polyline: the leaves see the meshes' clearance (mesh_escape_plan), theirs exact
+            spheres = np.array([[self.obstacle_clearance(q, o) for o in obstacles] for q in segment])
+            return segment, mesh_allowances(meshes.model, segment, obstacles, buffers, spheres.reshape(clearances.shape),
+                                            self.settings.goal_clearance)
         return segment, np.maximum(0.0, np.asarray(buffers, dtype=float) + self.settings.goal_clearance - clearances)
 
     def allowances(self, q: NDArray[np.float64], obstacles: Sequence[PlacedObstacle],
