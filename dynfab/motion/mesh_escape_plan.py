@@ -49,11 +49,14 @@ from dynfab.robots.mesh_collision import MeshCollisionModel, moving_part
 from dynfab.robots.mesh_contact import MeshContactCheck
 from dynfab.robots.mesh_sweep import PlacedShape, clearance_per_sample
 
-__all__ = ["END_SHARE", "EscapeScene", "escape_plan", "mesh_allowances", "search_margins"]
+__all__ = ["END_SHARE", "LEAF_SLACK", "EscapeScene", "escape_plan", "mesh_allowances", "search_margins"]
 
 #: the share of the nearer end's clearance on the meshes the path keeps where that is
 #: nearer than the search's margin (an end at exactly the margin would touch it) [-]
 END_SHARE = 0.9
+#: ``s`` of :func:`mesh_allowances`: what the leaves see beyond the meshes' clearance along
+#: the plan's approach [m]
+LEAF_SLACK = 0.003
 
 
 @dataclass(frozen=True)
@@ -172,9 +175,9 @@ def mesh_allowances(model: MeshCollisionModel, segment: NDArray[np.float64], obs
                     ) -> NDArray[np.float64]:
     """The obstacles' allowances along this plan's approach (k samples ``segment``, m
     ``obstacles``) [m]: what the fabric's leaves need to see, at each sample, the meshes'
-    clearance from each obstacle there, at most ``goal_clearance``:
+    clearance from each obstacle there plus :data:`LEAF_SLACK`, at most ``goal_clearance``:
 
-        a_k(q) = max(0, buffer_k + min(goal_clearance, m_k(q)) − c_k(q))
+        a_k(q) = max(0, buffer_k + min(goal_clearance, m_k(q) + s) − c_k(q))
 
     with ``m_k`` the robot's meshes' distance from obstacle ``k`` (exact, the links a joint
     moves) and ``c_k`` its spheres' (``spheres``, (k, m)). A grasp's approach gives
@@ -188,7 +191,7 @@ def mesh_allowances(model: MeshCollisionModel, segment: NDArray[np.float64], obs
     meshes = np.column_stack([clearance_per_sample(moving, segment, (PlacedShape(f"obstacles[{k}]", o.shape,
                                                                                  (o.placement,)),))
                               for k, o in enumerate(obstacles)]) if obstacles else np.zeros((len(segment), 0))
-    return np.maximum(0.0, np.asarray(buffers, dtype=float) + np.minimum(goal_clearance, meshes) - spheres)
+    return np.maximum(0.0, np.asarray(buffers, dtype=float) + np.minimum(goal_clearance, meshes + LEAF_SLACK) - spheres)
 
 
 def _split(way: NDArray[np.float64], accept: Callable[[NDArray[np.float64]], bool], step: float
