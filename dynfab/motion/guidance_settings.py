@@ -70,11 +70,13 @@ class GuidanceSettings:
         mesh_escape: the search, among meshes (no point clouds), where no attempt found an
             escape of the goal or a path: judged on the robot's meshes wherever the spheres
             refuse (:mod:`dynfab.motion.mesh_escape`), at 6 mm first, then ``mesh_margin``,
-            within a budget of wall time, its part the spheres refuse followed as an
-            approach (:mod:`dynfab.motion.mesh_escape_plan`). None: none. On by default
-            since session 14 (development kitchen seeds 0-4: docs/results.md); session 13
-            had it opt-in after a held-out kitchen run (seed 6, kitchen/0002) touched the
-            kitchen 0.1 mm deep with ``panda_link6`` on a path kept 3 mm clear.
+            within a budget, its part the spheres refuse followed as an approach
+            (:mod:`dynfab.motion.mesh_escape_plan`). None (the default): none. Opt-in
+            (``MeshEscapeSettings()``): on held-out kitchen seed 6 (session 13) a run it
+            rescued touched the kitchen 0.1 mm deep with ``panda_link6``; with the 6 mm search
+            (session 14) the runs it rescues on development seeds 0-4 still come within
+            0.4-0.7 mm of the kitchen (leaving a start in a pocket beside the path, or 8
+            mrad beside a 3 mm path's approach: docs/results.md).
         mesh_escape_samples: ``path.escape_samples`` for a goal whose approach the meshes
             judge (:meth:`JointGuidance._endpoint_tests`) [-]: 400 found no escape for as-posed
             table_pick/0032 (problems 29-32, which chose it), its hand between a table and a cube
@@ -190,7 +192,7 @@ class GuidanceSettings:
     tight_margin: float = 0.0
     approach_clearance: float = 0.005
     mesh_escape_samples: int = 1000
-    mesh_escape: MeshEscapeSettings | None = MeshEscapeSettings()
+    mesh_escape: MeshEscapeSettings | None = None
     cloud_focus: CloudFocus | None = CloudFocus()
     timing: TimingSettings = field(default_factory=TimingSettings)
     speed: float = 0.5
