@@ -74,9 +74,10 @@ class GuidanceSettings:
             (:mod:`dynfab.motion.mesh_escape_plan`). None (the default): none. Opt-in
             (``MeshEscapeSettings()``): on held-out kitchen seed 6 (session 13) a run it
             rescued touched the kitchen 0.1 mm deep with ``panda_link6``; with the 6 mm search
-            (session 14) the runs it rescues on development seeds 0-4 still come within
-            0.4-0.7 mm of the kitchen (leaving a start in a pocket beside the path, or 8
-            mrad beside a 3 mm path's approach: docs/results.md).
+            (session 14) two of the six runs it rescues on development seeds 0-4 still
+            come within 0.56-0.73 mm of the kitchen away from their starts (leaving a start
+            in a pocket beside the path, or 8 mrad beside a 3 mm path's approach:
+            docs/results.md).
         mesh_escape_samples: ``path.escape_samples`` for a goal whose approach the meshes
             judge (:meth:`JointGuidance._endpoint_tests`) [-]: 400 found no escape for as-posed
             table_pick/0032 (problems 29-32, which chose it), its hand between a table and a cube
