@@ -12,7 +12,11 @@ import pytest
 import dynfab.motion.mesh_escape_plan as escape_module
 from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance
 from dynfab.motion.guidance_settings import counted_checks
+from dynfab.geometry.shapes import Box
+from dynfab.motion.configuration_checker import PlacedObstacle
 from dynfab.motion.mesh_escape import MeshEscapeSettings
+from dynfab.motion.phased_trajectory import PhasedTrajectory
+from dynfab.motion.plan_values import Plan
 from dynfab.motion.mesh_escape_plan import LEAF_SLACK, EscapeScene, escape_plan, mesh_allowances, search_margins
 from dynfab.robots import load_robot
 from test_mesh_goal_check import BESIDE_LINK2, Q   # a cube the spheres touch at Q, the meshes clear by 1.7 cm
@@ -109,3 +113,28 @@ def test_along_the_plans_polyline_the_leaves_see_the_meshes_clearance_at_most_go
     narrow = mesh_allowances(scene.meshes.model, Q[None], (BESIDE_LINK2,), (0.02,), spheres, 0.01)
     assert narrow[0, 0] == pytest.approx(0.02 + 0.01 - spheres[0, 0])   # by goal_clearance where that is less
     assert mesh_allowances(scene.meshes.model, Q[None], (), (), np.zeros((1, 0)), 0.01).shape == (1, 0)
+
+
+def test_guidance_gives_a_polyline_approach_the_meshes_allowances_and_a_straight_one_its_own(panda) -> None:
+    cube = PlacedObstacle(Box((0.04, 0.04, 0.04)), BESIDE_LINK2.placement)   # 1 cm nearer Q on every side
+    guidance = JointGuidance(panda)
+    guidance.checker.set_obstacles((cube,))
+    bent = np.array([Q + [0.0, 0.1, 0.0, 0.0, 0.0, 0.0, 0.0], Q + [0.0, 0.05, 0.05, 0.0, 0.0, 0.0, 0.0], Q])
+
+    def plan_of(waypoints: np.ndarray) -> Plan:
+        trajectory = PhasedTrajectory((guidance._approach_timed(waypoints),))
+        return Plan(trajectory, Q, 0.0, 0, float(np.sum(np.linalg.norm(np.diff(waypoints, axis=0), axis=1))), 0.0)
+
+    settings = guidance.settings
+    segment, table = guidance.approach_allowances(plan_of(bent), (cube,), (0.02,))
+    meshes = guidance._meshes()
+    at_goal = meshes.clearance(Q)[0]
+    assert 0.0 < at_goal < settings.goal_clearance - LEAF_SLACK - 0.002   # the meshes' clearance decides there
+    spheres = guidance.checker.batch(segment)[:, :1]
+    np.testing.assert_allclose(table, mesh_allowances(meshes.model, segment, (cube,), (0.02,), spheres,
+                                                      settings.goal_clearance))
+    np.testing.assert_allclose(table[-1, 0], 0.02 + at_goal + LEAF_SLACK - spheres[-1, 0], atol=1e-6)
+    straight, as_before = guidance.approach_allowances(plan_of(bent[[0, 2]]), (cube,), (0.02,))   # a grasp's
+    guidance.checker.set_obstacles((cube,))
+    grid = guidance.checker.batch(straight)[:, 0]
+    np.testing.assert_allclose(as_before[:, 0], np.maximum(0.0, 0.02 + settings.goal_clearance - grid))

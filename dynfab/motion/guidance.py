@@ -274,21 +274,23 @@ class JointGuidance:
         ``obstacles`` at each (k, m) [m]. The straight approach may pass closer to an
         obstacle than the goal is (a table under a grasp), where the leaves would hold the
         robot short of the goal (problems 21-28, as posed: table_pick); what it may pass
-        matters only until the robot is past it (:meth:`GuidedFabric.allowances`)."""
+        matters only until the robot is past it (:meth:`GuidedFabric.allowances`). Along the
+        meshes' plan's polyline approach (more than two configurations, among meshes without
+        clouds) the leaves see the meshes' clearance instead
+        (:func:`~dynfab.motion.mesh_escape_plan.mesh_allowances`)."""
         if not isinstance(plan.trajectory, PhasedTrajectory):
             raise ValueError("approach_allowances: the plan has no approach")
         waypoints = plan.trajectory.phases[-1].waypoints
         segment = polyline_samples(waypoints, self.settings.path.resolution)
+        if (len(waypoints) > 2 and not any(isinstance(o.shape, PointCloud) for o in obstacles)
+                and (meshes := self._meshes()) is not None):   # the meshes' plan's polyline (mesh_escape_plan)
+            spheres = np.array([[self.obstacle_clearance(q, o) for o in obstacles] for q in segment])
+            return segment, mesh_allowances(meshes.model, segment, obstacles, buffers,
+                                            spheres.reshape(len(segment), len(obstacles)), self.settings.goal_clearance)
         clearances = np.empty((len(segment), len(obstacles)))
         for k, obstacle in enumerate(obstacles):
             self._single.set_obstacles((obstacle,))
             clearances[:, k] = self._single.batch(segment)[:, 0]
-        meshes = self._meshes()
-        if len(waypoints) > 2 and meshes is not None and not any(isinstance(o.shape, PointCloud) for o in obstacles):
-            # the meshes' plan's polyline: the leaves see the meshes' clearance (mesh_escape_plan), theirs exact
-            spheres = np.array([[self.obstacle_clearance(q, o) for o in obstacles] for q in segment])
-            return segment, mesh_allowances(meshes.model, segment, obstacles, buffers, spheres.reshape(clearances.shape),
-                                            self.settings.goal_clearance)
         return segment, np.maximum(0.0, np.asarray(buffers, dtype=float) + self.settings.goal_clearance - clearances)
 
     def allowances(self, q: NDArray[np.float64], obstacles: Sequence[PlacedObstacle],
