@@ -5,8 +5,8 @@ path judged on the robot's meshes wherever its spheres refuse
 
 It keeps a margin ``m`` on the meshes: first each of ``mesh_escape.clearances`` (6 mm, one
 search), then ``mesh_margin`` (3 mm, a search with each seed of guidance's attempts), until a
-search finds a path (the fabric strays 2-3 mm off the part the spheres refuse: a wider margin leaves it
-room). Within ``mesh_escape.end_radius`` of an end nearer them than ``m``, ``0.9 c`` (``c``
+search finds a path (the fabric strays 2-3 mm off the part the spheres refuse: a wider
+margin leaves it room). Within ``mesh_escape.end_radius`` of an end nearer them than ``m``, ``0.9 c`` (``c``
 that end's clearance on them: an end at exactly its margin would touch it; kept everywhere,
 seed-4 kitchen/0008's 0.4 mm start made a path the robot strayed off into the cupboard). The
 path is checked again with the exact mesh distances every half ``path.resolution`` at half
@@ -15,10 +15,8 @@ its least margin
 every ``mesh_escape.resolution``. It is cut at its last configuration the spheres accept by
 the planner's margin (:func:`_split`): the way there is timed as any plan's, the rest is the
 plan's approach, timed at ``approach_speed`` and followed closely, the obstacles' leaves given
-the allowances the spheres need along it
-(:meth:`~dynfab.motion.guidance.JointGuidance.approach_allowances`), as for a grasp's
-straight approach (:mod:`dynfab.motion.approach_segment` measures a polyline on its nearest
-piece). Each search is bounded by its mesh checks (``mesh_escape.checks``), all of them
+allowances along it so that they see the meshes' clearance (:func:`mesh_allowances`;
+:mod:`dynfab.motion.approach_segment` measures a polyline on its nearest piece). Each search is bounded by its mesh checks (``mesh_escape.checks``), all of them
 together by ``mesh_escape.total_checks`` and by ``mesh_escape.budget`` seconds of wall time
 from the plan's start (guidance's attempts before it included; in the simulators, whose
 plans are bounded by checks at any load, ``WALL_FACTOR`` times as long): spent, the plan
