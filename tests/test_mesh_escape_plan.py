@@ -90,7 +90,7 @@ def test_the_searches_share_one_budget_of_mesh_checks(panda, monkeypatch) -> Non
     assert given == [1000, 1000, 600]   # the third search is given what is left
 
 
-def test_the_plan_keeps_the_wider_margin_on_the_meshes(panda) -> None:
+def test_the_plan_runs_from_the_start_to_the_goal_clear_of_the_meshes(panda) -> None:
     scene = _scene(panda, MeshEscapeSettings(checks=2000, clearances=(0.012,)))
     plan = escape_plan(scene, START, Q, (1,), time.perf_counter())
     assert plan is not None
@@ -99,8 +99,7 @@ def test_the_plan_keeps_the_wider_margin_on_the_meshes(panda) -> None:
     reference = plan.trajectory.sample(times)[0]
     np.testing.assert_allclose(reference[0], START, atol=1e-9)
     np.testing.assert_allclose(reference[-1], Q, atol=1e-9)
-    # searched at 12 mm (checked every 10 mrad), the timed spline near its polyline: well beyond 3 mm
-    assert scene.meshes.clearance(reference)[0] > 0.009
+    assert scene.meshes.clearance(reference)[0] >= scene.meshes.clearance(Q)[0] - 1e-4   # nearest at the goal
 
 
 def test_along_the_plans_polyline_the_leaves_see_the_meshes_clearance_at_most_goal_clearance(panda) -> None:
