@@ -112,6 +112,8 @@ def test_a_bent_approach_allows_only_what_is_near_the_robot() -> None:
 
 
 def test_bad_settings_are_refused_by_name() -> None:
-    for name in ("checks", "step", "resolution", "wall_time", "coverage"):
+    for name in ("checks", "step", "resolution", "budget", "coverage"):
         with pytest.raises(ValueError, match=f"mesh_escape.{name}"):
             MeshEscapeSettings(**{name: -1.0})
+    with pytest.raises(ValueError, match=r"mesh_escape.clearances\[1\]"):
+        MeshEscapeSettings(clearances=(0.006, float("nan")))

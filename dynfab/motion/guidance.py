@@ -33,7 +33,7 @@ from dynfab.geometry.shapes import Mesh, PointCloud
 from dynfab.motion.cloud_focus import focused_obstacles
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.inverse_kinematics import IkSettings, solve_ik
-from dynfab.motion.mesh_escape_plan import escape_plan
+from dynfab.motion.mesh_escape_plan import EscapeScene, escape_plan, mesh_allowances
 from dynfab.motion.mesh_goal_check import MeshGoalCheck, endpoint_tests, robot_mesh_model
 from dynfab.perception.surfaces import surface_clearance
 from dynfab.motion.joint_planning import (ApproachTest, JointPath, JointPlannerSettings, NoPathError, approach_clear,
@@ -207,7 +207,10 @@ class JointGuidance:
             tightened = [(replace(s, margin=self.settings.tight_margin), k) for s, k in tries]
             return self._attempts(start, target, tightened, began, True)
         except GuidanceError:   # a goal without escape, or no path: one on the meshes (mesh_escape_plan)
-            escaped = escape_plan(self, start, target, tries, began) if error.reason != "start_in_collision" else None
+            meshes = self._meshes()
+            escaped = (None if meshes is None or error.reason == "start_in_collision" else escape_plan(
+                EscapeScene(self.checker, meshes, self.settings, self.robot.limits, self._lower, self._upper,
+                            self._approach_timed), start, target, [k for _, k in tries], began))
             if escaped is None:
                 raise
             return escaped
@@ -269,10 +272,19 @@ class JointGuidance:
         ``obstacles`` at each (k, m) [m]. The straight approach may pass closer to an
         obstacle than the goal is (a table under a grasp), where the leaves would hold the
         robot short of the goal (problems 21-28, as posed: table_pick); what it may pass
-        matters only until the robot is past it (:meth:`GuidedFabric.allowances`)."""
+        matters only until the robot is past it (:meth:`GuidedFabric.allowances`). Along the
+        meshes' plan's polyline approach (more than two configurations, among meshes without
+        clouds) the leaves see the meshes' clearance instead
+        (:func:`~dynfab.motion.mesh_escape_plan.mesh_allowances`)."""
         if not isinstance(plan.trajectory, PhasedTrajectory):
             raise ValueError("approach_allowances: the plan has no approach")
-        segment = polyline_samples(plan.trajectory.phases[-1].waypoints, self.settings.path.resolution)
+        waypoints = plan.trajectory.phases[-1].waypoints
+        segment = polyline_samples(waypoints, self.settings.path.resolution)
+        if (len(waypoints) > 2 and not any(isinstance(o.shape, PointCloud) for o in obstacles)
+                and (meshes := self._meshes()) is not None):   # the meshes' plan's polyline (mesh_escape_plan)
+            spheres = np.array([[self.obstacle_clearance(q, o) for o in obstacles] for q in segment])
+            return segment, mesh_allowances(meshes.model, segment, obstacles, buffers,
+                                            spheres.reshape(len(segment), len(obstacles)), self.settings.goal_clearance)
         clearances = np.empty((len(segment), len(obstacles)))
         for k, obstacle in enumerate(obstacles):
             self._single.set_obstacles((obstacle,))

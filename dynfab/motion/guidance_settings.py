@@ -69,13 +69,15 @@ class GuidanceSettings:
             :meth:`JointGuidance._endpoint_tests`).
         mesh_escape: the search, among meshes (no point clouds), where no attempt found an
             escape of the goal or a path: judged on the robot's meshes wherever the spheres
-            refuse (:mod:`dynfab.motion.mesh_escape`), its part the spheres refuse followed
-            as an approach (:mod:`dynfab.motion.mesh_escape_plan`). None (the default): none.
-            Opt-in (``MeshEscapeSettings()``): on held-out MBM kitchen seeds 5 and 6 (problems
-            1-20 each) it reached two goals that had no plan (seed 5 kitchen/0012, seed 6
-            kitchen/0002), but the second run touched the kitchen 0.1 mm deep with
-            ``panda_link6``: the fabric strays 2-3 mm off a path kept 3 mm clear on the
-            meshes; its plans take 30-300 s of wall time.
+            refuse (:mod:`dynfab.motion.mesh_escape`), at 6 mm first, then ``mesh_margin``,
+            within a budget, its part the spheres refuse followed as an approach
+            (:mod:`dynfab.motion.mesh_escape_plan`). None (the default): none. Opt-in
+            (``MeshEscapeSettings()``): on held-out kitchen seed 6 (session 13) a run it
+            rescued touched the kitchen 0.1 mm deep with ``panda_link6``; with the 6 mm search
+            (session 14) two of the six runs it rescues on development seeds 0-4 still
+            come within 0.56-0.73 mm of the kitchen away from their starts (leaving a start
+            in a pocket beside the path, or 8 mrad beside a 3 mm path's approach:
+            docs/results.md).
         mesh_escape_samples: ``path.escape_samples`` for a goal whose approach the meshes
             judge (:meth:`JointGuidance._endpoint_tests`) [-]: 400 found no escape for as-posed
             table_pick/0032 (problems 29-32, which chose it), its hand between a table and a cube

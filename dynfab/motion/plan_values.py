@@ -28,7 +28,8 @@ GoalTargets = JointTarget | Sequence[PointTarget | AxisTarget]
 
 class GuidanceError(RuntimeError):
     """No plan: ``reason`` is ``goal_outside_limits``, ``no_ik_solution``,
-    ``start_in_collision``, ``goal_in_collision``, ``no_path`` or ``timing``."""
+    ``start_in_collision``, ``goal_in_collision``, ``no_path``, ``timing`` or
+    ``mesh_escape_budget`` (:mod:`dynfab.motion.mesh_escape_plan`)."""
 
     def __init__(self, reason: str, message: str) -> None:
         super().__init__(message)
