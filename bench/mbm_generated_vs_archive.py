@@ -13,6 +13,7 @@ generated ones:
 - ``hand in object``: the goal hand in the grasped object's frame, mean (and its spread,
   the largest standard deviation of the three axes) [m];
 - ``gap``: the median mesh distance of the robot to the grasped object at the goal [mm];
+- ``goal - start``: the median joint distance from start to goal (Euclidean, 7 joints) [rad];
 - ``valid``: the share valid as posed on Franka's meshes (start and goal free, in limits).
 
 The grasped object is the graspable one nearest the hand at the goal
@@ -40,7 +41,7 @@ from dynfab.scenario.schema import scenario_from_dict
 
 def row(problems: Sequence[Problem], robot: Franka) -> list[str]:
     """The table's cells of one type and source (module doc)."""
-    hands, local, gaps, heights, yaws = [], [], [], [], []
+    hands, local, gaps, heights, yaws, spans = [], [], [], [], [], []
     for problem in problems:
         index = grasped_object(problem, robot)
         obj = problem.objects[index]
@@ -50,6 +51,7 @@ def row(problems: Sequence[Problem], robot: Franka) -> list[str]:
         hands.append(hand)
         local.append(rotation.T @ (hand - np.asarray(obj.position)))
         heights.append(obj.position[2])
+        spans.append(float(np.linalg.norm(goal - np.array(robot.clipped(problem.start)))))
         last = quaternion_matrix(problem.objects[-1].orientation)
         yaws.append(float(np.arctan2(last[1, 0], last[0, 0])))
         case = prepare_case(problem, "as-posed", robot)
@@ -62,6 +64,7 @@ def row(problems: Sequence[Problem], robot: Franka) -> list[str]:
             f"{min(heights):.2f}..{max(heights):.2f}", _vector(hands_array.mean(0)),
             f"{_vector(hands_array.min(0))}..{_vector(hands_array.max(0))}",
             f"{_vector(local_array.mean(0))} ±{local_array.std(0).max():.3f}", f"{np.median(gaps):.1f}",
+            f"{np.median(spans):.2f}",
             f"{valid}/{len(problems)}"]
 
 
@@ -84,8 +87,8 @@ def main() -> None:
     types = tuple(args.types.split(","))
     archive = load_problems(types)
     print("| type | source | objects | start=ready | yaw [rad] | object z [m] | goal hand mean [m] | goal hand range [m] "
-          "| hand in object [m] | gap [mm] | valid |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+          "| hand in object [m] | gap [mm] | goal - start [rad] | valid |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for name in types:
         generated = generated_problems((name,), args.per_type, 0, args.seed, robot)
         for source, problems in (("archive", [p for p in archive if p.type == name]), ("generated", generated)):
