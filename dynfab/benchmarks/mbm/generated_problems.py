@@ -83,24 +83,31 @@ def generate_problem(name: str, number: int, seed: int, robot: Franka) -> Proble
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ValueError(f"seed: expected a non-negative integer, got {seed!r}")
     rng = np.random.default_rng([seed, PROBLEM_TYPES.index(name), number, STREAM])
-    pairs = [(start, goal) for goal in config.goal_queries for start in config.start_queries
-             if _query_name(start) != _query_name(goal)] or [(None, goal) for goal in config.goal_queries]
+    pairs: list[tuple[Query | None, Query]] = [
+        (start, goal) for goal in config.goal_queries for start in config.start_queries
+        if _query_name(start) != _query_name(goal)] or [(None, goal) for goal in config.goal_queries]
     for _ in range(SCENE_ATTEMPTS):
-        objects = sample_scene(config, rng)
-        shapes = _shapes(name, number, objects, robot)
-        start_query, goal_query = pairs[rng.integers(len(pairs))]
-        if start_query is None:
-            start = np.array(READY) if is_free(robot, READY, shapes) else None
-        else:
-            start = _query_ik(robot, config, start_query, objects, shapes, rng)
-        if start is None:
-            continue
-        goal = _query_ik(robot, config, goal_query, objects, shapes, rng)
-        if goal is None:
-            continue
-        return Problem(name, number, tuple(float(v) for v in start), tuple(float(v) for v in goal), objects)
+        problem = _draw(config, number, pairs, robot, rng)
+        if problem is not None:
+            return problem
     raise ProblemError(f"configs/problems/{name}_panda.yaml", "queries",
                        f"no free start and goal in {SCENE_ATTEMPTS} scenes (problem {number}, seed {seed})")
+
+
+def _draw(config: PrimitiveConfig, number: int, pairs: Sequence[tuple[Query | None, Query]], robot: Franka,
+          rng: np.random.Generator) -> Problem | None:
+    """One scene and query pair with a free start and goal on them (module doc, steps 1-3), or None."""
+    objects = sample_scene(config, rng)
+    shapes = _shapes(config.name, number, objects, robot)
+    start_query, goal_query = pairs[rng.integers(len(pairs))]
+    if start_query is None:
+        start = np.array(READY) if is_free(robot, READY, shapes) else None
+    else:
+        start = _query_ik(robot, config, start_query, objects, shapes, rng)
+    goal = None if start is None else _query_ik(robot, config, goal_query, objects, shapes, rng)
+    if start is None or goal is None:
+        return None
+    return Problem(config.name, number, tuple(float(v) for v in start), tuple(float(v) for v in goal), objects)
 
 
 def sample_scene(config: PrimitiveConfig, rng: np.random.Generator) -> tuple[SceneObject, ...]:
