@@ -7,7 +7,8 @@ Per type, over the archive's problems (all 92 of the bundled archive) and ``--pe
 generated ones:
 
 - ``objects``: primitives per scene; ``start=ready``: the share starting at MBM's ready state;
-- ``yaw``: the range of the scene's yaw [rad] (of its last, never varied, primitive);
+- ``yaw``: the range of the scene's yaw [rad] (of the first object of the scene file that
+  no variation entry but ``World`` moves);
 - ``object z``: the range of the grasped object's height [m];
 - ``goal hand``: mean and range of the hand (``panda_hand_tcp``) at the goal [m];
 - ``hand in object``: the goal hand in the grasped object's frame, mean (and its spread,
@@ -30,6 +31,7 @@ import numpy as np
 
 from dynfab.benchmarks.mbm.franka import TCP_LINK, Franka, franka
 from dynfab.benchmarks.mbm.generated_problems import generated_problems
+from dynfab.benchmarks.mbm.primitive_configs import primitive_config
 from dynfab.benchmarks.mbm.problems import PROBLEM_TYPES, Problem, load_problems
 from dynfab.benchmarks.mbm.query_ik import READY
 from dynfab.benchmarks.mbm.validity import static_shapes
@@ -52,8 +54,8 @@ def row(problems: Sequence[Problem], robot: Franka) -> list[str]:
         local.append(rotation.T @ (hand - np.asarray(obj.position)))
         heights.append(obj.position[2])
         spans.append(float(np.linalg.norm(goal - np.array(robot.clipped(problem.start)))))
-        last = quaternion_matrix(problem.objects[-1].orientation)
-        yaws.append(float(np.arctan2(last[1, 0], last[0, 0])))
+        anchor = quaternion_matrix(next(o for o in problem.objects if o.id == _anchor(problem.type)).orientation)
+        yaws.append(float(np.arctan2(anchor[1, 0], anchor[0, 0])))
         case = prepare_case(problem, "as-posed", robot)
         shapes = _shapes_of(case.mapping, index)
         gaps.append(float(clearance_per_sample(robot.meshes, goal[None], shapes)[0]) * 1000)
@@ -71,6 +73,13 @@ def row(problems: Sequence[Problem], robot: Franka) -> list[str]:
 def _shapes_of(mapping: dict[str, Any], index: int) -> list[PlacedShape]:
     """The placed shape of obstacle ``index`` of a scenario mapping."""
     return [static_shapes(scenario_from_dict(mapping))[index]]
+
+
+def _anchor(name: str) -> str:
+    """The id of the first object of type ``name``'s scene file that only ``World`` moves."""
+    config = primitive_config(name)
+    varied = {obj for v in config.object_variations for obj in v.names}
+    return next(o.id for o in config.scene if o.id not in varied)
 
 
 def _vector(values: np.ndarray) -> str:

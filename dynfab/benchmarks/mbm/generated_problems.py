@@ -23,7 +23,9 @@ draws apart from the moving sphere's, ``[seed, type index, number]``):
    ``T_object · T_offset · T_ee⁻¹`` (``T_object`` the pose of the object's first
    primitive), sampled within the query's tolerances, within the joint limits and free of
    the whole scene (the object to grasp included: the open hand stops short of it) and of
-   self-collision on Franka's meshes (:mod:`~dynfab.benchmarks.mbm.query_ik`);
+   self-collision on Franka's meshes (:mod:`~dynfab.benchmarks.mbm.query_ik`). The start's
+   IK is seeded first at the ready state, the goal's at the start (MoveIt's state when MBM
+   asks for it: after a start query, its solution);
 4. a scene whose start or goal has none is drawn again (:data:`SCENE_ATTEMPTS`), as MBM's
    loop does. MBM also keeps only problems its planner solves in 60 s; here none is
    dropped for that.
@@ -103,8 +105,8 @@ def _draw(config: PrimitiveConfig, number: int, pairs: Sequence[tuple[Query | No
     if start_query is None:
         start = np.array(READY) if is_free(robot, READY, shapes) else None
     else:
-        start = _query_ik(robot, config, start_query, objects, shapes, rng)
-    goal = None if start is None else _query_ik(robot, config, goal_query, objects, shapes, rng)
+        start = _query_ik(robot, config, start_query, objects, shapes, rng, np.array(READY))
+    goal = None if start is None else _query_ik(robot, config, goal_query, objects, shapes, rng, start)
     if start is None or goal is None:
         return None
     return Problem(config.name, number, tuple(float(v) for v in start), tuple(float(v) for v in goal), objects)
@@ -126,10 +128,11 @@ def sample_scene(config: PrimitiveConfig, rng: np.random.Generator) -> tuple[Sce
 
 
 def _query_ik(robot: Franka, config: PrimitiveConfig, query: Query, objects: Sequence[SceneObject],
-              shapes: Sequence[PlacedShape], rng: np.random.Generator) -> NDArray[np.float64] | None:
-    """A free configuration on ``query`` (module doc, step 3), or None."""
+              shapes: Sequence[PlacedShape], rng: np.random.Generator,
+              initial: NDArray[np.float64]) -> NDArray[np.float64] | None:
+    """A free configuration on ``query`` (module doc, step 3), IK seeded first at ``initial``, or None."""
     target = _matrix(next(o for o in objects if o.id == query.obj)) @ query.offset @ np.linalg.inv(config.ee_offset)
-    found = free_query_ik(robot, target, query, shapes, rng)
+    found = free_query_ik(robot, target, query, shapes, rng, initial)
     return None if found is None else found[0]
 
 

@@ -7,8 +7,8 @@ The tip's target ``T_8`` (4x4, robot base frame) is ``T_object · T_offset · T_
 in the box of full edges ``position_tolerance`` [m] (world axes) centred on ``T_8``'s, the
 rotation as ``R_8 · Rx(a) Ry(b) Rz(c)`` with ``a, b, c`` uniform within
 ±``orientation_tolerance`` [rad] (robowflex's ``TF::sampleOrientation``); inverse
-kinematics (:data:`IK_SETTINGS`, :data:`READY` the first seed) must put the tip on that
-pose within the joint limits. MBM tries 200 times; here :data:`POSE_ATTEMPTS` poses of 10
+kinematics (:data:`IK_SETTINGS`, the first seed ``initial``: MoveIt's current state, by
+default :data:`READY`) must put the tip on that pose within the joint limits. MBM tries 200 times; here :data:`POSE_ATTEMPTS` poses of 10
 seeds each.
 """
 
@@ -45,10 +45,11 @@ def is_free(robot: Franka, q: Sequence[float] | NDArray[np.float64], shapes: Seq
 
 
 def free_query_ik(robot: Franka, target: NDArray[np.float64], query: Query, shapes: Sequence[PlacedShape],
-                  rng: np.random.Generator) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+                  rng: np.random.Generator, initial: Sequence[float] = READY
+                  ) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
     """A free configuration putting ``panda_link8`` on a pose sampled within ``query``'s
-    tolerances about ``target`` (module doc), and that pose (4x4); None after
-    :data:`POSE_ATTEMPTS` poses."""
+    tolerances about ``target`` (module doc), IK seeded first at ``initial`` [rad], and that
+    pose (4x4); None after :data:`POSE_ATTEMPTS` poses."""
     for _ in range(POSE_ATTEMPTS):
         position = target[:3, 3] + rng.uniform(-0.5, 0.5, 3) * np.asarray(query.position_tolerance)
         turn = Rotation.from_euler("XYZ", rng.uniform(-1.0, 1.0, 3) * np.asarray(query.orientation_tolerance))
@@ -57,7 +58,7 @@ def free_query_ik(robot: Franka, target: NDArray[np.float64], query: Query, shap
         targets += [AxisTarget(TIP_LINK, tuple(float(v) for v in np.eye(3)[k]), tuple(float(v) for v in rotation[:, k]))
                     for k in range(3)]
         settings = IkSettings(**{**IK_SETTINGS.__dict__, "seed": int(rng.integers(2**31))})
-        result = solve_ik(robot.robot, targets, np.array(READY), lambda q: is_free(robot, q, shapes), settings)
+        result = solve_ik(robot.robot, targets, np.array(initial, dtype=float), lambda q: is_free(robot, q, shapes), settings)
         if result.q is not None:
             return result.q, pose_matrix(position, rotation)
     return None
