@@ -11,7 +11,7 @@ import pytest
 
 from dynfab.benchmarks.mbm.benchmark import BenchmarkSettings, _cases
 from dynfab.benchmarks.mbm.franka import franka
-from dynfab.benchmarks.mbm.generated_problems import generate_problem, sample_scene
+from dynfab.benchmarks.mbm.generated_problems import generate_problem, generated_problems, sample_scene
 from dynfab.benchmarks.mbm.moveit import SceneObject
 from dynfab.benchmarks.mbm.primitive_configs import primitive_config
 from dynfab.benchmarks.mbm.problems import PROBLEM_TYPES, Problem
@@ -137,3 +137,10 @@ def test_the_generator_refuses_a_bad_type_seed_or_number_by_name(call, message: 
     with pytest.raises(ValueError, match=message):
         call(franka())
 
+
+
+def test_problems_drawn_over_two_processes_are_those_drawn_in_one() -> None:
+    robot = franka()
+    serial = generated_problems(("cage", "box"), 1, 2, 9, robot)
+    assert [p.name for p in serial] == ["cage/0003", "box/0003"]
+    assert generated_problems(("cage", "box"), 1, 2, 9, robot, jobs=2) == serial

@@ -113,7 +113,7 @@ def run_benchmark(settings: BenchmarkSettings, out_dir: str | Path, jobs: int | 
     jobs = (os.cpu_count() or 1) if jobs is None else jobs
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    cases = _cases(settings)
+    cases = _cases(settings, jobs)
     if settings.guidance is not None:
         cases = [dataclasses.replace(case, mapping={**case.mapping, "guidance": settings.guidance}) for case in cases]
     log = out / "runs.jsonl"
@@ -138,8 +138,9 @@ def run_benchmark(settings: BenchmarkSettings, out_dir: str | Path, jobs: int | 
     return ordered
 
 
-def _cases(settings: BenchmarkSettings) -> list[Case]:
-    """Every problem of ``settings`` prepared as a case of its robot and variant.
+def _cases(settings: BenchmarkSettings, jobs: int = 1) -> list[Case]:
+    """Every problem of ``settings`` prepared as a case of its robot and variant (generated
+    problems drawn over ``jobs`` local processes).
 
     Raises:
         ValueError: An unknown robot or source, a variant the UR5 does not have, or an
@@ -156,7 +157,7 @@ def _cases(settings: BenchmarkSettings) -> list[Case]:
         problems: tuple[Problem, ...] = ()
     elif settings.source == "generated":
         problems = generated_problems(primitive, settings.per_type or SCENE_PROBLEMS, settings.skip, settings.seed,
-                                      franka())
+                                      franka(), jobs)
     else:
         problems = load_problems(primitive, settings.per_type, archive=settings.archive, skip=settings.skip)
     if scenes and (settings.robot, settings.variant) != ("panda", SCENE_VARIANT):

@@ -34,14 +34,16 @@ draws apart from the moving sphere's, ``[seed, type index, number]``):
 from __future__ import annotations
 
 import dataclasses
+import multiprocessing
 from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from dynfab.benchmarks.mbm.conversion import scenario_mapping
-from dynfab.benchmarks.mbm.franka import Franka
+from dynfab.benchmarks.mbm.franka import Franka, franka
 from dynfab.benchmarks.mbm.moveit import ProblemError, SceneObject
 from dynfab.benchmarks.mbm.primitive_configs import PrimitiveConfig, primitive_config
 from dynfab.benchmarks.mbm.problems import PROBLEM_TYPES, Problem
@@ -59,17 +61,28 @@ __all__ = ["STREAM", "generate_problem", "generated_problems", "sample_scene"]
 STREAM = 19
 
 
-def generated_problems(types: Sequence[str], per_type: int, skip: int, seed: int, robot: Franka) -> tuple[Problem, ...]:
-    """Problems ``skip + 1 .. skip + per_type`` of each of ``types`` (in that order) drawn from ``seed``.
+def generated_problems(types: Sequence[str], per_type: int, skip: int, seed: int, robot: Franka,
+                       jobs: int = 1) -> tuple[Problem, ...]:
+    """Problems ``skip + 1 .. skip + per_type`` of each of ``types`` (in that order) drawn
+    from ``seed``, over ``jobs`` local processes (each problem draws from its own seed
+    sequence: the same problems for any ``jobs``).
 
     Raises:
-        ValueError: An unknown type, a negative seed or skip, or ``per_type`` below 1.
+        ValueError: An unknown type, a negative seed or skip, or ``per_type`` or ``jobs`` below 1.
         ProblemError: A problem found no free start and goal (:func:`generate_problem`).
     """
-    if per_type < 1 or skip < 0:
-        raise ValueError(f"per_type must be at least 1 and skip at least 0, got {per_type} and {skip}")
-    return tuple(generate_problem(name, number, seed, robot)
-                 for name in types for number in range(skip + 1, skip + per_type + 1))
+    if per_type < 1 or skip < 0 or jobs < 1:
+        raise ValueError(f"per_type and jobs must be at least 1 and skip at least 0, got {per_type}, {jobs} and {skip}")
+    keys = [(name, number) for name in types for number in range(skip + 1, skip + per_type + 1)]
+    if jobs == 1 or len(keys) == 1:
+        return tuple(generate_problem(name, number, seed, robot) for name, number in keys)
+    with ProcessPoolExecutor(max_workers=min(jobs, len(keys)), mp_context=multiprocessing.get_context("spawn")) as pool:
+        return tuple(pool.map(_generate_with_franka, *zip(*keys), [seed] * len(keys)))
+
+
+def _generate_with_franka(name: str, number: int, seed: int) -> Problem:
+    """:func:`generate_problem` in a worker process, on its own Franka."""
+    return generate_problem(name, number, seed, franka())
 
 
 def generate_problem(name: str, number: int, seed: int, robot: Franka) -> Problem:
