@@ -51,7 +51,8 @@ from dynfab.robots.urdf_model import UrdfModel
 from dynfab.scenario.scene_files import link_poses
 from dynfab.scenario.schema import scenario_from_dict
 
-__all__ = ["ANGLE_TOLERANCE", "SCENE_ATTEMPTS", "TOLERANCE", "VARIANT", "SceneProblem", "generate_scene_problem", "prepare_scene_case", "scene_problems"]
+__all__ = ["ANGLE_TOLERANCE", "SCENE_ATTEMPTS", "TOLERANCE", "VARIANT", "SceneProblem", "generate_scene_problem",
+           "prepare_scene_case", "scene_problems"]
 
 #: The variant's name: the scenes have no graspable object to remove.
 VARIANT = "as-posed"
