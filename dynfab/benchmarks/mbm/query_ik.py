@@ -8,8 +8,8 @@ in the box of full edges ``position_tolerance`` [m] (world axes) centred on ``T_
 rotation as ``R_8 · Rx(a) Ry(b) Rz(c)`` with ``a, b, c`` uniform within
 ±``orientation_tolerance`` [rad] (robowflex's ``TF::sampleOrientation``); inverse
 kinematics (:data:`IK_SETTINGS`, the first seed ``initial``: MoveIt's current state, by
-default :data:`READY`) must put the tip on that pose within the joint limits. MBM tries 200 times; here :data:`POSE_ATTEMPTS` poses of 10
-seeds each.
+default :data:`READY`) must put the tip on that pose within the joint limits. MBM tries 200
+times; here :data:`POSE_ATTEMPTS` poses of 10 seeds each.
 """
 
 from __future__ import annotations
@@ -58,7 +58,8 @@ def free_query_ik(robot: Franka, target: NDArray[np.float64], query: Query, shap
         targets += [AxisTarget(TIP_LINK, tuple(float(v) for v in np.eye(3)[k]), tuple(float(v) for v in rotation[:, k]))
                     for k in range(3)]
         settings = IkSettings(**{**IK_SETTINGS.__dict__, "seed": int(rng.integers(2**31))})
-        result = solve_ik(robot.robot, targets, np.array(initial, dtype=float), lambda q: is_free(robot, q, shapes), settings)
+        result = solve_ik(robot.robot, targets, np.array(initial, dtype=float), lambda q: is_free(robot, q, shapes),
+                          settings)
         if result.q is not None:
             return result.q, pose_matrix(position, rotation)
     return None
