@@ -41,9 +41,15 @@ def add_benchmark_parser(commands: Any) -> None:
     parser.add_argument("--types", type=_types, default=PROBLEM_TYPES, metavar="T1,T2",
                         help=f"problem types, comma-separated (default all of the archive: {','.join(PROBLEM_TYPES)}); "
                              "the mesh scenes kitchen,table_bars (generated from --seed, as-posed only)")
+    parser.add_argument("--source", choices=("archive", "generated"), default="archive",
+                        help="archive (default): the seven types' problems of the bundled archive (or --archive); "
+                             "generated: new problems of theirs, drawn from --seed as MotionBenchMaker's generate does "
+                             "from its bundled configs (scene variation, query, collision-free IK on Franka's meshes), "
+                             "numbered 1, 2, ... (default 100 per type), in every variant")
     parser.add_argument("--problems", type=at_least_one, metavar="N", help="the first N problems of each type")
     parser.add_argument("--first", type=at_least_one, metavar="K", default=1,
-                        help="start at each type's K-th problem (default 1; the shared set numbers them from 9)")
+                        help="start at each type's K-th problem (default 1; the shared set numbers them from 9, "
+                             "generated ones from 1)")
     parser.add_argument("--archive", type=Path, metavar="PATH",
                         help="read the problems from this archive in VAMP's format (e.g. VAMP's "
                              "resources/panda/problems.tar.bz2, with the problems 1-8 the bundled one leaves out) "
@@ -52,8 +58,11 @@ def add_benchmark_parser(commands: Any) -> None:
                         help="the scenarios' planner (default dynamic-fabric)")
     parser.add_argument("--guidance", action=argparse.BooleanOptionalAction,
                         help="set the scenarios' guidance key (default: the schema's default)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the moving spheres and of the mesh scenes' problems (default 0)")
-    parser.add_argument("--out", type=Path, help="output directory (default dynfab-benchmarks/mbm-VARIANT)")
+    parser.add_argument("--seed", type=_seed, default=0,
+                        help="seed of the moving spheres and of the generated problems (mesh scenes, --source "
+                             "generated), a non-negative integer (default 0)")
+    parser.add_argument("--out", type=Path, help="output directory (default dynfab-benchmarks/mbm-VARIANT, "
+                                                 "dynfab-benchmarks/mbm-generated-VARIANT for --source generated)")
     parser.add_argument("--jobs", type=at_least_one, help="worker processes (default: the number of CPUs)")
     parser.add_argument("--workers", type=at_least_one,
                         help="run on Dask: an embedded LocalCluster of this many worker processes")
@@ -72,9 +81,14 @@ def benchmark_command(args: argparse.Namespace) -> int:
     if args.robot == "ur5" and variant != "object-removed":
         print(f"dynfab: error: --robot ur5 runs the object-removed variant only, not {variant}", file=sys.stderr)
         return 2
+    if args.source == "generated" and args.archive is not None:
+        print("dynfab: error: --archive reads an archive's problems, --source generated draws new ones: give one",
+              file=sys.stderr)
+        return 2
     settings = BenchmarkSettings(variant, args.types, args.problems, args.planner, args.guidance, args.seed,
-                                 args.first - 1, args.robot, args.archive)
-    out = args.out or Path("dynfab-benchmarks") / f"mbm-{settings.label}"
+                                 args.first - 1, args.robot, args.archive, args.source)
+    generated = "generated-" if args.source == "generated" else ""
+    out = args.out or Path("dynfab-benchmarks") / f"mbm-{generated}{settings.label}"
     records = reported(lambda: run_benchmark(settings, out, args.jobs, requested_cluster(args.workers, args.scheduler),
                                              sys.stderr),
                        (BenchmarkError, ClusterError, ProblemError, ScenarioError),
@@ -85,6 +99,17 @@ def benchmark_command(args: argparse.Namespace) -> int:
     print(f"dynfab: {len(records)} problems; wrote {out}/runs.jsonl, runs.csv, summary.md, summary.json and "
           f"scenarios/", file=sys.stderr)
     return 0
+
+
+def _seed(text: str) -> int:
+    """``--seed``: a non-negative integer (numpy's seed sequences take no negative one)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {value}")
+    return value
 
 
 def _types(text: str) -> tuple[str, ...]:

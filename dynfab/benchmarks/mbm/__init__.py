@@ -6,4 +6,6 @@ M. Toussaint, L. E. Kavraki, "MotionBenchMaker: A Tool to Generate and Benchmark
 Planning Datasets", IEEE Robotics and Automation Letters 7(2), 2022. The problem sets are
 those KavrakiLab/vamp ships (Apache-2.0, ``data/LICENSE-vamp``; MBM itself is BSD-3-Clause,
 ``data/LICENSE-motion_bench_maker``); ``data/README.md`` says what the bundled files are.
+New problems of the same types are drawn from MBM's bundled configs
+(:mod:`dynfab.benchmarks.mbm.generated_problems`, ``--source generated``).
 """

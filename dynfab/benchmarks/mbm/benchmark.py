@@ -31,8 +31,9 @@ import yaml
 
 from dynfab.benchmarks.mbm.conversion import PLANNER
 from dynfab.benchmarks.mbm.franka import franka
+from dynfab.benchmarks.mbm.generated_problems import generated_problems
 from dynfab.benchmarks.mbm.problem_run import run_case
-from dynfab.benchmarks.mbm.problems import PROBLEM_TYPES, load_problems
+from dynfab.benchmarks.mbm.problems import PROBLEM_TYPES, Problem, load_problems
 from dynfab.benchmarks.mbm.scene_configs import SCENE_TYPES
 from dynfab.benchmarks.mbm.scenes import VARIANT as SCENE_VARIANT
 from dynfab.benchmarks.mbm.scenes import prepare_scene_case, scene_problems
@@ -45,11 +46,14 @@ from dynfab.fabric.fingerprint import package_digest
 from dynfab.experiments.cluster import Cluster, series_executor
 from dynfab.experiments.series import Progress, RunError, SeriesError, exclusive, log_lines
 
-__all__ = ["BenchmarkError", "BenchmarkSettings", "run_benchmark"]
+__all__ = ["SOURCES", "BenchmarkError", "BenchmarkSettings", "run_benchmark"]
 
 
-#: Problems of a mesh scene when ``per_type`` is None (MBM's configs ask for 100).
+#: Problems of a generated type when ``per_type`` is None (MBM's configs ask for 100).
 SCENE_PROBLEMS = 100
+#: Where the seven primitive types' problems come from: the archive, or drawn from ``seed``
+#: (:mod:`dynfab.benchmarks.mbm.generated_problems`).
+SOURCES: tuple[str, ...] = ("archive", "generated")
 
 
 class BenchmarkError(ValueError):
@@ -66,14 +70,16 @@ class BenchmarkSettings:
         robot: ``panda`` (the problems as posed) or ``ur5`` (:mod:`dynfab.benchmarks.mbm.ur5_case`).
         types: Problem types, in report order: those of the archive and the mesh scenes
             (:mod:`dynfab.benchmarks.mbm.scenes`, generated from ``seed``).
-        per_type: The first this many problems of each type; None: all (a mesh scene:
+        per_type: The first this many problems of each type; None: all (a generated type:
             :data:`SCENE_PROBLEMS`).
         planner: The scenario's planner.
         guidance: The scenario's ``guidance`` key; None leaves it out (the schema's default).
-        seed: Seed of the moving spheres and of the mesh scenes' problems.
+        seed: Seed of the moving spheres and of the generated problems.
         skip: Problems of each type skipped before the first ``per_type`` (in number order).
         archive: A problems archive in VAMP's format to read instead of the bundled one
             (:func:`~dynfab.benchmarks.mbm.problems.load_problems`); None: the bundled one.
+        source: One of :data:`SOURCES`: the seven primitive types read from the archive, or
+            new problems of theirs generated from ``seed`` (numbered 1, 2, ...).
     """
 
     variant: str = "as-posed"
@@ -85,6 +91,7 @@ class BenchmarkSettings:
     skip: int = 0
     robot: str = "panda"
     archive: Path | None = None
+    source: str = "archive"
 
     @property
     def label(self) -> str:
@@ -106,7 +113,7 @@ def run_benchmark(settings: BenchmarkSettings, out_dir: str | Path, jobs: int | 
     jobs = (os.cpu_count() or 1) if jobs is None else jobs
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    cases = _cases(settings)
+    cases = _cases(settings, jobs)
     if settings.guidance is not None:
         cases = [dataclasses.replace(case, mapping={**case.mapping, "guidance": settings.guidance}) for case in cases]
     log = out / "runs.jsonl"
@@ -131,15 +138,28 @@ def run_benchmark(settings: BenchmarkSettings, out_dir: str | Path, jobs: int | 
     return ordered
 
 
-def _cases(settings: BenchmarkSettings) -> list[Case]:
-    """Every problem of ``settings`` prepared as a case of its robot and variant.
+def _cases(settings: BenchmarkSettings, jobs: int = 1) -> list[Case]:
+    """Every problem of ``settings`` prepared as a case of its robot and variant (generated
+    problems drawn over ``jobs`` local processes).
 
     Raises:
-        ValueError: An unknown robot, or a variant the UR5 does not have.
+        ValueError: An unknown robot or source, a variant the UR5 does not have, or an
+            archive with generated problems.
     """
     scenes = tuple(t for t in settings.types if t in SCENE_TYPES)
-    problems = load_problems(tuple(t for t in settings.types if t not in SCENE_TYPES), settings.per_type,
-                             archive=settings.archive, skip=settings.skip) if len(scenes) < len(settings.types) else ()
+    primitive = tuple(t for t in settings.types if t not in SCENE_TYPES)
+    if settings.source not in SOURCES:
+        raise ValueError(f"unknown source {settings.source!r} (expected one of {', '.join(SOURCES)})")
+    if settings.source == "generated" and settings.archive is not None:
+        raise ValueError(f"an archive ({settings.archive}) holds problems to read, the generated source draws new "
+                         f"ones: give one of them")
+    if not primitive:
+        problems: tuple[Problem, ...] = ()
+    elif settings.source == "generated":
+        problems = generated_problems(primitive, settings.per_type or SCENE_PROBLEMS, settings.skip, settings.seed,
+                                      franka(), jobs)
+    else:
+        problems = load_problems(primitive, settings.per_type, archive=settings.archive, skip=settings.skip)
     if scenes and (settings.robot, settings.variant) != ("panda", SCENE_VARIANT):
         raise ValueError(f"the mesh scenes ({', '.join(scenes)}) run the Panda {SCENE_VARIANT} only (their queries "
                          f"name no object to remove)")

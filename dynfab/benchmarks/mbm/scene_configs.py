@@ -27,14 +27,15 @@ from dataclasses import dataclass
 from functools import cache
 from importlib.resources import as_file, files
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import yaml
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-__all__ = ["PACKAGE", "SCENE_TYPES", "Query", "SceneConfig", "Variation", "data_root", "pose_matrix",
-           "scene_config"]
+__all__ = ["PACKAGE", "SCENE_TYPES", "Query", "SceneConfig", "Variation", "config_pose", "data_root", "pose_matrix",
+           "query_list", "read_config", "scene_config", "variation_list"]
 
 #: The mesh scenes of MBM with a Panda problem config, in report order.
 SCENE_TYPES: tuple[str, ...] = ("kitchen", "table_bars")
@@ -124,27 +125,37 @@ def scene_config(name: str) -> SceneConfig:
     """
     if name not in SCENE_TYPES:
         raise ValueError(f"unknown scene {name!r} (expected one of {', '.join(SCENE_TYPES)})")
-    config = _read(f"package://{PACKAGE}/configs/problems/{name}_panda.yaml")
-    queries = _read(config["queries"])
-    variations = tuple(Variation(tuple(v["names"]), tuple(v["position"]), tuple(v["orientation"]))
-                       for v in _read(config["variation"]))
-    return SceneConfig(name, config["scene"], _pose(config["base_offset"]), _pose(config["ee_offset"]),
-                       tuple(_query(q) for q in queries.get("start_queries", ())),
-                       tuple(_query(q) for q in queries["goal_queries"]), variations)
+    config = read_config(f"package://{PACKAGE}/configs/problems/{name}_panda.yaml")
+    queries = read_config(config["queries"])
+    return SceneConfig(name, config["scene"], config_pose(config["base_offset"]), config_pose(config["ee_offset"]),
+                       query_list(queries.get("start_queries", ())), query_list(queries["goal_queries"]),
+                       variation_list(read_config(config["variation"])))
 
 
-def _read(uri: str) -> dict:  # type: ignore[type-arg]
+def read_config(uri: str) -> Any:
     """A bundled YAML file named by its ``package://motion_bench_maker/...`` URI."""
     relative = uri.removeprefix("package://")
     return yaml.safe_load((data_root() / relative).read_text(encoding="utf-8"))
 
 
-def _pose(node: dict) -> NDArray[np.float64]:  # type: ignore[type-arg]
+def config_pose(node: dict[str, Any]) -> NDArray[np.float64]:
+    """A config's ``{position: [x, y, z], orientation: [x, y, z, w]}`` as a 4x4 pose."""
     return pose_matrix(np.asarray(node["position"], dtype=float),
                        Rotation.from_quat(np.asarray(node["orientation"], dtype=float)).as_matrix())
 
 
-def _query(node: dict) -> Query:  # type: ignore[type-arg]
-    (obj,) = node["objects"]
-    offset = node["offset"]
-    return Query(obj, node["tag"], _pose(offset), tuple(offset["position_tol"]), tuple(offset["orientation_tol"]))
+def query_list(nodes: list[dict[str, Any]]) -> tuple[Query, ...]:
+    """A queries file's ``start_queries`` or ``goal_queries``: one :class:`Query` per object
+    an entry names (MBM's ``IO::loadQueries``: ``objects: [Can1, Can2]`` is two queries)."""
+    queries = []
+    for node in nodes:
+        offset = node["offset"]
+        for obj in node["objects"]:
+            queries.append(Query(obj, node["tag"], config_pose(offset), tuple(offset["position_tol"]),
+                                 tuple(offset["orientation_tol"])))
+    return tuple(queries)
+
+
+def variation_list(nodes: list[dict[str, Any]]) -> tuple[Variation, ...]:
+    """A variation file's entries, in file order."""
+    return tuple(Variation(tuple(v["names"]), tuple(v["position"]), tuple(v["orientation"])) for v in nodes)

@@ -12,9 +12,9 @@ Problem ``number`` of a scene draws from ``numpy.random.default_rng([seed, scene
    bars (±0.1 m along y) is not applied, its bars moving by their joints (0.35 m) instead;
 2. **start and goal**: a start and a goal query (distinct names), each the tip target
    ``T_8 = T_object · T_offset · T_ee⁻¹`` sampled within the query's tolerances, then
-   inverse kinematics of Franka's ``panda_link8`` onto it (:data:`IK_SETTINGS` per pose,
-   :data:`POSE_ATTEMPTS` poses: MBM's 200 attempts) whose solution is within the limits and
-   free of the scene and of self-collision on Franka's meshes (fingers open);
+   inverse kinematics of Franka's ``panda_link8`` onto it (:mod:`~dynfab.benchmarks.mbm.query_ik`:
+   MBM's 200 attempts) whose solution is within the limits and free of the scene and of
+   self-collision on Franka's meshes (fingers open);
 3. a scene whose start or goal has no such solution is drawn again (:data:`SCENE_ATTEMPTS`),
    as MBM's loop does. MBM also keeps only problems its planner solves in 60 s; here none is
    dropped for that.
@@ -39,37 +39,29 @@ from scipy.spatial.transform import Rotation
 from dynfab.benchmarks.mbm.conversion import DT, DURATION, PLANNER
 from dynfab.benchmarks.mbm.franka import TCP_LINK, Franka
 from dynfab.benchmarks.mbm.moveit import ProblemError
+from dynfab.benchmarks.mbm.query_ik import READY, TIP_LINK, free_query_ik
 from dynfab.benchmarks.mbm.scene_configs import (SCENE_TYPES, Query, SceneConfig, data_root, pose_matrix,
                                                  scene_config)
 from dynfab.benchmarks.mbm.validity import static_shapes
 from dynfab.benchmarks.mbm.variants import Case
-from dynfab.motion.inverse_kinematics import AxisTarget, IkSettings, PointTarget, solve_ik
 from dynfab.robots.mesh_paths import resolve_uri
-from dynfab.robots.mesh_sweep import PlacedShape, sweep_meshes
+from dynfab.robots.mesh_sweep import PlacedShape
 from dynfab.robots.urdf import load_urdf
 from dynfab.robots.urdf_model import UrdfModel
 from dynfab.scenario.scene_files import link_poses
 from dynfab.scenario.schema import scenario_from_dict
 
-__all__ = ["ANGLE_TOLERANCE", "IK_SETTINGS", "POSE_ATTEMPTS", "SCENE_ATTEMPTS", "TIP_LINK", "TOLERANCE", "VARIANT",
-           "SceneProblem", "generate_scene_problem", "prepare_scene_case", "scene_problems"]
+__all__ = ["ANGLE_TOLERANCE", "SCENE_ATTEMPTS", "TOLERANCE", "VARIANT", "SceneProblem", "generate_scene_problem",
+           "prepare_scene_case", "scene_problems"]
 
 #: The variant's name: the scenes have no graspable object to remove.
 VARIANT = "as-posed"
-#: MBM's IK tip for the Panda (its ``panda_arm`` group's chain ends there).
-TIP_LINK = "panda_link8"
 #: Position tolerance of the pose goal [m].
 TOLERANCE = 0.01
 #: Orientation tolerance of the pose goal [rad].
 ANGLE_TOLERANCE = 0.05
-#: Inverse kinematics per sampled tip pose (10 seeds: with :data:`POSE_ATTEMPTS`, MBM's 200).
-IK_SETTINGS = IkSettings(seeds=10, iterations=100, tolerance=1e-6, solutions=1, time_limit=1e9)
-#: Tip poses sampled per query before the scene is drawn again.
-POSE_ATTEMPTS = 20
 #: Scenes drawn per problem before giving up.
 SCENE_ATTEMPTS = 50
-#: MBM's Panda state (``configs/robots/panda.yaml``): the first IK seed [rad].
-READY: tuple[float, ...] = (0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785)
 
 
 @dataclass(frozen=True)
@@ -176,26 +168,8 @@ def _object_poses(config: SceneConfig, scene: dict[str, Any]) -> dict[str, NDArr
 
 def _free_ik(robot: Franka, config: SceneConfig, query: Query, objects: dict[str, NDArray[np.float64]],
              shapes: list[PlacedShape], rng: np.random.Generator) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
-    """A configuration putting ``panda_link8`` on a pose sampled within ``query``'s tolerances,
-    free on Franka's meshes, and that pose (4x4); None after :data:`POSE_ATTEMPTS` poses."""
-    target = objects[query.obj] @ query.offset @ np.linalg.inv(config.ee_offset)
-
-    def free(q: NDArray[np.float64]) -> bool:
-        sweep = sweep_meshes(robot.meshes, q[None], shapes)
-        return not sweep.obstacle_contacts and not sweep.self_contacts
-
-    for _ in range(POSE_ATTEMPTS):
-        position = target[:3, 3] + rng.uniform(-0.5, 0.5, 3) * np.asarray(query.position_tolerance)
-        turn = Rotation.from_euler("XYZ", rng.uniform(-1.0, 1.0, 3) * np.asarray(query.orientation_tolerance))
-        rotation = target[:3, :3] @ turn.as_matrix()
-        targets: list[PointTarget | AxisTarget] = [PointTarget(TIP_LINK, tuple(float(v) for v in position))]
-        targets += [AxisTarget(TIP_LINK, tuple(float(v) for v in np.eye(3)[k]), tuple(float(v) for v in rotation[:, k]))
-                    for k in range(3)]
-        settings = IkSettings(**{**IK_SETTINGS.__dict__, "seed": int(rng.integers(2**31))})
-        result = solve_ik(robot.robot, targets, np.array(READY), free, settings)
-        if result.q is not None:
-            return result.q, pose_matrix(position, rotation)
-    return None
+    """:func:`~dynfab.benchmarks.mbm.query_ik.free_query_ik` onto ``query``'s object."""
+    return free_query_ik(robot, objects[query.obj] @ query.offset @ np.linalg.inv(config.ee_offset), query, shapes, rng)
 
 
 def _tip_to_tcp(robot: Franka) -> NDArray[np.float64]:
