@@ -83,6 +83,12 @@ class JointGuidance:
         self._lower = np.where(np.isfinite(kin.lower), kin.lower, -np.pi)
         self._upper = np.where(np.isfinite(kin.upper), kin.upper, np.pi)
 
+    @property
+    def bounds(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The joint bounds plans keep (n,) each [rad or m]: the robot's limits, ±π where a
+        joint has none."""
+        return self._lower, self._upper
+
     def goal_configuration(self, goal: GoalTargets, q: NDArray[np.float64], seed: int = 0) -> NDArray[np.float64]:
         """The configuration to plan to: a joint goal (clipped into the limits when within
         :data:`LIMIT_SLACK`), or the collision-free IK solution nearest ``q`` (clear by the

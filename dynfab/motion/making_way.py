@@ -75,20 +75,20 @@ def moving_reason(guidance: JointGuidance, plan: Plan, tau: float, q: NDArray[np
 
 
 def refuge(guidance: JointGuidance, q: NDArray[np.float64], static: Sequence[PlacedObstacle],
-           capsules: Sequence[PlacedObstacle], moving: Sequence[PlacedObstacle], seed: int) -> NDArray[np.float64] | None:
-    """``q`` [rad] if it keeps the planner's margin from ``capsules``, else the configuration
-    nearest it among :data:`REFUGE_SAMPLES` at each radius of
-    :data:`REFUGE_RADII` (uniform directions, within the joint limits; ``seed``) that keeps
-    the planner's margin from ``capsules``, from ``static`` no less than ``q`` does up to the
-    margin, and the self-collision margin, and whose straight way from ``q`` keeps them from
-    ``static`` and the ``moving`` spheres where they are; None if none does."""
+           moving: Sequence[PlacedObstacle], seed: int) -> NDArray[np.float64] | None:
+    """``q`` [rad] if it keeps the planner's margin from the capsules the ``moving`` spheres
+    sweep over ``sweep_horizon``, else the configuration nearest it among
+    :data:`REFUGE_SAMPLES` at each radius of :data:`REFUGE_RADII` (uniform directions,
+    within guidance's joint bounds; ``seed``) that keeps the planner's margin from those
+    capsules, from ``static`` no less than ``q`` does up to the margin, and the
+    self-collision margin, and whose straight way from ``q`` keeps them from ``static`` and
+    the ``moving`` spheres where they are; None if none does."""
     settings = guidance.settings.path
-    kinematics = guidance.robot.kinematics
-    lower = np.where(np.isfinite(kinematics.lower), kinematics.lower, -np.pi)
-    upper = np.where(np.isfinite(kinematics.upper), kinematics.upper, np.pi)
+    capsules = tuple(swept_obstacle(o, guidance.settings.sweep_horizon) for o in moving)
+    lower, upper = guidance.bounds
     rng = np.random.default_rng(seed)
     checker = guidance.checker
-    checker.set_obstacles(tuple(capsules))
+    checker.set_obstacles(capsules)
     if checker.free(q, settings.margin, -np.inf):
         return q
     checker.set_obstacles(tuple(static))
@@ -97,7 +97,7 @@ def refuge(guidance: JointGuidance, q: NDArray[np.float64], static: Sequence[Pla
         directions = rng.normal(size=(REFUGE_SAMPLES, len(q)))
         directions /= np.linalg.norm(directions, axis=1, keepdims=True)
         candidates = np.clip(q + radius * directions, lower, upper)
-        checker.set_obstacles(tuple(capsules))
+        checker.set_obstacles(capsules)
         clear = [c for c in candidates if checker.free(c, settings.margin, settings.self_margin)]
         checker.set_obstacles(tuple(static))
         clear = sorted((c for c in clear if checker.free(c, near, settings.self_margin)),
@@ -120,8 +120,7 @@ def refuge_plan(guidance: JointGuidance, q: NDArray[np.float64], static: Sequenc
     """
     began = time.perf_counter()
     start = np.asarray(q, dtype=float)
-    capsules = tuple(swept_obstacle(o, guidance.settings.sweep_horizon) for o in moving)
-    target = refuge(guidance, start, static, capsules, moving, seed)
+    target = refuge(guidance, start, static, moving, seed)
     if target is None:
         raise GuidanceError("no_refuge", f"no configuration within {REFUGE_RADII[-1]} rad of the robot keeps "
                                          f"{guidance.settings.path.margin} m from what the moving obstacles sweep")
