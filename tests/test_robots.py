@@ -27,7 +27,7 @@ def test_load_panda(panda: Robot) -> None:
     assert panda.goal_link == "panda_hand"
     assert not panda.planar
     np.testing.assert_array_equal(panda.default_q, Q0)
-    assert len(panda.collision_spheres) == 75  # fitted to Franka's meshes: test_collision_model.py
+    assert len(panda.collision_spheres) == 101  # fitted to Franka's meshes: test_collision_model.py
     assert all(0.005 <= s.radius <= 0.11 for s in panda.collision_spheres)
     covered = {s.link for s in panda.collision_spheres}
     assert covered == {f"panda_link{i}" for i in range(8)} | {"panda_hand_body", "panda_leftfinger",
@@ -110,7 +110,7 @@ def _joint_depth(link: str) -> int:
 def test_panda_self_collision_pairs(panda: Robot) -> None:
     spheres = panda.collision_spheres
     pairs = panda.self_collision_pairs
-    assert 240 <= len(pairs) <= 300   # 268: pairs also chosen around each body pair's close samples
+    assert 340 <= len(pairs) <= 400   # 373: pairs also chosen around each body pair's close samples
     assert len(set(pairs)) == len(pairs)
     for a, b in pairs:
         assert abs(_joint_depth(spheres[a].link) - _joint_depth(spheres[b].link)) >= 2

@@ -51,10 +51,10 @@ _PANDA_SPHERES: tuple[tuple[str, str, tuple[float, float, float], float], ...] =
     ("fingertips", "panda_hand", (0.0, 0.0, -0.02), 0.04),
 )
 
-#: Which spheres the built-in ``panda`` uses: ``"fitted"`` (panda_spheres.py: 75 spheres
+#: Which spheres the built-in ``panda`` uses: ``"fitted"`` (panda_spheres.py: 101 spheres
 #: fitted to Franka's collision meshes of the arm, the hand and each finger, none of whose
-#: surface points lies more than 5 mm outside them, reaching at most 1 cm out of the hand
-#: and fingers and 2 cm elsewhere, and 268 pairs chosen on the meshes) or ``"hand-written"`` (the table above,
+#: surface points lies more than 5 mm outside them, reaching at most 1 cm out of the hand,
+#: the fingers and links 5 and 6, 2 cm elsewhere, and 373 pairs chosen on the meshes) or ``"hand-written"`` (the table above,
 #: the default until 2026-11: it leaves 29 % of the mesh surface more than 1 cm and 12 %
 #: more than 3 cm outside, up to 8.3 cm at PANDA_DEFAULT_Q, and its pairs let the meshes
 #: touch themselves in 11 of 50 Experiment-1 runs). ``panda_robot("hand-written")`` keeps
@@ -104,13 +104,14 @@ BOXER_SPHERE_RADIUS = 0.24
 # Arm spheres that can reach the Boxer's body spheres: indices into PANDA_FITTED_SPHERES
 # (from panda_link4 on: the hand and the fingers included) that come within 2 cm of a
 # body sphere (indices into _BOXER_BODY) in the closest of 100,000 uniform random arm
-# configurations within the joint limits, the hand open and closed (measured 2026-11-25;
-# the other arm-body sphere pairs stay at least 2.06 cm apart; panda_link0 sits on the
-# plate and is left out, panda_link1 to panda_link3 never come near). At
-# BOXER_PANDA_DEFAULT_Q all these pairs are more than 0.5 m apart.
+# configurations within the joint limits, the hand open and closed (measured 2026-11-25 on
+# the 75 spheres of then; the other arm-body sphere pairs stay at least 2.06 cm apart;
+# panda_link0 sits on the plate and is left out, panda_link1 to panda_link3 never come
+# near). Every sphere from panda_link5 on (refitted 2026-11-26) is kept against every body
+# sphere. At BOXER_PANDA_DEFAULT_Q all these pairs are more than 0.5 m apart.
 _ALL_BODY = tuple(range(len(_BOXER_BODY)))
 _ARM_NEAR_BODY: tuple[tuple[int, tuple[int, ...]], ...] = (
-    ((35, (2, 3)),) + tuple((arm, _ALL_BODY) for arm in range(36, 75) if arm != 40))
+    ((35, (2, 3)),) + tuple((arm, _ALL_BODY) for arm in range(36, len(PANDA_FITTED_SPHERES)) if arm != 40))
 
 
 def load_robot(name: str, fingers: float | None = None) -> Robot:
