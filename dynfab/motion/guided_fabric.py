@@ -251,9 +251,12 @@ class GuidedFabric:
                  after: str | None) -> None:
         """Ask for a plan from ``q`` at time ``t`` [s]; ``after``: why (:meth:`ReplanWatch.reason`), None at first."""
         assert self._goal is not None
-        home = self._home if self._home is not None else None if self._plan is None else self._plan.goal.copy()
-        request = PlanRequest(t, np.array(q, dtype=float), self._goal, self._static, tuple(moving),
-                              None if after is None else home,
+        previous_goal: NDArray[np.float64] | None = None   # a first plan keeps none
+        if after is not None and self._home is not None:
+            previous_goal = self._home                      # at a refuge: the goal configuration
+        elif after is not None and self._plan is not None:
+            previous_goal = self._plan.goal.copy()
+        request = PlanRequest(t, np.array(q, dtype=float), self._goal, self._static, tuple(moving), previous_goal,
                               self._seed, after in ("held", "short"), leaf_buffers(self.fabric.config, self._static), after)
         self._seed += self._settings.attempts
         self._pending = self._maker.submit(request)
