@@ -31,6 +31,7 @@ import trimesh
 
 from dynfab.experiments.sampling import rounded
 from dynfab.robots import Kinematics, load_urdf
+from dynfab.robots.joint_bounds import finite_joint_bounds
 from dynfab.robots.link_meshes import link_collision_meshes
 from dynfab.robots.mesh_paths import resolve_uri
 
@@ -138,8 +139,7 @@ class _ArmGeometry:
 
     def goal(self, rng: np.random.Generator) -> np.ndarray:
         start, reach = self.tool_position(np.array(self.arm.home)), self.arm.reach
-        low = np.where(np.isfinite(self.kinematics.lower), self.kinematics.lower, -np.pi)
-        high = np.where(np.isfinite(self.kinematics.upper), self.kinematics.upper, np.pi)
+        low, high = finite_joint_bounds(self.kinematics.lower, self.kinematics.upper)
         while True:
             goal = self.tool_position(rng.uniform(low, high))
             horizontal = float(np.hypot(goal[0], goal[1]))

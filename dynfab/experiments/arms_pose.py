@@ -37,6 +37,7 @@ from scipy.spatial.transform import Rotation
 from dynfab.experiments.arms import _ERD, ARMS, Arm
 from dynfab.experiments.sampling import rounded
 from dynfab.geometry.shapes import Box, Placement
+from dynfab.robots.joint_bounds import finite_joint_bounds
 from dynfab.robots.mesh_collision import MeshCollisionModel, mesh_collision_model
 from dynfab.robots.mesh_sweep import PlacedShape, sweep_meshes
 
@@ -100,8 +101,7 @@ class _PoseGeometry:
         kin = arm.kinematics()
         q = ca.SX.sym("q", kin.dof)
         tool = ca.Function("tool", [q], [kin.transform(q, arm.tool)])
-        lower = np.where(np.isfinite(kin.lower), kin.lower, -np.pi)
-        upper = np.where(np.isfinite(kin.upper), kin.upper, np.pi)
+        lower, upper = finite_joint_bounds(kin.lower, kin.upper)
         meshes = mesh_collision_model(kin, np.clip(np.zeros(kin.dof), lower, upper))
         assert meshes is not None, f"{arm.urdf} has no collision geometry"
         return cls(arm, tool, meshes, lower, upper)

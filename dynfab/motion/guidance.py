@@ -42,6 +42,7 @@ from dynfab.motion.joint_trajectory import JointTrajectory, TimingError, time_pa
 from dynfab.motion.guidance_settings import GuidanceSettings
 from dynfab.motion.phased_trajectory import PhasedTrajectory
 from dynfab.motion.plan_values import GoalTargets, GuidanceError, JointTarget, Plan
+from dynfab.robots.joint_bounds import finite_joint_bounds
 from dynfab.robots.robot import Robot
 
 __all__ = ["GoalTargets", "GuidanceError", "GuidanceSettings", "JointGuidance", "JointTarget", "Plan"]
@@ -80,8 +81,7 @@ class JointGuidance:
         self._leaf_spheres = list(moving_spheres(robot))  # those a nearest-point leaf acts on
         self._leaf_radii = np.asarray(robot.sphere_radii, dtype=float)[self._leaf_spheres]
         kin = robot.kinematics
-        self._lower = np.where(np.isfinite(kin.lower), kin.lower, -np.pi)
-        self._upper = np.where(np.isfinite(kin.upper), kin.upper, np.pi)
+        self._lower, self._upper = finite_joint_bounds(kin.lower, kin.upper)
 
     @property
     def bounds(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

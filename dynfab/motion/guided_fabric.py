@@ -34,27 +34,12 @@ it, while in the approach the clock keeps its lag rule. Chosen on held-out probl
 therefore do not test it: with a 50 ms plan latency and the clock running on,
 moving-sphere bookshelf_thin/0017 and 0019 stalled after 7-8 plans; with it stopped
 everywhere, as-posed table_under_pick/0019 stalled in its approach; as here, all three
-reached their goals) when
-
-- the reference within ``check_horizon`` ahead meets what a moving obstacle sweeps within
-  ``sweep_horizon`` (:func:`~dynfab.motion.swept_obstacles.swept_clear_of`; checked every
-  ``check_period``, and not within ``blocked_interval`` of a blocked replan), or
-- the run stalls: while the reference runs, the robot has stayed more than ``lag_slow``
-  behind it for ``stall_lag_time`` seconds (outside an approach), or the clock ``τ`` has
-  not advanced by ``stall_rate · stall_window`` within ``stall_window`` seconds (the robot
-  is held back); on an approach the robot follows, the joint-space distance to the goal
-  configuration has not come ``stall_floor`` below its best for ``stall_window`` seconds
-  (the clock waits for a robot the obstacle leaves slow down; it still closes in); once
-  the reference has ended, that distance has not come ``max(stall_floor,
-  stall_progress · d₀)`` below its best for ``stall_window`` seconds (``d₀``: its
-  distance when the goal was set, so the test scales with the motion asked for). A
-  detour that leads away from the goal is progress as long as it is followed;
-- the robot is held short of the approach: the reference waits at the approach's start
-  and the robot has stayed more than ``approach_lag_stop`` from it for
-  ``approach_hold_time`` seconds. The new plan is the straight approach from where the
-  robot is, if that segment goes no deeper into anything than the goal
-  (:meth:`~dynfab.motion.guidance.JointGuidance.approach_from`); else a plan as after a
-  stall, whose way is followed closely.
+reached their goals) when the reference ahead meets what a moving obstacle sweeps, the
+run stalls, or the robot is held short of a grasp's approach (:mod:`dynfab.motion.replan_reasons`).
+A replan after the robot was held short is the straight approach from where the robot is,
+if that segment goes no deeper into anything than the goal
+(:meth:`~dynfab.motion.guidance.JointGuidance.approach_from`); else a plan as after a
+stall, whose way is followed closely.
 
 Replans plan among the static obstacles and what the moving ones sweep within
 ``sweep_horizon`` from where they are now (:func:`~dynfab.motion.plan_requests.make_plan`),
@@ -98,10 +83,10 @@ from dynfab.motion.approach_segment import allowances_ahead, leaf_buffers, segme
 from dynfab.motion.guidance import GoalTargets, GuidanceSettings, JointGuidance, Plan
 from dynfab.motion.guidance_settings import counted_checks
 from dynfab.motion.guidance_status import GuidanceStatus
-from dynfab.motion.making_way import moving_reason
 from dynfab.motion.plan_joining import in_sight, join_time
-from dynfab.motion.reference_clock import approach_rate, run_progress, way_rate
+from dynfab.motion.reference_clock import approach_rate, in_approach, way_rate
 from dynfab.motion.plan_requests import PendingPlan, PlanRequest, plan_maker
+from dynfab.motion.replan_reasons import ReplanWatch, counted
 from dynfab.motion.straight_motion import StraightMotion
 
 __all__ = ["GuidanceStatus", "GuidedFabric", "guided_goal_config"]
@@ -148,11 +133,7 @@ class GuidedFabric:
         self._plan: Plan | None = None
         self._tau = 0.0
         self._last_t: float | None = None
-        self._next_check = 0.0
-        self._best = np.inf
-        self._best_time = 0.0
-        self._stage: str | None = None
-        self._progress_needed = settings.stall_floor
+        self._watch = ReplanWatch(settings)
         self._seed = 0
         self._segment = np.zeros((1, fabric.robot.dof))   # the approach's configurations (k, n) [rad]
         self._table = np.zeros((1, 0))                     # the allowances at each (k, m) [m]
@@ -160,8 +141,6 @@ class GuidedFabric:
         self._reference = np.zeros(fabric.robot.dof)       # q_r(τ) written last, without the pull [rad]
         self._pull = ApproachPull(settings, fabric.robot.dof)
         self._approaching = False
-        self._lagging_since: float | None = None
-        self._short_since: float | None = None
         self._close = False
         self._home: NDArray[np.float64] | None = None      # the goal configuration while at a refuge
 
@@ -233,25 +212,27 @@ class GuidedFabric:
         lag = float(np.linalg.norm(q - self._reference))   # the reference at τ, written last tick
         budget = self.status.plans + self.status.failed_plans <= settings.replans or self._home is not None   # away: back
         if self._pending is None and budget:
-            reason = self._replan_reason(t, q, lag, moving)
+            reason = self._watch.reason(t, q, lag, self._plan, self._tau, self._approaching, self.guidance,
+                                        self._home, moving)
+            self.status = counted(self.status, reason)
             if reason is not None:
                 self._request(t, q, moving, after=reason)
                 if self._receive(t, q, moving):
                     lag = float(np.linalg.norm(q - self._reference))
         dt = 0.0 if self._last_t is None else max(0.0, t - self._last_t)
         self._last_t = t
-        in_approach = self._in_approach()
-        self._approaching = self._approaching or (in_approach and lag <= settings.approach_lag_stop)
-        sight = in_approach or in_sight(self._sight, q, self._reference, settings.path)
-        waiting = self._pending is not None and not in_approach or not sight
+        approach = in_approach(self._plan, self._tau)
+        self._approaching = self._approaching or (approach and lag <= settings.approach_lag_stop)
+        sight = approach or in_sight(self._sight, q, self._reference, settings.path)
+        waiting = self._pending is not None and not approach or not sight
         if waiting:
             rate = 0.0
-        elif in_approach:
+        elif approach:
             rate = approach_rate(settings, lag, segment_offset(self._segment, q))
         else:
             rate = way_rate(settings, lag, close=self._close or self._entering())
         self._tau += rate * dt
-        following = in_approach and self._approaching
+        following = approach and self._approaching
         ended = self._tau >= self._plan.trajectory.duration
         self._write(self._tau, rate, self._pull.shift(self._segment, q, dt, ended) if following else None)
 
@@ -266,58 +247,16 @@ class GuidedFabric:
         assert self._plan is not None
         return self._plan.approach > 0.0 and self._tau >= self._plan.approach_start - self._settings.close_time
 
-    def _in_approach(self) -> bool:
-        """Whether the reference's clock is in the plan's approach."""
-        assert self._plan is not None
-        return self._plan.approach > 0.0 and self._tau >= self._plan.approach_start
-
-    def _replan_reason(self, t: float, q: NDArray[np.float64], lag: float,
-                       moving: Sequence[PlacedObstacle]) -> str | None:
-        """``held`` if progress stalled on the way (the reference running, not in an
-        approach), ``short`` if the robot is held short of the approach's start,
-        ``stalled`` if it stalled elsewhere, else what moves asks for (``return``, ``refuge``,
-        ``blocked``: :func:`~dynfab.motion.making_way.moving_reason`) or None; ``lag``: ``‖q − q_r‖`` [rad]."""
-        assert self._plan is not None
-        settings = self._settings
-        running = self._tau < self._plan.trajectory.duration
-        if running and not self._in_approach() and lag > settings.lag_slow:
-            self._lagging_since = t if self._lagging_since is None else self._lagging_since
-        else:
-            self._lagging_since = None
-        if self._lagging_since is not None and t - self._lagging_since > settings.stall_lag_time:
-            self.status = replace(self.status, replans_stalled=self.status.replans_stalled + 1)
-            return "held"
-        if running and self._in_approach() and not self._approaching and lag > settings.approach_lag_stop:
-            self._short_since = t if self._short_since is None else self._short_since
-        else:
-            self._short_since = None
-        if self._short_since is not None and t - self._short_since > settings.approach_hold_time:
-            self.status = replace(self.status, replans_stalled=self.status.replans_stalled + 1)
-            return "short"
-        stage, progress, needed = run_progress(settings, self._plan, self._tau, self._approaching, q,
-                                               self._progress_needed)
-        if progress < self._best - needed or stage != self._stage:
-            self._stage, self._best, self._best_time = stage, progress, t
-        at_goal = stage == "ended" and progress <= settings.stall_floor
-        if not at_goal and t - self._best_time > settings.stall_window:
-            self.status = replace(self.status, replans_stalled=self.status.replans_stalled + 1)
-            return "held" if running and not self._in_approach() else "stalled"
-        if moving and t >= self._next_check:
-            self._next_check = t + settings.check_period
-            reason = moving_reason(self.guidance, self._plan, self._tau, q, self._home, moving)
-            if reason in ("refuge", "blocked"):
-                count = "refuges" if reason == "refuge" else "replans_blocked"
-                self.status = replace(self.status, **{count: getattr(self.status, count) + 1})
-            return reason
-        return None
-
     def _request(self, t: float, q: NDArray[np.float64], moving: Sequence[PlacedObstacle],
                  after: str | None) -> None:
-        """Ask for a plan from ``q`` at time ``t`` [s]; ``after``: why (:meth:`_replan_reason`), None at first."""
+        """Ask for a plan from ``q`` at time ``t`` [s]; ``after``: why (:meth:`ReplanWatch.reason`), None at first."""
         assert self._goal is not None
-        home = self._home if self._home is not None else None if self._plan is None else self._plan.goal.copy()
-        request = PlanRequest(t, np.array(q, dtype=float), self._goal, self._static, tuple(moving),
-                              None if after is None else home,
+        previous_goal: NDArray[np.float64] | None = None   # a first plan keeps none
+        if after is not None and self._home is not None:
+            previous_goal = self._home                      # at a refuge: the goal configuration
+        elif after is not None and self._plan is not None:
+            previous_goal = self._plan.goal.copy()
+        request = PlanRequest(t, np.array(q, dtype=float), self._goal, self._static, tuple(moving), previous_goal,
                               self._seed, after in ("held", "short"), leaf_buffers(self.fabric.config, self._static), after)
         self._seed += self._settings.attempts
         self._pending = self._maker.submit(request)
@@ -338,9 +277,7 @@ class GuidedFabric:
                               plan_time_ms=outcome.elapsed_ms if status.plan_time_ms is None else status.plan_time_ms,
                               plan_times_ms=status.plan_times_ms + (outcome.elapsed_ms,), failure=outcome.failure)
         self.failure_message = outcome.message
-        self._best, self._best_time, self._stage = np.inf, t, None
-        self._next_check = t + (self._settings.blocked_interval if request.after in ("blocked", "refuge") else 0.0)
-        self._lagging_since = self._short_since = None
+        self._watch.restart(t, pause=request.after in ("blocked", "refuge"))
         plan = outcome.plan
         if plan is None:
             if first:
@@ -348,8 +285,7 @@ class GuidedFabric:
                 self._set_reference(q, 0.0, 0.0)   # q at rest
             return True  # a failed replan keeps following the old reference
         if first:
-            distance = float(np.linalg.norm(request.q - plan.goal))
-            self._progress_needed = max(self._settings.stall_floor, self._settings.stall_progress * distance)
+            self._watch.scale_to(float(np.linalg.norm(request.q - plan.goal)))
         self._plan = plan
         self._home = request.previous_goal if request.after == "refuge" else None
         self._close = request.after == "short"

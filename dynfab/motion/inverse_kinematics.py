@@ -27,6 +27,7 @@ import casadi as ca
 import numpy as np
 from numpy.typing import NDArray
 
+from dynfab.robots.joint_bounds import finite_joint_bounds
 from dynfab.robots.robot import Robot
 
 __all__ = ["AxisTarget", "IkResult", "IkSettings", "PointTarget", "solve_ik"]
@@ -157,8 +158,7 @@ def solve_ik(robot: Robot, targets: Sequence[Target], current: NDArray[np.float6
     lower = robot.kinematics.lower if lower is None else lower
     upper = robot.kinematics.upper if upper is None else upper
     rng = np.random.default_rng(settings.seed)
-    finite_low = np.where(np.isfinite(lower), lower, -np.pi)
-    finite_high = np.where(np.isfinite(upper), upper, np.pi)
+    finite_low, finite_high = finite_joint_bounds(lower, upper)
     found: list[NDArray[np.float64]] = []
     converged = rejected = tried = 0
     for k in range(settings.seeds):

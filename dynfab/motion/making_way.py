@@ -37,7 +37,7 @@ from dynfab.motion.guidance import GuidanceError, JointGuidance, Plan
 from dynfab.motion.joint_trajectory import TimingError, time_path
 from dynfab.motion.swept_obstacles import swept_clear_of, swept_obstacle
 
-__all__ = ["REFUGE_RADII", "REFUGE_SAMPLES", "moving_reason", "refuge", "refuge_plan", "sweeps"]
+__all__ = ["REFUGE_RADII", "REFUGE_SAMPLES", "moving_reason", "refuge", "refuge_plan", "swept_capsules", "sweeps"]
 
 #: joint-space distances [rad] from the robot at which refuges are sampled, nearest first
 REFUGE_RADII = (0.15, 0.3, 0.6, 1.0)
@@ -45,15 +45,21 @@ REFUGE_RADII = (0.15, 0.3, 0.6, 1.0)
 REFUGE_SAMPLES = 64
 
 
-def sweeps(guidance: JointGuidance, q: NDArray[np.float64],
-           moving: Sequence[PlacedObstacle]) -> tuple[PlacedObstacle, ...]:
+def swept_capsules(guidance: JointGuidance, moving: Sequence[PlacedObstacle]) -> tuple[PlacedObstacle, ...]:
+    """What each of the ``moving`` spheres sweeps over ``sweep_horizon``
+    (:func:`~dynfab.motion.swept_obstacles.swept_obstacle`; a sphere at rest: itself)."""
+    return tuple(swept_obstacle(o, guidance.settings.sweep_horizon) for o in moving)
+
+
+def sweeps(guidance: JointGuidance, q: NDArray[np.float64], moving: Sequence[PlacedObstacle],
+           capsules: Sequence[PlacedObstacle] | None = None) -> tuple[PlacedObstacle, ...]:
     """The capsules the ``moving`` spheres sweep over ``sweep_horizon`` that come within the
     planner's margin of the robot at ``q`` [rad] (a sphere at rest sweeps none: one resting
-    on the goal is not passing it, and the fabric avoids it there)."""
-    settings = guidance.settings
-    capsules = (swept_obstacle(o, settings.sweep_horizon) for o in moving)
+    on the goal is not passing it, and the fabric avoids it there); ``capsules``: their
+    :func:`swept_capsules` if already built."""
+    capsules = swept_capsules(guidance, moving) if capsules is None else capsules
     return tuple(c for c, o in zip(capsules, moving)
-                 if c is not o and guidance.obstacle_clearance(q, c) < settings.path.margin)
+                 if c is not o and guidance.obstacle_clearance(q, c) < guidance.settings.path.margin)
 
 
 def moving_reason(guidance: JointGuidance, plan: Plan, tau: float, q: NDArray[np.float64],
@@ -64,9 +70,10 @@ def moving_reason(guidance: JointGuidance, plan: Plan, tau: float, q: NDArray[np
     sweeps the goal configuration (at a refuge: the robot); ``blocked`` if the reference
     within ``check_horizon`` meets what they sweep (each capsule shortened until it clears
     the robot, :func:`~dynfab.motion.swept_obstacles.swept_clear_of`); else None."""
-    if home is not None and not sweeps(guidance, home, moving):
+    capsules = swept_capsules(guidance, moving)
+    if home is not None and not sweeps(guidance, home, moving, capsules):
         return "return"
-    if sweeps(guidance, plan.goal if home is None else q, moving):
+    if sweeps(guidance, plan.goal if home is None else q, moving, capsules):
         return "refuge"
     settings = guidance.settings
     swept = [swept_clear_of(o, settings.sweep_horizon, (q,), guidance.obstacle_clearance, settings.path.margin)
@@ -84,7 +91,7 @@ def refuge(guidance: JointGuidance, q: NDArray[np.float64], static: Sequence[Pla
     self-collision margin, and whose straight way from ``q`` keeps them from ``static`` and
     the ``moving`` spheres where they are; None if none does."""
     settings = guidance.settings.path
-    capsules = tuple(swept_obstacle(o, guidance.settings.sweep_horizon) for o in moving)
+    capsules = swept_capsules(guidance, moving)
     lower, upper = guidance.bounds
     rng = np.random.default_rng(seed)
     checker = guidance.checker

@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 from dynfab.motion.guidance import Plan
 from dynfab.motion.guidance_settings import GuidanceSettings
 
-__all__ = ["approach_rate", "run_progress", "way_rate"]
+__all__ = ["approach_rate", "in_approach", "run_progress", "way_rate"]
 
 
 def way_rate(settings: GuidanceSettings, lag: float, close: bool) -> float:
@@ -44,6 +44,11 @@ def approach_rate(settings: GuidanceSettings, lag: float, offset: float) -> floa
     (module docstring)."""
     return min(_ramp(lag, settings.approach_lag_slow, settings.approach_lag_stop),
                _ramp(offset, settings.approach_offset_slow, settings.approach_offset_stop))
+
+
+def in_approach(plan: Plan, tau: float) -> bool:
+    """Whether the clock ``tau`` [s] of ``plan``'s reference is in the plan's approach."""
+    return plan.approach > 0.0 and tau >= plan.approach_start
 
 
 def run_progress(settings: GuidanceSettings, plan: Plan, tau: float, approaching: bool, q: NDArray[np.float64],

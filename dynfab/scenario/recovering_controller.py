@@ -15,6 +15,7 @@ import numpy as np
 from dynfab.fabric.planner import FabricPlanner
 from dynfab.motion.references import References
 from dynfab.motion.trajectories import StaticPoint
+from dynfab.robots.joint_bounds import finite_joint_bounds
 from dynfab.robots.robot import Robot
 from dynfab.robots.self_collision import bodies
 from dynfab.scenario.controllers import FabricController
@@ -131,8 +132,7 @@ def link_reach(robot: Robot, link: str, samples: int = 500, seed: int = 0) -> fl
     """The farthest ``link`` gets from the root over ``samples`` random configurations within
     the joint limits (unlimited joints: ±π) [m]."""
     kin = robot.kinematics
-    low = np.where(np.isfinite(kin.lower), kin.lower, -np.pi)
-    high = np.where(np.isfinite(kin.upper), kin.upper, np.pi)
+    low, high = finite_joint_bounds(kin.lower, kin.upper)
     q = ca.SX.sym("q", robot.dof)
     position = ca.Function("link_position", [q], [kin.position(q, link)]).map(samples)
     configurations = np.random.default_rng(seed).uniform(low, high, (samples, robot.dof))

@@ -26,9 +26,9 @@ draws apart from the moving sphere's, ``[seed, type index, number]``):
    self-collision on Franka's meshes (:mod:`~dynfab.benchmarks.mbm.query_ik`). The start's
    IK is seeded first at the ready state, the goal's at the start (MoveIt's state when MBM
    asks for it: after a start query, its solution);
-4. a scene whose start or goal has none is drawn again (up to :data:`SCENE_ATTEMPTS`), as MBM's
-   loop does. MBM also keeps only problems its planner solves in 60 s; here none is
-   dropped for that.
+4. a scene whose start or goal has none is drawn again (up to
+   :data:`PRIMITIVE_SCENE_ATTEMPTS`), as MBM's loop does. MBM also keeps only problems its
+   planner solves in 60 s; here none is dropped for that.
 """
 
 from __future__ import annotations
@@ -54,14 +54,15 @@ from dynfab.geometry.shapes import quaternion_matrix
 from dynfab.robots.mesh_sweep import PlacedShape
 from dynfab.scenario.schema import scenario_from_dict
 
-__all__ = ["SCENE_ATTEMPTS", "STREAM", "generate_problem", "generated_problems", "sample_scene"]
+__all__ = ["PRIMITIVE_SCENE_ATTEMPTS", "STREAM", "generate_problem", "generated_problems", "sample_scene"]
 
 #: The last entry of the generator's seed sequence (module doc).
 STREAM = 19
-#: Scenes drawn for one problem before it is given up (a problem drawn in fewer is the same
-#: with any larger number): the mesh scenes' 50 were too few for cage, whose hand must fit
-#: inside the cage on Franka's meshes (problem 7 of seed 2 found none in 50).
-SCENE_ATTEMPTS = 400
+#: Scenes drawn for one problem of a primitive type before it is given up (a problem drawn
+#: in fewer is the same with any larger number): the mesh scenes' 50
+#: (:data:`~dynfab.benchmarks.mbm.scenes.MESH_SCENE_ATTEMPTS`) were too few for cage, whose
+#: hand must fit inside the cage on Franka's meshes (problem 7 of seed 2 found none in 50).
+PRIMITIVE_SCENE_ATTEMPTS = 400
 
 
 def generated_problems(types: Sequence[str], per_type: int, skip: int, seed: int, robot: Franka,
@@ -93,7 +94,7 @@ def generate_problem(name: str, number: int, seed: int, robot: Franka) -> Proble
 
     Raises:
         ValueError: An unknown type, a number below 1 or a negative seed (named).
-        ProblemError: No scene of :data:`SCENE_ATTEMPTS` had a free start and goal.
+        ProblemError: No scene of :data:`PRIMITIVE_SCENE_ATTEMPTS` had a free start and goal.
     """
     config = primitive_config(name)
     if isinstance(number, bool) or not isinstance(number, int) or number < 1:
@@ -104,12 +105,12 @@ def generate_problem(name: str, number: int, seed: int, robot: Franka) -> Proble
     pairs: list[tuple[Query | None, Query]] = [
         (start, goal) for goal in config.goal_queries for start in config.start_queries
         if _query_name(start) != _query_name(goal)] or [(None, goal) for goal in config.goal_queries]
-    for _ in range(SCENE_ATTEMPTS):
+    for _ in range(PRIMITIVE_SCENE_ATTEMPTS):
         problem = _draw(config, number, pairs, robot, rng)
         if problem is not None:
             return problem
     raise ProblemError(f"configs/problems/{name}_panda.yaml", "queries",
-                       f"no free start and goal in {SCENE_ATTEMPTS} scenes (problem {number}, seed {seed})")
+                       f"no free start and goal in {PRIMITIVE_SCENE_ATTEMPTS} scenes (problem {number}, seed {seed})")
 
 
 def _draw(config: PrimitiveConfig, number: int, pairs: Sequence[tuple[Query | None, Query]], robot: Franka,

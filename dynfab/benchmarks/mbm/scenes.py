@@ -15,7 +15,7 @@ Problem ``number`` of a scene draws from ``numpy.random.default_rng([seed, scene
    inverse kinematics of Franka's ``panda_link8`` onto it (:mod:`~dynfab.benchmarks.mbm.query_ik`:
    MBM's 200 attempts) whose solution is within the limits and free of the scene and of
    self-collision on Franka's meshes (fingers open);
-3. a scene whose start or goal has no such solution is drawn again (:data:`SCENE_ATTEMPTS`),
+3. a scene whose start or goal has no such solution is drawn again (:data:`MESH_SCENE_ATTEMPTS`),
    as MBM's loop does. MBM also keeps only problems its planner solves in 60 s; here none is
    dropped for that.
 
@@ -51,7 +51,7 @@ from dynfab.robots.urdf_model import UrdfModel
 from dynfab.scenario.scene_files import link_poses
 from dynfab.scenario.schema import scenario_from_dict
 
-__all__ = ["ANGLE_TOLERANCE", "SCENE_ATTEMPTS", "TOLERANCE", "VARIANT", "SceneProblem", "generate_scene_problem",
+__all__ = ["ANGLE_TOLERANCE", "MESH_SCENE_ATTEMPTS", "TOLERANCE", "VARIANT", "SceneProblem", "generate_scene_problem",
            "prepare_scene_case", "scene_problems"]
 
 #: The variant's name: the scenes have no graspable object to remove.
@@ -60,8 +60,10 @@ VARIANT = "as-posed"
 TOLERANCE = 0.01
 #: Orientation tolerance of the pose goal [rad].
 ANGLE_TOLERANCE = 0.05
-#: Scenes drawn per problem before giving up.
-SCENE_ATTEMPTS = 50
+#: Scenes drawn per problem of a mesh scene (kitchen, table_bars) before giving up; the
+#: primitive types' generated problems draw up to
+#: :data:`~dynfab.benchmarks.mbm.generated_problems.PRIMITIVE_SCENE_ATTEMPTS`.
+MESH_SCENE_ATTEMPTS = 50
 
 
 @dataclass(frozen=True)
@@ -105,11 +107,11 @@ def generate_scene_problem(name: str, number: int, seed: int, robot: Franka) -> 
 
     Raises:
         ValueError: An unknown scene.
-        ProblemError: No scene of :data:`SCENE_ATTEMPTS` had a free start and goal.
+        ProblemError: No scene of :data:`MESH_SCENE_ATTEMPTS` had a free start and goal.
     """
     config = scene_config(name)
     rng = np.random.default_rng([seed, SCENE_TYPES.index(name), number])
-    for _ in range(SCENE_ATTEMPTS):
+    for _ in range(MESH_SCENE_ATTEMPTS):
         scene = _sample_scene(config, rng)
         shapes = static_shapes(scenario_from_dict(_mapping(READY, _pose_goal(np.eye(4)), scene, PLANNER)))
         objects = _object_poses(config, scene)
@@ -126,7 +128,7 @@ def generate_scene_problem(name: str, number: int, seed: int, robot: Franka) -> 
         return SceneProblem(name, number, seed, tuple(float(v) for v in start[0]), tuple(float(v) for v in goal_q),
                             tip @ _tip_to_tcp(robot), scene, f"{_query_name(start_query)} -> {_query_name(goal_query)}")
     raise ProblemError(f"configs/problems/{name}_panda.yaml", "queries",
-                       f"no free start and goal in {SCENE_ATTEMPTS} scenes (problem {number}, seed {seed})")
+                       f"no free start and goal in {MESH_SCENE_ATTEMPTS} scenes (problem {number}, seed {seed})")
 
 
 def prepare_scene_case(problem: SceneProblem, planner: str = PLANNER) -> Case:
