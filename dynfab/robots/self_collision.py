@@ -54,6 +54,7 @@ from scipy import sparse
 from dynfab.geometry.set_cover import fewest_cover
 
 from .body_distances import BodyMeshes, body_meshes
+from .joint_bounds import finite_joint_bounds
 from .kinematics import Kinematics
 from .robot import CollisionSphere
 from .urdf import Joint
@@ -182,7 +183,7 @@ def configurations_around(close: np.ndarray, kinematics: Kinematics, count: int,
     """``count`` configurations ``clip(q + N(0, spread^2))``, each ``q`` a row of ``close``
     drawn at random, within the limits (see :func:`sample_configurations`), shape
     (count, dof); ``spread`` in rad (m for prismatic joints)."""
-    lower, upper = _sampled_limits(kinematics)
+    lower, upper = finite_joint_bounds(kinematics.lower, kinematics.upper)
     picks = close[rng.integers(len(close), size=count)]
     return np.clip(picks + rng.normal(scale=spread, size=picks.shape), lower, upper)
 
@@ -206,15 +207,8 @@ def bodies(kinematics: Kinematics) -> dict[str, int]:
 def sample_configurations(kinematics: Kinematics, count: int, seed: int) -> np.ndarray:
     """``count`` configurations uniform within the limits (unlimited joints: [-pi, pi]),
     shape (count, dof)."""
-    lower, upper = _sampled_limits(kinematics)
+    lower, upper = finite_joint_bounds(kinematics.lower, kinematics.upper)
     return np.random.default_rng(seed).uniform(lower, upper, size=(count, kinematics.dof))
-
-
-def _sampled_limits(kinematics: Kinematics) -> tuple[np.ndarray, np.ndarray]:
-    """The joint limits, unlimited joints at [-pi, pi]."""
-    lower = np.where(np.isfinite(kinematics.lower), kinematics.lower, -np.pi)
-    upper = np.where(np.isfinite(kinematics.upper), kinematics.upper, np.pi)
-    return lower, upper
 
 
 def sphere_centres(kinematics: Kinematics, spheres: Sequence[CollisionSphere],
