@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from toppra.parametrizer import ParametrizeConstAccel
 
-from dynfab.geometry.shapes import Box, Placement
+from dynfab.geometry.shapes import Box, Placement, Sphere
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.guidance import GuidanceError, JointGuidance, JointTarget
 from dynfab.motion.inverse_kinematics import AxisTarget, PointTarget, solve_ik
@@ -201,3 +201,17 @@ def test_an_escaped_goal_is_approached_slowly_in_a_phase_of_its_own_after_a_stop
     for phase, start in zip(trajectory.phases, trajectory.starts):
         inside = (times >= start) & (times < start + phase.duration)
         np.testing.assert_allclose(position[inside], phase.sample(times[inside] - start)[0], atol=1e-12)
+
+
+def test_guidance_checks_on_the_planning_spheres_and_weighs_allowances_on_the_fabrics() -> None:
+    """A grain (1 mm sphere) beside panda_link5 at the default configuration, inside the
+    bulge of the fabric's 2 cm spheres there but clear of guidance's 1 cm ones: the planner's
+    checker sees it 1 cm away (a configuration it may plan through), the allowances, which
+    the fabric's leaves read, see the fabric's spheres 7 mm into it."""
+    panda = load_robot("panda")
+    guidance = JointGuidance(panda)
+    grain = PlacedObstacle(Sphere(0.001), Placement((0.18, 0.1853, 0.7807)))
+    guidance.checker.set_obstacles((grain,))
+    assert guidance.checker.clearances(panda.default_q)[0] > 0.01
+    assert guidance.obstacle_clearance(panda.default_q, grain) == pytest.approx(-0.007, abs=5e-4)
+    assert guidance.allowances(panda.default_q, (grain,), (0.0,))[0] > 0.007

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from importlib import resources
 from pathlib import Path
 
@@ -11,6 +12,7 @@ import pytest
 
 from dynfab.robots import (CollisionSphere, Robot, UnknownLinkError, UnknownRobotError,
                            UrdfError, load_robot, parse_urdf, robot_from_urdf)
+from dynfab.robots.builtin import panda_robot
 
 Q0 = np.array([1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0])
 POINT_URDF = Path(str(resources.files("dynfab.robots").joinpath("data", "point.urdf")))
@@ -27,7 +29,7 @@ def test_load_panda(panda: Robot) -> None:
     assert panda.goal_link == "panda_hand"
     assert not panda.planar
     np.testing.assert_array_equal(panda.default_q, Q0)
-    assert len(panda.collision_spheres) == 101  # fitted to Franka's meshes: test_collision_model.py
+    assert len(panda.collision_spheres) == 75  # fitted to Franka's meshes: test_collision_model.py
     assert all(0.005 <= s.radius <= 0.11 for s in panda.collision_spheres)
     covered = {s.link for s in panda.collision_spheres}
     assert covered == {f"panda_link{i}" for i in range(8)} | {"panda_hand_body", "panda_leftfinger",
@@ -35,6 +37,32 @@ def test_load_panda(panda: Robot) -> None:
     assert panda.kinematics.locked == {"panda_finger_joint1": 0.04}  # open: no planner coordinate
     with pytest.raises(ValueError):
         panda.default_q[0] = 0.0  # read-only
+
+
+def test_panda_plans_on_tighter_spheres_than_the_fabric_avoids_with(panda: Robot) -> None:
+    """Guidance's spheres (links 5 and 6 at 1 cm: test_collision_model.py): the same links
+    and kinematics, more spheres on links 5 and 6 only, and the planning robot has no
+    planning spheres of its own."""
+    planning = panda.planning_robot
+    assert planning is panda.planning_robot and planning.kinematics is panda.kinematics
+    assert len(planning.collision_spheres) == 101 and len(planning.self_collision_pairs) == 373
+    assert planning.planning_spheres is None and planning.planning_robot is planning
+    count = lambda robot, link: sum(s.link == link for s in robot.collision_spheres)  # noqa: E731
+    for link in {s.link for s in panda.collision_spheres}:
+        more = link in ("panda_link5", "panda_link6")
+        assert (count(planning, link) > count(panda, link)) if more else count(planning, link) == count(panda, link)
+    hand_written = panda_robot("hand-written")
+    assert hand_written.planning_robot is hand_written
+
+
+def test_bad_planning_spheres_are_refused(panda: Robot) -> None:
+    spheres = panda.collision_spheres[:3]
+    with pytest.raises(ValueError, match=r"planning pair \(0, 3\) must index two different spheres of 3"):
+        dataclasses.replace(panda, planning_spheres=spheres, planning_pairs=((0, 3),))
+    with pytest.raises(UnknownLinkError, match="unknown link 'elbow'"):
+        dataclasses.replace(panda, planning_spheres=(CollisionSphere("elbow", (0.0, 0.0, 0.0), 0.1),))
+    with pytest.raises(ValueError, match="planning_pairs need planning_spheres"):
+        dataclasses.replace(panda, planning_spheres=None, planning_pairs=((0, 1),))
 
 
 def test_load_point() -> None:
@@ -110,7 +138,7 @@ def _joint_depth(link: str) -> int:
 def test_panda_self_collision_pairs(panda: Robot) -> None:
     spheres = panda.collision_spheres
     pairs = panda.self_collision_pairs
-    assert 340 <= len(pairs) <= 400   # 373: pairs also chosen around each body pair's close samples
+    assert 240 <= len(pairs) <= 300   # 268: pairs also chosen around each body pair's close samples
     assert len(set(pairs)) == len(pairs)
     for a, b in pairs:
         assert abs(_joint_depth(spheres[a].link) - _joint_depth(spheres[b].link)) >= 2

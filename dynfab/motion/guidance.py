@@ -64,7 +64,8 @@ class JointGuidance:
     Attributes:
         robot: the robot (fixed base).
         settings: the guidance settings.
-        checker: the configuration checker with the obstacles of the last plan.
+        checker: the configuration checker with the obstacles of the last plan, on the
+            robot's planning spheres (:attr:`~dynfab.robots.robot.Robot.planning_robot`).
     """
 
     def __init__(self, robot: Robot, settings: GuidanceSettings = GuidanceSettings()) -> None:
@@ -72,9 +73,9 @@ class JointGuidance:
             raise ValueError(f"robot '{robot.name}': joint-space guidance needs a fixed-base robot in space")
         self.robot = robot
         self.settings = settings
-        self.checker = ConfigurationChecker(robot)
-        self._single = ConfigurationChecker(robot)  # one obstacle at a time (allowances)
-        self._ahead = ConfigurationChecker(robot)   # what moves (blocked_ahead)
+        self.checker = ConfigurationChecker(robot.planning_robot)
+        self._single = ConfigurationChecker(robot)  # one obstacle at a time (allowances: the fabric's spheres)
+        self._ahead = ConfigurationChecker(robot.planning_robot)   # what moves (blocked_ahead)
         self._mesh_check: MeshGoalCheck | None | bool = False  # made on first use; None: no meshes
         # the last focus made: the obstacles, the goal's bytes and the focused obstacles
         self._focus: tuple[tuple[PlacedObstacle, ...], bytes, tuple[PlacedObstacle, ...]] | None = None

@@ -127,7 +127,8 @@ class GuidedFabric:
         self._maker = plan_maker(self.guidance, plan_latency)
         self._pending: PendingPlan | None = None
         self._interim: tuple[float, StraightMotion] | None = None   # since when, toward the goal
-        self._joining, self._sight = ConfigurationChecker(fabric.robot), ConfigurationChecker(fabric.robot)  # not the worker's
+        planning = fabric.robot.planning_robot   # the plans' spheres; these two are not the worker's checkers
+        self._joining, self._sight = ConfigurationChecker(planning), ConfigurationChecker(planning)
         self._static: tuple[PlacedObstacle, ...] = ()
         self._goal: GoalTargets | None = None
         self._plan: Plan | None = None

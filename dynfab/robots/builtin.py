@@ -13,7 +13,7 @@ import numpy as np
 from .collision_model import auto_collision_model
 from .franka import FINGER_JOINT, FINGER_RANGE, OPEN, PANDA_JOINTS
 from .kinematics import Kinematics
-from .panda_spheres import PANDA_FITTED_PAIRS, PANDA_FITTED_SPHERES
+from .panda_spheres import PANDA_FITTED_PAIRS, PANDA_FITTED_SPHERES, PANDA_PLANNING_PAIRS, PANDA_PLANNING_SPHERES
 from .limits import BOXER_ACCELERATION, FRANKA_ACCELERATION, MotionLimits
 from .robot import BASE_JOINTS, CollisionSphere, DifferentialDriveBase, Robot, default_limits
 from .urdf import load_urdf, parse_urdf
@@ -51,10 +51,12 @@ _PANDA_SPHERES: tuple[tuple[str, str, tuple[float, float, float], float], ...] =
     ("fingertips", "panda_hand", (0.0, 0.0, -0.02), 0.04),
 )
 
-#: Which spheres the built-in ``panda`` uses: ``"fitted"`` (panda_spheres.py: 101 spheres
+#: Which spheres the built-in ``panda`` uses: ``"fitted"`` (panda_spheres.py: 75 spheres
 #: fitted to Franka's collision meshes of the arm, the hand and each finger, none of whose
-#: surface points lies more than 5 mm outside them, reaching at most 1 cm out of the hand,
-#: the fingers and links 5 and 6, 2 cm elsewhere, and 373 pairs chosen on the meshes) or ``"hand-written"`` (the table above,
+#: surface points lies more than 5 mm outside them, reaching at most 1 cm out of the hand
+#: and fingers and 2 cm elsewhere, and 268 pairs chosen on the meshes; global guidance checks
+#: configurations with 101 spheres, links 5 and 6 at 1 cm too, and 373 pairs:
+#: :attr:`Robot.planning_robot`) or ``"hand-written"`` (the table above,
 #: the default until 2026-11: it leaves 29 % of the mesh surface more than 1 cm and 12 %
 #: more than 3 cm outside, up to 8.3 cm at PANDA_DEFAULT_Q, and its pairs let the meshes
 #: touch themselves in 11 of 50 Experiment-1 runs). ``panda_robot("hand-written")`` keeps
@@ -104,14 +106,13 @@ BOXER_SPHERE_RADIUS = 0.24
 # Arm spheres that can reach the Boxer's body spheres: indices into PANDA_FITTED_SPHERES
 # (from panda_link4 on: the hand and the fingers included) that come within 2 cm of a
 # body sphere (indices into _BOXER_BODY) in the closest of 100,000 uniform random arm
-# configurations within the joint limits, the hand open and closed (measured 2026-11-25 on
-# the 75 spheres of then; the other arm-body sphere pairs stay at least 2.06 cm apart;
-# panda_link0 sits on the plate and is left out, panda_link1 to panda_link3 never come
-# near). Every sphere from panda_link5 on (refitted 2026-11-26) is kept against every body
-# sphere. At BOXER_PANDA_DEFAULT_Q all these pairs are more than 0.5 m apart.
+# configurations within the joint limits, the hand open and closed (measured 2026-11-25;
+# the other arm-body sphere pairs stay at least 2.06 cm apart; panda_link0 sits on the
+# plate and is left out, panda_link1 to panda_link3 never come near). At
+# BOXER_PANDA_DEFAULT_Q all these pairs are more than 0.5 m apart.
 _ALL_BODY = tuple(range(len(_BOXER_BODY)))
 _ARM_NEAR_BODY: tuple[tuple[int, tuple[int, ...]], ...] = (
-    ((35, (2, 3)),) + tuple((arm, _ALL_BODY) for arm in range(36, len(PANDA_FITTED_SPHERES)) if arm != 40))
+    ((35, (2, 3)),) + tuple((arm, _ALL_BODY) for arm in range(36, 75) if arm != 40))
 
 
 def load_robot(name: str, fingers: float | None = None) -> Robot:
@@ -236,16 +237,24 @@ def panda_robot(sphere_model: str, fingers: float = OPEN) -> Robot:
     if sphere_model not in ("fitted", "hand-written"):
         raise ValueError(f"panda sphere_model must be fitted or hand-written, got {sphere_model!r}")
     kinematics = _builtin_kinematics("panda.urdf", PANDA_JOINTS, fingers)
+    planning: tuple[CollisionSphere, ...] | None = None
+    planning_pairs: tuple[tuple[int, int], ...] = ()
     if sphere_model == "fitted":
-        spheres = tuple(CollisionSphere(link, center, radius) for link, center, radius in PANDA_FITTED_SPHERES)
+        spheres = _spheres(PANDA_FITTED_SPHERES)
         pairs = PANDA_FITTED_PAIRS
+        planning, planning_pairs = _spheres(PANDA_PLANNING_SPHERES), PANDA_PLANNING_PAIRS
     else:
         labels = [label for label, *_ in _PANDA_SPHERES]
         spheres = tuple(CollisionSphere(link, center, radius) for _, link, center, radius in _PANDA_SPHERES)
         pairs = tuple((labels.index(a), labels.index(b)) for a, b in _PANDA_SELF_COLLISION)
     return Robot(name="panda", kinematics=kinematics, goal_link="panda_hand", collision_spheres=spheres,
                  self_collision_pairs=pairs, planar=False, default_q=np.array(PANDA_DEFAULT_Q),
-                 limits=_known_limits(kinematics, None))
+                 limits=_known_limits(kinematics, None), planning_spheres=planning, planning_pairs=planning_pairs)
+
+
+def _spheres(table: tuple[tuple[str, tuple[float, float, float], float], ...]) -> tuple[CollisionSphere, ...]:
+    """The spheres of a table of ``panda_spheres.py``."""
+    return tuple(CollisionSphere(link, center, radius) for link, center, radius in table)
 
 
 def _known_limits(kinematics: Kinematics, base: DifferentialDriveBase | None) -> MotionLimits:
@@ -289,7 +298,7 @@ def _boxer_panda(fingers: float = OPEN) -> Robot:
     against the body spheres they can reach (``_ARM_NEAR_BODY``).
     """
     body = tuple(CollisionSphere("chassis_link", center, BOXER_SPHERE_RADIUS) for _, center in _BOXER_BODY)
-    arm = tuple(CollisionSphere(link, center, radius) for link, center, radius in PANDA_FITTED_SPHERES)
+    arm = _spheres(PANDA_FITTED_SPHERES)
     offset = len(body)
     pairs = tuple((a + offset, b + offset) for a, b in PANDA_FITTED_PAIRS) + tuple(
         (b, a + offset) for a, near in _ARM_NEAR_BODY for b in near)

@@ -12,9 +12,9 @@ tests/test_robots.py checks the kinematics):
    hand and each finger on their own so that the fingers' spheres move with the opening
    a scenario sets: the fewest spheres with no mesh surface point more than 5 mm outside
    (checked on the meshes subdivided to 2 mm edges) and spheres reaching at most
-   :data:`HAND_BULGE` out of the meshes at the hand, the fingers and the two links before
-   the hand (:data:`TIGHT_LINKS`), :data:`ARM_BULGE` elsewhere (the fit holds its bulge
-   bound by construction; :data:`_HEADROOM` below it, for step 3);
+   :data:`HAND_BULGE` out of the meshes at the hand and the fingers, :data:`ARM_BULGE`
+   elsewhere (the fit holds its bulge bound by construction; :data:`_HEADROOM` below it,
+   for step 3);
 2. a sphere of ``panda_link1`` whose centre lies within 1 cm of joint 1's axis is moved
    onto it, its radius grown by the shift (it still holds the old sphere, so coverage
    is kept), if its bulge stays within the bound: a point on that axis never moves, and
@@ -27,7 +27,12 @@ tests/test_robots.py checks the kinematics):
    travel): body pairs whose meshes come within 2 cm in 10,000 random configurations,
    and per pair the fewest sphere pairs that in each of those configurations, and in
    3,000 more drawn around them (0.1 rad per joint, where contacts are dense), see the
-   bodies at most 7 mm farther apart than the meshes are.
+   bodies at most 1 cm farther apart than the meshes are (twice the coverage tolerance).
+
+Two tables: the fabric's (``PANDA_FITTED_*``: the hand and fingers at :data:`HAND_BULGE`,
+pairs :data:`PANDA_PAIRS`) and global guidance's (``PANDA_PLANNING_*``:
+:data:`PLANNING_TIGHT_LINKS` at :data:`HAND_BULGE`, pairs :data:`PLANNING_PAIRS`; the
+other links' spheres are the same). Why two: ``panda_spheres.py``.
 
 The summary at the end of ``panda_spheres.py`` is measured on the final (snapped,
 rounded) spheres: coverage on the 2 mm check points plus their spacing bound, bulge as
@@ -38,6 +43,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -50,66 +56,67 @@ from .robot import CollisionSphere
 from .self_collision import PairSelection, select_pairs
 
 # PANDA_URDF lives in dynfab.robots.franka; importers of it from here keep working.
-__all__ = ["ARM_BULGE", "HAND_BULGE", "TIGHT_LINKS", "PANDA_FIT", "PANDA_PAIRS", "PANDA_URDF", "TOLERANCE",
-           "fit_panda", "measured", "table_module"]
+__all__ = ["ARM_BULGE", "HAND_BULGE", "HAND_LINKS", "PANDA_FIT", "PANDA_PAIRS", "PANDA_URDF", "PLANNING_PAIRS",
+           "PLANNING_TIGHT_LINKS", "TOLERANCE", "fit_panda", "measured", "table_module"]
 
 #: Largest distance of a mesh surface point outside the spheres [m]. The seeds these
 #: bounds were chosen and checked on, and held-out results: panda_spheres.py.
 TOLERANCE = 0.005
-#: Largest distance a sphere reaches out of the meshes: :data:`TIGHT_LINKS`, the rest [m].
+#: Largest distance a sphere reaches out of the meshes: hand and fingers, the rest [m].
 HAND_BULGE, ARM_BULGE = 0.01, 0.02
-#: Franka's links with the tighter bulge bound: the hand, the fingers, and the two links
-#: before the hand (``panda_link5``, ``panda_link6``), which enter shelves and boxes
-#: with it. With 2 cm there, their spheres refused three generated MBM goals that the
-#: meshes find free (``goal_in_collision``; generated seeds 1 and 2: as posed
-#: bookshelf_small/0005 and cage/0003, object removed table_under_pick/0002).
-TIGHT_LINKS = ("panda_link5", "panda_link6", "panda_hand", "panda_leftfinger", "panda_rightfinger")
+#: Franka's links with the tighter bulge bound.
+HAND_LINKS = ("panda_hand", "panda_leftfinger", "panda_rightfinger")
+#: ... in guidance's spheres: also the two links before the hand, which enter shelves and
+#: boxes with it. At 2 cm their spheres refused three generated MBM goals free on the
+#: meshes (``goal_in_collision``; generated seeds 1 and 2: as posed bookshelf_small/0005 and
+#: cage/0003, object removed table_under_pick/0002).
+PLANNING_TIGHT_LINKS = ("panda_link5", "panda_link6") + HAND_LINKS
 #: What step 3 may add to a bulge: 0.2 mm of radius, 0.09 mm of centre shift [m].
 _HEADROOM = 3e-4
 #: Sphere fit of the arm links (see the module docstring); the check edge of 2 mm leaves
 #: 3.8 mm of the 5 mm to the fit.
 PANDA_FIT = SphereFitParameters(tolerance=TOLERANCE, max_bulge=ARM_BULGE - _HEADROOM, check_edge=0.002,
                                 fewest=True)
-#: Pair selection on the meshes, 7 mm slack, 3,000 draws near contact per body pair (see
-#: the module docstring). The slack was 1 cm (268 pairs) until links 5 and 6 got the hand's
-#: bulge bound: with their smaller spheres 1 cm kept 325 pairs, which on the fresh
-#: samples of tests/test_collision_model.py overlapped in 98.5 % of the touching
-#: configurations and stayed up to 5.7 mm apart (the test asks 99 % and 5 mm); 7 mm keeps
-#: 373 (99.7 %, 0.9 mm). Without the near draws (123 pairs) it missed a finger on
+#: Pair selection on the meshes, 1 cm slack, 3,000 draws near contact per body pair (see
+#: the module docstring). Without the near draws (123 pairs) it missed a finger on
 #: ``panda_link0`` (Experiment 1 seed 1036) and in ``panda_link1`` (Experiment 2b seed 3);
 #: the draws' count and spread were chosen on random near-contact configurations (not on
 #: those runs); tests/test_self_pairs.py checks both runs and fresh near-contact samples.
-PANDA_PAIRS = PairSelection(samples=10000, margin=0.02, meshes=True, cover_slack=0.007, near_samples=3000,
+PANDA_PAIRS = PairSelection(samples=10000, margin=0.02, meshes=True, cover_slack=0.01, near_samples=3000,
                             near_spread=0.1)
+#: The pairs of guidance's spheres: :data:`PANDA_PAIRS` at 7 mm slack. At 1 cm (325 pairs),
+#: with the smaller spheres of links 5 and 6, they overlapped in 98.5 % of the touching
+#: configurations of tests/test_collision_model.py's fresh samples and stayed up to 5.7 mm
+#: apart (the test asks 99 % and 5 mm); 7 mm keeps 373 (99.7 %, 0.9 mm).
+PLANNING_PAIRS = replace(PANDA_PAIRS, cover_slack=0.007)
 #: Largest shift of a ``panda_link1`` sphere onto joint 1's axis [m].
 AXIS_SNAP = 0.01
 #: Rounding step of the written numbers [m].
 _STEP = 1e-4
 
 
-def _bound(link: str) -> float:
-    """The bulge bound of a Franka link [m]."""
-    return HAND_BULGE if link in TIGHT_LINKS else ARM_BULGE
-
-
-def fit_panda() -> tuple[tuple[LinkFit, ...], tuple[tuple[int, int], ...]]:
+def fit_panda(tight: Sequence[str] = HAND_LINKS, selection: PairSelection = PANDA_PAIRS
+              ) -> tuple[tuple[LinkFit, ...], tuple[tuple[int, int], ...]]:
     """Steps 1-4 of the module docstring: the fits per link (dynfab's link names; spheres
     snapped and rounded; coverage and bulge measured on them) and the sphere pairs.
+    ``tight``: the Franka links fitted at :data:`HAND_BULGE`; ``selection``: how the pairs
+    are chosen.
 
     Raises:
         FileNotFoundError: example-robot-data is not installed.
     """
     kinematics = franka_kinematics(OPEN)
     hand = {link: SphereFitParameters(tolerance=TOLERANCE, max_bulge=HAND_BULGE - _HEADROOM,
-                                      check_edge=PANDA_FIT.check_edge, fewest=True) for link in TIGHT_LINKS}
+                                      check_edge=PANDA_FIT.check_edge, fewest=True) for link in tight}
     fits = []
     for fit in fit_link_spheres(kinematics, PANDA_FIT, hand):
         meshes = link_collision_meshes(kinematics.model, fit.link)
-        spheres = tuple(_rounded(_onto_axis(s, meshes)) for s in fit.spheres)
+        spheres = tuple(_rounded(_onto_axis(s, meshes, HAND_BULGE if fit.link in tight else ARM_BULGE))
+                        for s in fit.spheres)
         fits.append(measured(LinkFit(fit.link, spheres, fit.coverage, fit.bulge), meshes))
     spheres = [s for fit in fits for s in fit.spheres]
-    pairs = sorted(set(select_pairs(kinematics, spheres, PANDA_PAIRS))
-                   | set(select_pairs(franka_kinematics(0.0), spheres, PANDA_PAIRS)))
+    pairs = sorted(set(select_pairs(kinematics, spheres, selection))
+                   | set(select_pairs(franka_kinematics(0.0), spheres, selection)))
     renamed = tuple(LinkFit(DYNFAB_LINKS[fit.link], tuple(CollisionSphere(DYNFAB_LINKS[s.link], s.center, s.radius)
                                                           for s in fit.spheres), fit.coverage, fit.bulge)
                     for fit in fits)
@@ -128,16 +135,16 @@ def measured(fit: LinkFit, meshes: Sequence) -> LinkFit:
     return LinkFit(fit.link, fit.spheres, float(coverage), float(bulge))
 
 
-def _onto_axis(sphere: CollisionSphere, meshes: Sequence) -> CollisionSphere:
+def _onto_axis(sphere: CollisionSphere, meshes: Sequence, bound: float) -> CollisionSphere:
     """A ``panda_link1`` sphere within :data:`AXIS_SNAP` of the z axis (joint 1) moved onto
-    it, if its bulge stays within the bound."""
+    it, if its bulge stays within ``bound`` [m]."""
     x, y, z = sphere.center
     shift = math.hypot(x, y)
     if sphere.link != "panda_link1" or shift > AXIS_SNAP:
         return sphere
     snapped = CollisionSphere(sphere.link, (0.0, 0.0, z), sphere.radius + shift)
     bulge = sphere_bulges(meshes, np.array([snapped.center]), np.array([snapped.radius]))[0]
-    return snapped if bulge <= _bound(sphere.link) - _HEADROOM else sphere
+    return snapped if bulge <= bound - _HEADROOM else sphere
 
 
 def _rounded(sphere: CollisionSphere) -> CollisionSphere:
@@ -146,31 +153,40 @@ def _rounded(sphere: CollisionSphere) -> CollisionSphere:
     return CollisionSphere(sphere.link, center, radius)  # type: ignore[arg-type]
 
 
-def table_module(fits: Sequence[LinkFit], pairs: Sequence[tuple[int, int]], docstring: str) -> str:
-    """The text of ``panda_spheres.py``: ``docstring``, then the spheres and pairs."""
+#: A table of ``panda_spheres.py``: its name's prefix (``PANDA_FITTED``), what it is for,
+#: the fits per link and the pairs.
+Table = tuple[str, str, Sequence[LinkFit], Sequence[tuple[int, int]]]
+
+
+def table_module(tables: Sequence[Table], docstring: str) -> str:
+    """The text of ``panda_spheres.py``: ``docstring``, then each table's spheres
+    (``<prefix>_SPHERES``) and pairs (``<prefix>_PAIRS``)."""
+    names = sorted(f"{prefix}_{kind}" for prefix, *_ in tables for kind in ("PAIRS", "SPHERES"))
     lines = [f'"""{docstring.strip()}\n"""', "", "from __future__ import annotations", "",
-             '__all__ = ["PANDA_FITTED_PAIRS", "PANDA_FITTED_SPHERES"]', "",
-             "#: (link, centre in the link frame [m], radius [m]).",
-             "PANDA_FITTED_SPHERES: tuple[tuple[str, tuple[float, float, float], float], ...] = ("]
-    for fit in fits:
-        for s in fit.spheres:
-            centre = ", ".join(f"{x:.4f}" for x in s.center)
-            lines.append(f'    ("{s.link}", ({centre}), {s.radius:.4f}),')
-    lines += [")", "", "#: Index pairs into PANDA_FITTED_SPHERES kept apart.",
-              "PANDA_FITTED_PAIRS: tuple[tuple[int, int], ...] = ("]
-    cells = [f"({a}, {b})," for a, b in pairs]
-    for start in range(0, len(cells), 10):
-        lines.append("    " + " ".join(cells[start:start + 10]))
-    lines.append(")")
+             f"__all__ = [{', '.join(f'{chr(34)}{name}{chr(34)}' for name in names)}]"]
+    for prefix, purpose, fits, pairs in tables:
+        lines += ["", f"#: {purpose}: (link, centre in the link frame [m], radius [m]).",
+                  f"{prefix}_SPHERES: tuple[tuple[str, tuple[float, float, float], float], ...] = ("]
+        for fit in fits:
+            for s in fit.spheres:
+                centre = ", ".join(f"{x:.4f}" for x in s.center)
+                lines.append(f'    ("{s.link}", ({centre}), {s.radius:.4f}),')
+        lines += [")", "", f"#: Index pairs into {prefix}_SPHERES kept apart.",
+                  f"{prefix}_PAIRS: tuple[tuple[int, int], ...] = ("]
+        cells = [f"({a}, {b})," for a, b in pairs]
+        for start in range(0, len(cells), 10):
+            lines.append("    " + " ".join(cells[start:start + 10]))
+        lines.append(")")
     return "\n".join(lines) + "\n"
 
 
-def _summary(fits: Sequence[LinkFit], pairs: Sequence[tuple[int, int]]) -> str:
+def _summary(table: Table) -> str:
     """Per link: sphere count, coverage and bulge, measured on the final spheres."""
+    prefix, _, fits, pairs = table
     rows = [f"    {fit.link:<17} {len(fit.spheres):>2} spheres, coverage {1000 * fit.coverage:.1f} mm, "
             f"bulge {1000 * fit.bulge:.1f} mm" for fit in fits]
     total = sum(len(fit.spheres) for fit in fits)
-    return "\n".join(rows + [f"    {total} spheres, {len(pairs)} self-collision pairs"])
+    return "\n".join([f"{prefix}:", ""] + rows + [f"    {total} spheres, {len(pairs)} self-collision pairs"])
 
 
 def main() -> int:
@@ -178,9 +194,12 @@ def main() -> int:
     ``Fitted:``, a new summary, the new tables."""
     from . import panda_spheres
 
-    fits, pairs = fit_panda()
+    tables: list[Table] = [("PANDA_FITTED", "The fabric's spheres", *fit_panda()),
+                           ("PANDA_PLANNING", "Global guidance's spheres",
+                            *fit_panda(PLANNING_TIGHT_LINKS, PLANNING_PAIRS))]
     head, _, _ = (panda_spheres.__doc__ or "").partition("Fitted:")
-    print(table_module(fits, pairs, f"{head.rstrip()}\n\nFitted:\n\n{_summary(fits, pairs)}"), end="")
+    summary = "\n\n".join(_summary(table) for table in tables)
+    print(table_module(tables, f"{head.rstrip()}\n\nFitted:\n\n{summary}"), end="")
     return 0
 
 

@@ -1,15 +1,15 @@
 """The Panda's collision spheres fitted to Franka's collision meshes (example-robot-data),
 made and rewritten by ``python -m dynfab.robots.panda_sphere_fit`` (see that module for the
 steps: the fewest spheres per link, the hand body and each finger on their own, with 5 mm
-coverage and at most 1 cm bulge at the hand, the fingers and links 5 and 6, 2 cm elsewhere; a
+coverage and at most 1 cm bulge at the hand and the fingers, 2 cm elsewhere; a
 ``panda_link1`` sphere moved onto joint 1's axis where the bound allows; pairs chosen on the
 meshes with the hand open and closed, on uniform samples and on samples drawn around their
 near contacts).
 
 Claims, checked in tests/test_collision_model.py: no point of the collision meshes lies more
 than 5 mm outside the spheres (vertices plus about 1 sample per 4 mm^2); no sphere reaches
-more than 1 cm out of the meshes of the hand, the fingers and links 5 and 6, and 2 cm
-out of the others (measured on the spheres' surfaces); on 2000 random configurations, open and closed,
+more than 1 cm out of the hand's and the fingers' meshes and 2 cm out of the others'
+(measured on the spheres' surfaces); on 2000 random configurations, open and closed,
 wherever two bodies' meshes touch a kept pair of theirs comes within 5 mm (measured
 1.5 mm), and overlaps in 99 % of those configurations (measured 99.4 %); in
 tests/test_self_pairs.py, wherever a finger or the hand goes more than 1 cm into
@@ -23,14 +23,18 @@ to 4.0 cm out of the hand, so every MotionBenchMaker grasp goal (the open hand 2
 around an object) was in collision for the fabric. Now the hand has its own body and
 fingers at the opening a scenario sets (``robot: {name: panda, fingers: 0.04}``).
 
-Links 5 and 6 at 1 cm (2026-11-26, issue 19): at 2 cm they had 7 and 4 spheres (75 in
-all, 268 pairs) and refused three generated MBM goals free on Franka's meshes
-(``goal_in_collision``, generated seeds 1 and 2: as posed bookshelf_small/0005 and
-cage/0003, object removed table_under_pick/0002), their spheres 0.5-11.5 mm into a board.
-Now 22 and 15 (101 in all, 373 pairs: the pair selection's slack is now 7 mm,
-panda_sphere_fit.py says why); the two latter goals plan, bookshelf_small/0005
-(2.8 mm from the board on the meshes, link 5's spheres 1.1 mm into it) still does not.
-The cost figures below are the 75 spheres'.
+Two tables (2026-11-26, issue 19): the fabric's (``PANDA_FITTED_*``) and global guidance's
+(``PANDA_PLANNING_*``), which :attr:`dynfab.robots.robot.Robot.planning_robot` gives the
+planner's configuration checks. Guidance's has links 5 and 6 at 1 cm too (22 and 15 spheres
+against 7 and 4, 101 in all) and 373 pairs (the selection's slack 7 mm:
+``panda_sphere_fit.py`` says why). At 2 cm those links refused three generated MBM goals
+free on Franka's meshes (``goal_in_collision``; generated seeds 1 and 2: as posed
+bookshelf_small/0005 and cage/0003, object removed table_under_pick/0002); with the tighter
+table the two latter plan and are reached, the first is still refused (2.8 mm from a board
+on the meshes, link 5's spheres 1.1 mm into it). The fabric keeps the 75: its obstacle
+leaves act one per sphere, and with the 101 (three times the leaves at links 5 and 6) the
+arm stalled 13 mm from the bars in two of eight fresh cage problems that the 75 reach
+(generated seed 3, as posed, problems 1 and 2). The figures below are the fabric's.
 
 What it costs (measured 2026-11-25 on the 2-core machine, ``./run bench``, the scene of
 5 spheres, 2 boxes and a pose goal, static fabric, VM): 0.518 ms a step against 0.176 ms
@@ -64,6 +68,23 @@ selection's 10,000 random configurations missed this one.
 
 Fitted:
 
+PANDA_FITTED:
+
+    panda_link0       17 spheres, coverage 4.9 mm, bulge 19.9 mm
+    panda_link1        6 spheres, coverage 4.5 mm, bulge 19.7 mm
+    panda_link2        6 spheres, coverage 4.9 mm, bulge 19.7 mm
+    panda_link3        6 spheres, coverage 4.8 mm, bulge 19.9 mm
+    panda_link4        6 spheres, coverage 4.9 mm, bulge 19.8 mm
+    panda_link5        7 spheres, coverage 4.2 mm, bulge 19.6 mm
+    panda_link6        4 spheres, coverage 4.7 mm, bulge 19.8 mm
+    panda_link7        4 spheres, coverage 4.7 mm, bulge 19.8 mm
+    panda_hand_body   11 spheres, coverage 4.8 mm, bulge 9.8 mm
+    panda_leftfinger   4 spheres, coverage 4.1 mm, bulge 9.9 mm
+    panda_rightfinger  4 spheres, coverage 4.0 mm, bulge 9.8 mm
+    75 spheres, 268 self-collision pairs
+
+PANDA_PLANNING:
+
     panda_link0       17 spheres, coverage 4.9 mm, bulge 19.9 mm
     panda_link1        6 spheres, coverage 4.5 mm, bulge 19.7 mm
     panda_link2        6 spheres, coverage 4.9 mm, bulge 19.7 mm
@@ -80,10 +101,120 @@ Fitted:
 
 from __future__ import annotations
 
-__all__ = ["PANDA_FITTED_PAIRS", "PANDA_FITTED_SPHERES"]
+__all__ = ["PANDA_FITTED_PAIRS", "PANDA_FITTED_SPHERES", "PANDA_PLANNING_PAIRS", "PANDA_PLANNING_SPHERES"]
 
-#: (link, centre in the link frame [m], radius [m]).
+#: The fabric's spheres: (link, centre in the link frame [m], radius [m]).
 PANDA_FITTED_SPHERES: tuple[tuple[str, tuple[float, float, float], float], ...] = (
+    ("panda_link0", (0.0326, 0.0220, 0.0291), 0.0484),
+    ("panda_link0", (0.0204, -0.0371, 0.0281), 0.0472),
+    ("panda_link0", (-0.0086, 0.0666, 0.0206), 0.0404),
+    ("panda_link0", (-0.0182, -0.0649, 0.0221), 0.0420),
+    ("panda_link0", (-0.0895, -0.0460, 0.0277), 0.0469),
+    ("panda_link0", (-0.1297, -0.0370, 0.0118), 0.0317),
+    ("panda_link0", (-0.0591, 0.0607, 0.0180), 0.0364),
+    ("panda_link0", (0.0231, -0.0078, 0.0422), 0.0610),
+    ("panda_link0", (-0.1318, 0.0116, 0.0149), 0.0347),
+    ("panda_link0", (-0.0009, -0.0015, 0.0787), 0.0812),
+    ("panda_link0", (-0.1079, 0.0414, 0.0235), 0.0427),
+    ("panda_link0", (-0.0535, -0.0028, 0.0556), 0.0754),
+    ("panda_link0", (-0.0139, -0.0461, 0.0373), 0.0570),
+    ("panda_link0", (-0.0953, -0.0420, 0.0281), 0.0457),
+    ("panda_link0", (0.0307, 0.0559, 0.0106), 0.0131),
+    ("panda_link0", (-0.0515, -0.0659, 0.0164), 0.0236),
+    ("panda_link0", (-0.1293, 0.0221, 0.0155), 0.0291),
+    ("panda_link1", (0.0002, -0.0053, -0.1365), 0.0742),
+    ("panda_link1", (0.0000, -0.0540, -0.0004), 0.0746),
+    ("panda_link1", (0.0004, -0.0265, -0.0468), 0.0734),
+    ("panda_link1", (0.0000, -0.0394, -0.0724), 0.0737),
+    ("panda_link1", (0.0135, 0.0134, -0.1556), 0.0552),
+    ("panda_link1", (-0.0097, 0.0043, -0.1481), 0.0635),
+    ("panda_link2", (-0.0015, -0.0104, 0.0361), 0.0720),
+    ("panda_link2", (0.0000, -0.0720, 0.0312), 0.0735),
+    ("panda_link2", (0.0000, -0.1388, 0.0127), 0.0722),
+    ("panda_link2", (-0.0019, -0.0128, 0.0752), 0.0650),
+    ("panda_link2", (0.0083, -0.1487, -0.0050), 0.0639),
+    ("panda_link2", (-0.0037, -0.1445, -0.0039), 0.0692),
+    ("panda_link3", (0.0802, 0.0402, -0.0023), 0.0730),
+    ("panda_link3", (0.0035, -0.0065, -0.0770), 0.0634),
+    ("panda_link3", (0.0346, 0.0201, -0.0536), 0.0772),
+    ("panda_link3", (-0.0092, -0.0070, -0.0816), 0.0578),
+    ("panda_link3", (-0.0175, 0.0227, -0.0959), 0.0449),
+    ("panda_link3", (0.0627, 0.0258, -0.0074), 0.0544),
+    ("panda_link4", (-0.0018, 0.0019, 0.0412), 0.0727),
+    ("panda_link4", (-0.0905, 0.0871, 0.0141), 0.0556),
+    ("panda_link4", (-0.0456, 0.0521, 0.0215), 0.0776),
+    ("panda_link4", (-0.0682, 0.0902, -0.0152), 0.0526),
+    ("panda_link4", (-0.0911, 0.0818, -0.0057), 0.0613),
+    ("panda_link4", (-0.0278, -0.0209, 0.0075), 0.0276),
+    ("panda_link5", (0.0049, -0.0071, -0.2182), 0.0622),
+    ("panda_link5", (0.0002, 0.0184, -0.2078), 0.0721),
+    ("panda_link5", (0.0001, 0.0549, -0.0491), 0.0691),
+    ("panda_link5", (-0.0021, -0.0035, -0.2154), 0.0661),
+    ("panda_link5", (-0.0001, 0.0396, -0.0960), 0.0689),
+    ("panda_link5", (-0.0001, 0.0625, -0.0040), 0.0687),
+    ("panda_link5", (0.0000, 0.0342, -0.1471), 0.0699),
+    ("panda_link6", (0.0004, 0.0053, 0.0150), 0.0592),
+    ("panda_link6", (0.0845, -0.0088, 0.0021), 0.0616),
+    ("panda_link6", (0.0681, 0.0382, 0.0042), 0.0607),
+    ("panda_link6", (0.0478, -0.0076, 0.0084), 0.0626),
+    ("panda_link7", (0.0258, 0.0214, 0.0787), 0.0465),
+    ("panda_link7", (0.0476, 0.0479, 0.0826), 0.0333),
+    ("panda_link7", (-0.0020, -0.0137, 0.0792), 0.0461),
+    ("panda_link7", (-0.0158, 0.0005, 0.0794), 0.0470),
+    ("panda_hand_body", (0.0012, -0.0059, 0.0096), 0.0380),
+    ("panda_hand_body", (0.0004, 0.0020, 0.0455), 0.0283),
+    ("panda_hand_body", (0.0007, -0.0367, 0.0433), 0.0293),
+    ("panda_hand_body", (0.0001, 0.0746, 0.0405), 0.0311),
+    ("panda_hand_body", (0.0005, 0.0718, 0.0158), 0.0329),
+    ("panda_hand_body", (-0.0006, 0.0396, 0.0443), 0.0280),
+    ("panda_hand_body", (0.0007, -0.0748, 0.0458), 0.0288),
+    ("panda_hand_body", (-0.0001, 0.0405, 0.0154), 0.0369),
+    ("panda_hand_body", (-0.0001, -0.0455, 0.0105), 0.0341),
+    ("panda_hand_body", (-0.0001, -0.0824, 0.0082), 0.0279),
+    ("panda_hand_body", (-0.0003, -0.0727, -0.0047), 0.0242),
+    ("panda_leftfinger", (0.0034, 0.0195, 0.0142), 0.0151),
+    ("panda_leftfinger", (0.0080, 0.0124, 0.0047), 0.0086),
+    ("panda_leftfinger", (-0.0040, 0.0180, 0.0084), 0.0162),
+    ("panda_leftfinger", (-0.0020, 0.0082, 0.0419), 0.0158),
+    ("panda_rightfinger", (-0.0025, -0.0178, 0.0113), 0.0162),
+    ("panda_rightfinger", (0.0008, -0.0169, 0.0171), 0.0134),
+    ("panda_rightfinger", (-0.0005, -0.0049, 0.0018), 0.0105),
+    ("panda_rightfinger", (0.0026, -0.0086, 0.0426), 0.0159),
+)
+
+#: Index pairs into PANDA_FITTED_SPHERES kept apart.
+PANDA_FITTED_PAIRS: tuple[tuple[int, int], ...] = (
+    (0, 45), (0, 46), (0, 48), (0, 52), (0, 53), (0, 54), (0, 55), (0, 59), (0, 63), (0, 65),
+    (1, 50), (2, 43), (2, 45), (2, 46), (2, 48), (2, 49), (2, 50), (2, 51), (2, 52), (2, 54),
+    (2, 55), (2, 57), (2, 60), (2, 62), (2, 64), (2, 66), (2, 69), (2, 72), (3, 45), (3, 46),
+    (3, 54), (3, 59), (4, 43), (4, 48), (4, 51), (4, 56), (4, 60), (5, 46), (5, 52), (5, 53),
+    (5, 54), (5, 64), (5, 70), (6, 46), (6, 48), (6, 49), (6, 51), (6, 52), (6, 55), (6, 59),
+    (6, 60), (6, 64), (6, 65), (6, 74), (7, 43), (7, 45), (7, 46), (7, 49), (7, 52), (7, 54),
+    (7, 55), (7, 56), (7, 57), (7, 59), (7, 60), (7, 61), (7, 62), (7, 64), (7, 66), (7, 70),
+    (7, 74), (8, 43), (8, 45), (8, 51), (8, 52), (9, 43), (9, 45), (9, 46), (9, 48), (9, 49),
+    (9, 50), (9, 51), (9, 52), (9, 54), (9, 55), (9, 56), (9, 57), (9, 58), (9, 59), (9, 60),
+    (9, 61), (9, 62), (9, 63), (9, 64), (9, 65), (9, 66), (9, 70), (9, 72), (9, 74), (10, 43),
+    (10, 45), (10, 46), (10, 48), (10, 49), (10, 50), (10, 51), (10, 52), (10, 55), (10, 58), (10, 59),
+    (10, 62), (10, 63), (10, 65), (10, 70), (10, 71), (11, 43), (11, 45), (11, 46), (11, 48), (11, 49),
+    (11, 50), (11, 51), (11, 52), (11, 53), (11, 54), (11, 55), (11, 56), (11, 57), (11, 58), (11, 59),
+    (11, 60), (11, 61), (11, 62), (11, 63), (11, 64), (11, 65), (11, 69), (11, 70), (11, 74), (12, 43),
+    (12, 45), (12, 48), (12, 49), (12, 50), (12, 51), (12, 52), (12, 53), (12, 54), (12, 55), (12, 57),
+    (12, 59), (12, 62), (12, 63), (12, 65), (13, 43), (13, 45), (13, 46), (13, 49), (13, 50), (13, 51),
+    (13, 52), (13, 55), (13, 61), (13, 62), (13, 63), (13, 65), (13, 70), (14, 49), (16, 50), (16, 55),
+    (16, 70), (17, 43), (17, 45), (17, 46), (17, 48), (17, 49), (17, 50), (17, 52), (17, 53), (17, 54),
+    (17, 56), (17, 57), (17, 58), (17, 59), (17, 62), (17, 63), (17, 64), (17, 65), (17, 70), (17, 74),
+    (18, 43), (18, 49), (18, 50), (18, 53), (18, 55), (18, 56), (18, 57), (18, 59), (18, 62), (18, 63),
+    (18, 64), (18, 65), (18, 66), (18, 70), (18, 74), (19, 56), (19, 57), (19, 58), (19, 60), (19, 61),
+    (19, 62), (19, 63), (19, 65), (19, 69), (20, 43), (20, 49), (20, 52), (20, 53), (20, 56), (20, 57),
+    (20, 58), (20, 59), (20, 60), (20, 61), (20, 62), (20, 63), (20, 64), (20, 70), (20, 74), (21, 54),
+    (22, 56), (23, 43), (23, 57), (23, 58), (23, 59), (23, 60), (23, 61), (23, 62), (23, 63), (23, 64),
+    (23, 65), (23, 69), (23, 70), (23, 74), (24, 59), (24, 62), (24, 70), (24, 74), (26, 43), (26, 49),
+    (26, 50), (26, 53), (26, 54), (26, 57), (26, 58), (26, 59), (26, 61), (26, 62), (26, 63), (26, 66),
+    (26, 70), (26, 74), (28, 70), (28, 74), (45, 53), (45, 55), (45, 65), (46, 52),
+)
+
+#: Global guidance's spheres: (link, centre in the link frame [m], radius [m]).
+PANDA_PLANNING_SPHERES: tuple[tuple[str, tuple[float, float, float], float], ...] = (
     ("panda_link0", (0.0326, 0.0220, 0.0291), 0.0484),
     ("panda_link0", (0.0204, -0.0371, 0.0281), 0.0472),
     ("panda_link0", (-0.0086, 0.0666, 0.0206), 0.0404),
@@ -187,8 +318,8 @@ PANDA_FITTED_SPHERES: tuple[tuple[str, tuple[float, float, float], float], ...] 
     ("panda_rightfinger", (0.0026, -0.0086, 0.0426), 0.0159),
 )
 
-#: Index pairs into PANDA_FITTED_SPHERES kept apart.
-PANDA_FITTED_PAIRS: tuple[tuple[int, int], ...] = (
+#: Index pairs into PANDA_PLANNING_SPHERES kept apart.
+PANDA_PLANNING_PAIRS: tuple[tuple[int, int], ...] = (
     (0, 51), (0, 55), (0, 56), (0, 65), (0, 71), (0, 72), (0, 73), (0, 78), (0, 79), (0, 80),
     (0, 81), (0, 86), (0, 89), (0, 91), (1, 56), (1, 85), (1, 100), (2, 42), (2, 51), (2, 52),
     (2, 56), (2, 65), (2, 70), (2, 72), (2, 76), (2, 78), (2, 80), (2, 81), (2, 83), (2, 86),

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from functools import cached_property
 
 import casadi as ca
 import numpy as np
@@ -122,6 +123,11 @@ class Robot:
             variable is actuated and velocities are ``qdot``.
         limits: Velocity, acceleration (jerk, effort) limits of the velocity coordinates;
             ``None`` derives them from the kinematics (:func:`default_limits`).
+        planning_spheres: Spheres global guidance checks configurations with instead
+            (:attr:`planning_robot`), or None: ``collision_spheres``. Tighter spheres let a
+            plan reach goals close to obstacles; the fabric keeps ``collision_spheres``, whose
+            obstacle leaves act one per sphere, so more spheres on a link push it harder.
+        planning_pairs: Index pairs into ``planning_spheres`` that must not overlap.
 
     Convention for a robot with a ``base``: its first three joints (in the order of
     ``kinematics.joint_names``) are ``base_x`` (prismatic along world x), ``base_y``
@@ -150,6 +156,8 @@ class Robot:
     default_q: np.ndarray
     base: DifferentialDriveBase | None = None
     limits: MotionLimits | None = None
+    planning_spheres: tuple[CollisionSphere, ...] | None = None
+    planning_pairs: tuple[tuple[int, int], ...] = ()
 
     def __post_init__(self) -> None:
         kin = self.kinematics
@@ -158,16 +166,16 @@ class Robot:
                 raise TypeError(f"robot '{self.name}': base must be a "
                                 f"DifferentialDriveBase or None, got {type(self.base).__name__}")
             _check_base_joints(self.name, kin)
-        for link in [self.goal_link] + [s.link for s in self.collision_spheres]:
-            if link not in kin.link_names:
-                raise UnknownLinkError(f"robot '{self.name}': unknown link '{link}'; "
-                                       f"valid links: {', '.join(kin.link_names)}")
-        count = len(self.collision_spheres)
-        pairs = tuple((int(a), int(b)) for a, b in self.self_collision_pairs)
-        for a, b in pairs:
-            if not (0 <= a < count and 0 <= b < count) or a == b:
-                raise ValueError(f"robot '{self.name}': self-collision pair ({a}, {b}) "
-                                 f"must index two different spheres of {count}")
+        if self.goal_link not in kin.link_names:
+            raise UnknownLinkError(f"robot '{self.name}': unknown link '{self.goal_link}'; "
+                                   f"valid links: {', '.join(kin.link_names)}")
+        pairs = self._checked("self-collision pair", self.collision_spheres, self.self_collision_pairs)
+        if self.planning_spheres is not None:
+            object.__setattr__(self, "planning_spheres", tuple(self.planning_spheres))
+            object.__setattr__(self, "planning_pairs",
+                               self._checked("planning pair", self.planning_spheres, self.planning_pairs))
+        elif self.planning_pairs:
+            raise ValueError(f"robot '{self.name}': planning_pairs need planning_spheres")
         default_q = np.array(self.default_q, dtype=float).reshape(-1)
         if default_q.size != kin.dof:
             raise ValueError(f"robot '{self.name}': default_q must have {kin.dof} "
@@ -182,6 +190,31 @@ class Robot:
             raise ValueError(f"robot '{self.name}': limits must be given for the velocity "
                              f"coordinates {', '.join(names)}; got {', '.join(limits.names)}")
         object.__setattr__(self, "limits", limits)
+
+    def _checked(self, what: str, spheres: Sequence[CollisionSphere],
+                 pairs: Sequence[tuple[int, int]]) -> tuple[tuple[int, int], ...]:
+        """``pairs`` as int tuples, once every sphere's link is known and every pair indexes
+        two different ``spheres``."""
+        links = self.kinematics.link_names
+        for sphere in spheres:
+            if sphere.link not in links:
+                raise UnknownLinkError(f"robot '{self.name}': unknown link '{sphere.link}'; "
+                                       f"valid links: {', '.join(links)}")
+        checked = tuple((int(a), int(b)) for a, b in pairs)
+        for a, b in checked:
+            if not (0 <= a < len(spheres) and 0 <= b < len(spheres)) or a == b:
+                raise ValueError(f"robot '{self.name}': {what} ({a}, {b}) "
+                                 f"must index two different spheres of {len(spheres)}")
+        return checked
+
+    @cached_property
+    def planning_robot(self) -> Robot:
+        """The robot as global guidance checks configurations: with ``planning_spheres`` and
+        ``planning_pairs`` as its collision spheres and pairs, or itself without them."""
+        if self.planning_spheres is None:
+            return self
+        return replace(self, collision_spheres=self.planning_spheres, self_collision_pairs=self.planning_pairs,
+                       planning_spheres=None, planning_pairs=())
 
     @property
     def velocity_names(self) -> tuple[str, ...]:

@@ -37,9 +37,9 @@ shoulder held off the base by a pair of bulging spheres, into successes):
   while every kept pair of those bodies stayed apart). Each body pair that came close is
   sampled again around its close samples, ``q' = clip(q + N(0, near_spread^2))`` [rad],
   ``near_samples`` times, and the cover is chosen on both sets. The built-in Panda's
-  pairs went from 123 to 268 (373 since its links 5 and 6 have tighter spheres); the ``auto`` models of example-robot-data's UR5, Kinova
-  j2s6s200, xArm7 and Panda now keep 95, 104, 132 and 111 pairs (default fits, as
-  tests/test_collision_model.py makes them).
+  pairs went from 123 to 268 (373 for its planning spheres); the ``auto`` models of
+  example-robot-data's UR5, Kinova j2s6s200, xArm7 and Panda now keep 95, 104, 132 and
+  111 pairs (default fits, as tests/test_collision_model.py makes them).
 """
 
 from __future__ import annotations
