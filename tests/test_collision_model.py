@@ -17,7 +17,7 @@ from dynfab.robots.collision_model import CollisionModel, auto_collision_model, 
 from dynfab.robots.link_meshes import LinkMeshError, link_collision_meshes
 from dynfab.robots.franka import DYNFAB_LINKS, franka_kinematics
 from dynfab.robots.panda_sphere_fit import HAND_LINKS, PLANNING_TIGHT_LINKS
-from dynfab.robots.panda_spheres import PANDA_FITTED_SPHERES, PANDA_PLANNING_SPHERES
+from dynfab.robots.panda_spheres import PANDA_FITTED_SPHERES
 from dynfab.robots.robot import CollisionSphere
 from dynfab.robots.body_distances import body_meshes
 from dynfab.robots.self_collision import PairSelection, bodies, sample_configurations, select_pairs, sphere_centres
@@ -240,7 +240,8 @@ def test_missing_mesh_of_a_moving_link_names_the_link(tmp_path: Path) -> None:
 #: with their sphere and pair counts, the largest count on one link and the Franka links
 #: at the 1 cm bulge bound.
 TABLES = {"fabric": (PANDA_FITTED_SPHERES, 75, 268, 17, HAND_LINKS),
-          "planning": (PANDA_PLANNING_SPHERES, 101, 373, 22, PLANNING_TIGHT_LINKS)}
+          "planning": (tuple((s.link, s.center, s.radius) for s in panda_robot("fitted").planning_robot.collision_spheres),
+                       101, 373, 22, PLANNING_TIGHT_LINKS)}
 
 
 def _franka_spheres(table: str = "fabric") -> tuple[list[CollisionSphere], dict[str, str]]:

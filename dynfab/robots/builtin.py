@@ -242,7 +242,7 @@ def panda_robot(sphere_model: str, fingers: float = OPEN) -> Robot:
     if sphere_model == "fitted":
         spheres = _spheres(PANDA_FITTED_SPHERES)
         pairs = PANDA_FITTED_PAIRS
-        planning, planning_pairs = _spheres(PANDA_PLANNING_SPHERES), PANDA_PLANNING_PAIRS
+        planning, planning_pairs = _planning_spheres(), PANDA_PLANNING_PAIRS
     else:
         labels = [label for label, *_ in _PANDA_SPHERES]
         spheres = tuple(CollisionSphere(link, center, radius) for _, link, center, radius in _PANDA_SPHERES)
@@ -252,9 +252,20 @@ def panda_robot(sphere_model: str, fingers: float = OPEN) -> Robot:
                  limits=_known_limits(kinematics, None), planning_spheres=planning, planning_pairs=planning_pairs)
 
 
-def _spheres(table: tuple[tuple[str, tuple[float, float, float], float], ...]) -> tuple[CollisionSphere, ...]:
+def _spheres(table: Sequence[tuple[str, tuple[float, float, float], float]]) -> tuple[CollisionSphere, ...]:
     """The spheres of a table of ``panda_spheres.py``."""
     return tuple(CollisionSphere(link, center, radius) for link, center, radius in table)
+
+
+def _planning_spheres() -> tuple[CollisionSphere, ...]:
+    """Global guidance's spheres: the fabric's, those of the links ``PANDA_PLANNING_SPHERES``
+    has (5 and 6) replaced by its tighter ones, in the links' order (which
+    ``PANDA_PLANNING_PAIRS`` index)."""
+    tighter = {link for link, *_ in PANDA_PLANNING_SPHERES}
+    rows = []
+    for link in dict.fromkeys(link for link, *_ in PANDA_FITTED_SPHERES):
+        rows += [row for row in (PANDA_PLANNING_SPHERES if link in tighter else PANDA_FITTED_SPHERES) if row[0] == link]
+    return _spheres(rows)
 
 
 def _known_limits(kinematics: Kinematics, base: DifferentialDriveBase | None) -> MotionLimits:

@@ -154,7 +154,8 @@ def _rounded(sphere: CollisionSphere) -> CollisionSphere:
 
 
 #: A table of ``panda_spheres.py``: its name's prefix (``PANDA_FITTED``), what it is for,
-#: the fits per link and the pairs.
+#: the fits per link (those written: a table may leave out the links it shares with the
+#: one before) and the pairs (into all its spheres, in the links' order).
 Table = tuple[str, str, Sequence[LinkFit], Sequence[tuple[int, int]]]
 
 
@@ -180,12 +181,12 @@ def table_module(tables: Sequence[Table], docstring: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _summary(table: Table) -> str:
-    """Per link: sphere count, coverage and bulge, measured on the final spheres."""
+def _summary(table: Table, total: int) -> str:
+    """Per link written: sphere count, coverage and bulge, measured on the final spheres;
+    then the table's ``total`` spheres and its pairs."""
     prefix, _, fits, pairs = table
     rows = [f"    {fit.link:<17} {len(fit.spheres):>2} spheres, coverage {1000 * fit.coverage:.1f} mm, "
             f"bulge {1000 * fit.bulge:.1f} mm" for fit in fits]
-    total = sum(len(fit.spheres) for fit in fits)
     return "\n".join([f"{prefix}:", ""] + rows + [f"    {total} spheres, {len(pairs)} self-collision pairs"])
 
 
@@ -194,11 +195,19 @@ def main() -> int:
     ``Fitted:``, a new summary, the new tables."""
     from . import panda_spheres
 
-    tables: list[Table] = [("PANDA_FITTED", "The fabric's spheres", *fit_panda()),
-                           ("PANDA_PLANNING", "Global guidance's spheres",
-                            *fit_panda(PLANNING_TIGHT_LINKS, PLANNING_PAIRS))]
+    fabric, fabric_pairs = fit_panda()
+    planning, planning_pairs = fit_panda(PLANNING_TIGHT_LINKS, PLANNING_PAIRS)
+    wrist = {DYNFAB_LINKS[link] for link in PLANNING_TIGHT_LINKS if link not in HAND_LINKS}
+    if [f.spheres for f in fabric if f.link not in wrist] != [f.spheres for f in planning if f.link not in wrist]:
+        raise RuntimeError("the two fits differ outside links 5 and 6")
+    tables: list[Table] = [("PANDA_FITTED", "The fabric's spheres", fabric, fabric_pairs),
+                           ("PANDA_PLANNING", "Global guidance's spheres of links 5 and 6 (the others: "
+                            "PANDA_FITTED_SPHERES'; its pairs index them all in the links' order)",
+                            [f for f in planning if f.link in wrist],
+                            planning_pairs)]
     head, _, _ = (panda_spheres.__doc__ or "").partition("Fitted:")
-    summary = "\n\n".join(_summary(table) for table in tables)
+    summary = "\n\n".join(_summary(table, sum(len(f.spheres) for f in fits))
+                            for table, fits in zip(tables, (fabric, planning)))
     print(table_module(tables, f"{head.rstrip()}\n\nFitted:\n\n{summary}"), end="")
     return 0
 

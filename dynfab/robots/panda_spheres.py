@@ -85,17 +85,8 @@ PANDA_FITTED:
 
 PANDA_PLANNING:
 
-    panda_link0       17 spheres, coverage 4.9 mm, bulge 19.9 mm
-    panda_link1        6 spheres, coverage 4.5 mm, bulge 19.7 mm
-    panda_link2        6 spheres, coverage 4.9 mm, bulge 19.7 mm
-    panda_link3        6 spheres, coverage 4.8 mm, bulge 19.9 mm
-    panda_link4        6 spheres, coverage 4.9 mm, bulge 19.8 mm
     panda_link5       22 spheres, coverage 4.9 mm, bulge 9.9 mm
     panda_link6       15 spheres, coverage 4.8 mm, bulge 9.9 mm
-    panda_link7        4 spheres, coverage 4.7 mm, bulge 19.8 mm
-    panda_hand_body   11 spheres, coverage 4.8 mm, bulge 9.8 mm
-    panda_leftfinger   4 spheres, coverage 4.1 mm, bulge 9.9 mm
-    panda_rightfinger  4 spheres, coverage 4.0 mm, bulge 9.8 mm
     101 spheres, 373 self-collision pairs
 """
 
@@ -213,49 +204,8 @@ PANDA_FITTED_PAIRS: tuple[tuple[int, int], ...] = (
     (26, 70), (26, 74), (28, 70), (28, 74), (45, 53), (45, 55), (45, 65), (46, 52),
 )
 
-#: Global guidance's spheres: (link, centre in the link frame [m], radius [m]).
+#: Global guidance's spheres of links 5 and 6 (the others: PANDA_FITTED_SPHERES'; its pairs index them all in the links' order): (link, centre in the link frame [m], radius [m]).
 PANDA_PLANNING_SPHERES: tuple[tuple[str, tuple[float, float, float], float], ...] = (
-    ("panda_link0", (0.0326, 0.0220, 0.0291), 0.0484),
-    ("panda_link0", (0.0204, -0.0371, 0.0281), 0.0472),
-    ("panda_link0", (-0.0086, 0.0666, 0.0206), 0.0404),
-    ("panda_link0", (-0.0182, -0.0649, 0.0221), 0.0420),
-    ("panda_link0", (-0.0895, -0.0460, 0.0277), 0.0469),
-    ("panda_link0", (-0.1297, -0.0370, 0.0118), 0.0317),
-    ("panda_link0", (-0.0591, 0.0607, 0.0180), 0.0364),
-    ("panda_link0", (0.0231, -0.0078, 0.0422), 0.0610),
-    ("panda_link0", (-0.1318, 0.0116, 0.0149), 0.0347),
-    ("panda_link0", (-0.0009, -0.0015, 0.0787), 0.0812),
-    ("panda_link0", (-0.1079, 0.0414, 0.0235), 0.0427),
-    ("panda_link0", (-0.0535, -0.0028, 0.0556), 0.0754),
-    ("panda_link0", (-0.0139, -0.0461, 0.0373), 0.0570),
-    ("panda_link0", (-0.0953, -0.0420, 0.0281), 0.0457),
-    ("panda_link0", (0.0307, 0.0559, 0.0106), 0.0131),
-    ("panda_link0", (-0.0515, -0.0659, 0.0164), 0.0236),
-    ("panda_link0", (-0.1293, 0.0221, 0.0155), 0.0291),
-    ("panda_link1", (0.0002, -0.0053, -0.1365), 0.0742),
-    ("panda_link1", (0.0000, -0.0540, -0.0004), 0.0746),
-    ("panda_link1", (0.0004, -0.0265, -0.0468), 0.0734),
-    ("panda_link1", (0.0000, -0.0394, -0.0724), 0.0737),
-    ("panda_link1", (0.0135, 0.0134, -0.1556), 0.0552),
-    ("panda_link1", (-0.0097, 0.0043, -0.1481), 0.0635),
-    ("panda_link2", (-0.0015, -0.0104, 0.0361), 0.0720),
-    ("panda_link2", (0.0000, -0.0720, 0.0312), 0.0735),
-    ("panda_link2", (0.0000, -0.1388, 0.0127), 0.0722),
-    ("panda_link2", (-0.0019, -0.0128, 0.0752), 0.0650),
-    ("panda_link2", (0.0083, -0.1487, -0.0050), 0.0639),
-    ("panda_link2", (-0.0037, -0.1445, -0.0039), 0.0692),
-    ("panda_link3", (0.0802, 0.0402, -0.0023), 0.0730),
-    ("panda_link3", (0.0035, -0.0065, -0.0770), 0.0634),
-    ("panda_link3", (0.0346, 0.0201, -0.0536), 0.0772),
-    ("panda_link3", (-0.0092, -0.0070, -0.0816), 0.0578),
-    ("panda_link3", (-0.0175, 0.0227, -0.0959), 0.0449),
-    ("panda_link3", (0.0627, 0.0258, -0.0074), 0.0544),
-    ("panda_link4", (-0.0018, 0.0019, 0.0412), 0.0727),
-    ("panda_link4", (-0.0905, 0.0871, 0.0141), 0.0556),
-    ("panda_link4", (-0.0456, 0.0521, 0.0215), 0.0776),
-    ("panda_link4", (-0.0682, 0.0902, -0.0152), 0.0526),
-    ("panda_link4", (-0.0911, 0.0818, -0.0057), 0.0613),
-    ("panda_link4", (-0.0278, -0.0209, 0.0075), 0.0276),
     ("panda_link5", (0.0020, 0.0080, -0.1893), 0.0609),
     ("panda_link5", (0.0000, 0.0494, -0.0203), 0.0587),
     ("panda_link5", (0.0240, 0.0163, -0.2308), 0.0387),
@@ -293,29 +243,6 @@ PANDA_PLANNING_SPHERES: tuple[tuple[str, tuple[float, float, float], float], ...
     ("panda_link6", (-0.0054, -0.0077, 0.0144), 0.0471),
     ("panda_link6", (0.0640, 0.0286, 0.0055), 0.0499),
     ("panda_link6", (0.0929, -0.0426, -0.0349), 0.0180),
-    ("panda_link7", (0.0258, 0.0214, 0.0787), 0.0465),
-    ("panda_link7", (0.0476, 0.0479, 0.0826), 0.0333),
-    ("panda_link7", (-0.0020, -0.0137, 0.0792), 0.0461),
-    ("panda_link7", (-0.0158, 0.0005, 0.0794), 0.0470),
-    ("panda_hand_body", (0.0012, -0.0059, 0.0096), 0.0380),
-    ("panda_hand_body", (0.0004, 0.0020, 0.0455), 0.0283),
-    ("panda_hand_body", (0.0007, -0.0367, 0.0433), 0.0293),
-    ("panda_hand_body", (0.0001, 0.0746, 0.0405), 0.0311),
-    ("panda_hand_body", (0.0005, 0.0718, 0.0158), 0.0329),
-    ("panda_hand_body", (-0.0006, 0.0396, 0.0443), 0.0280),
-    ("panda_hand_body", (0.0007, -0.0748, 0.0458), 0.0288),
-    ("panda_hand_body", (-0.0001, 0.0405, 0.0154), 0.0369),
-    ("panda_hand_body", (-0.0001, -0.0455, 0.0105), 0.0341),
-    ("panda_hand_body", (-0.0001, -0.0824, 0.0082), 0.0279),
-    ("panda_hand_body", (-0.0003, -0.0727, -0.0047), 0.0242),
-    ("panda_leftfinger", (0.0034, 0.0195, 0.0142), 0.0151),
-    ("panda_leftfinger", (0.0080, 0.0124, 0.0047), 0.0086),
-    ("panda_leftfinger", (-0.0040, 0.0180, 0.0084), 0.0162),
-    ("panda_leftfinger", (-0.0020, 0.0082, 0.0419), 0.0158),
-    ("panda_rightfinger", (-0.0025, -0.0178, 0.0113), 0.0162),
-    ("panda_rightfinger", (0.0008, -0.0169, 0.0171), 0.0134),
-    ("panda_rightfinger", (-0.0005, -0.0049, 0.0018), 0.0105),
-    ("panda_rightfinger", (0.0026, -0.0086, 0.0426), 0.0159),
 )
 
 #: Index pairs into PANDA_PLANNING_SPHERES kept apart.
