@@ -13,7 +13,7 @@ from dynfab.motion.configuration_checker import ConfigurationChecker
 from dynfab.motion.guidance import GuidanceSettings
 from dynfab.motion.mesh_goal_check import MeshGoalCheck, endpoint_tests, robot_mesh_model
 from dynfab.robots import load_robot
-from wall_scene import MESH_WALL, START
+from wall_scene import MESH_WALL, START, WALL
 
 #: joint 1 turns the hand toward the wall as it grows (wall_scene)
 TOWARD_THE_WALL = np.eye(7)[0]
@@ -69,6 +69,21 @@ def test_a_goal_approach_under_mesh_margin_is_refused_if_settling_past_it_touche
     assert accepted(goal=False, overshoot=OVERSHOOT)     # a start's way out: nothing past it
     assert accepted(goal=True, overshoot=0.0)
     assert not accepted(goal=True, overshoot=OVERSHOOT)
+
+
+def test_the_same_goal_before_a_box_is_refused_too(panda, near_goal) -> None:
+    """Among shapes as among meshes (session 15: generated object-removed cage/0003, a goal
+    0.23 mm from a bar, settled panda_link5 0.33 mm into it): the wall as a box."""
+    box = MeshGoalCheck(robot_mesh_model(panda), GuidanceSettings().mesh_margin)
+    box.set_obstacles((WALL,))
+    assert 0.0 < box.clearance(near_goal)[0] < 0.0025
+    checker = ConfigurationChecker(panda, [WALL])
+    settings = GuidanceSettings()
+    from_away = near_goal - 0.1 * TOWARD_THE_WALL
+    tests = endpoint_tests(near_goal, checker, lambda: box, replace(settings, goal_overshoot=OVERSHOOT), True)
+    assert not any(test is not None and test.accepts(from_away, near_goal) for test in tests)
+    tests = endpoint_tests(near_goal, checker, lambda: box, replace(settings, goal_overshoot=0.0), True)
+    assert any(test is not None and test.accepts(from_away, near_goal) for test in tests)
 
 
 def test_a_goal_free_on_the_meshes_by_mesh_margin_is_not_asked_for_room_past_it(panda, check) -> None:

@@ -50,7 +50,7 @@ class GuidanceSettings:
             for table_bars/0010 and 0023 are 2.6 and 2.1 mm from a bar, and the robot that
             reached them came 2.1 and 0.3 mm nearer (0.46 and 1.8 mm at the least): a floor of
             1 mm leaves no room for that.
-        goal_overshoot: how far [rad] past a goal among meshes (not clouds) nearer them
+        goal_overshoot: how far [rad] past a goal among meshes or shapes (not clouds) nearer them
             than ``mesh_margin`` its approach must be clear too (:func:`~dynfab.motion.mesh_goal_check.endpoint_tests`):
             the fabric settling at such a goal passed it by 5.8 mrad along its approach
             (development kitchen/0013, seed 2); 0.01 chosen on that run.
