@@ -13,6 +13,7 @@ import pytest
 from dynfab.motion.approach_pull import ApproachPull
 from dynfab.motion.approach_segment import across_segment, along_segment, segment_offset
 from dynfab.motion.guidance import GuidanceSettings, JointTarget
+from dynfab.motion.reference_clock import in_approach
 from dynfab.robots import load_robot
 from dynfab.scenario.guided_controller import make_scenario_controller
 from dynfab.scenario.references import scenario_references
@@ -107,7 +108,7 @@ def _pushed_run(panda, grasp, settings: GuidanceSettings, push: float):
 
     def pushed(t: float, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
         command = controller(t, q, qdot)
-        if guided.plan is None or not guided._in_approach():
+        if guided.plan is None or not in_approach(guided.plan, guided._tau):
             return command
         segment = guided._segment
         direction = (segment[-1] - segment[0]) / np.linalg.norm(segment[-1] - segment[0])

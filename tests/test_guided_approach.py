@@ -264,7 +264,8 @@ def test_an_approach_from_where_the_robot_is_passes_the_meshes_test_too(panda, b
                                                                        meshes_accept: bool) -> None:
     """The straight approach made when the robot is held short of its plan's (held-out
     as-posed bookshelf_tall/0046: the spheres' test alone let it 6.9 mm into a can on the
-    meshes) is judged as a plan's approach to that goal is."""
+    meshes) is judged as a plan's approach to that goal is: the segment, then (the goal
+    under ``mesh_margin`` from the wall) its continuation past the goal, touching nothing."""
     guidance = JointGuidance(panda)
     guidance.checker.set_obstacles([WALL])
     asked = []
@@ -275,8 +276,9 @@ def test_an_approach_from_where_the_robot_is_passes_the_meshes_test_too(panda, b
 
     monkeypatch.setattr(MeshGoalCheck, "segment_free", judged)
     plan = guidance.approach_from(_turned(barely, -0.1), barely)
-    assert (plan is not None) == meshes_accept and len(asked) == 1
+    assert (plan is not None) == meshes_accept and len(asked) == (2 if meshes_accept else 1)
     assert asked[0] == pytest.approx(guidance._meshes().clearance(barely)[0])   # no deeper than the goal
+    assert asked[1:] == ([0.0] if meshes_accept else [])   # past the goal: not touching
 
 
 def test_the_offset_from_a_segment_is_the_distance_to_its_nearest_point() -> None:

@@ -81,8 +81,9 @@ def test_the_reference_waits_for_a_robot_that_cannot_see_it(panda) -> None:
     times = np.linspace(0.0, trajectory.duration, 2001)
     ahead = times[np.argmax(np.linalg.norm(trajectory.sample(times)[0] - START, axis=1) > AHEAD)]
     point = trajectory.evaluate(float(ahead)).position
-    obstacle = _sphere_in_the_way(panda, point)
-    checker = ConfigurationChecker(panda, [obstacle])
+    planning = panda.planning_robot   # the spheres the guided fabric's sight test reads
+    obstacle = _sphere_in_the_way(planning, point)
+    checker = ConfigurationChecker(planning, [obstacle])
     assert min(checker.clearances(START)[0], checker.clearances(point)[0]) > 0.01   # in the way, not at its ends
     assert checker.clearances((START + point) / 2)[0] < 0.0
     assert _lag_after_one_second(panda, obstacle) < AHEAD   # it waits where the straight way to it is blocked
