@@ -141,9 +141,7 @@ def _cage_problem() -> tuple[list[PlacedObstacle], np.ndarray, JointTarget]:
 
 
 def test_a_cage_goal_blocked_on_the_whole_cloud_is_planned_on_the_focused_one_and_reused() -> None:
-    # guidance on the fabric's spheres (with its own tighter ones, links 5 and 6 at 1 cm, the
-    # whole cloud has an escape for this goal)
-    robot = replace(load_robot("panda"), planning_spheres=None, planning_pairs=())
+    robot = load_robot("panda")
     obstacles, start, goal = _cage_problem()
     # one attempt, seed 0's escape samples (a later seed finds an escape on the whole cloud), 4 s of search
     # (counted in checks: the same on a loaded machine)

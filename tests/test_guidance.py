@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from toppra.parametrizer import ParametrizeConstAccel
 
+from dynfab.geometry.point_cloud import PointCloud
 from dynfab.geometry.shapes import Box, Placement, Sphere
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.guidance import GuidanceError, JointGuidance, JointTarget
@@ -215,3 +216,17 @@ def test_guidance_checks_on_the_planning_spheres_and_weighs_allowances_on_the_fa
     assert guidance.checker.clearances(panda.default_q)[0] > 0.01
     assert guidance.obstacle_clearance(panda.default_q, grain) == pytest.approx(-0.007, abs=5e-4)
     assert guidance.allowances(panda.default_q, (grain,), (0.0,))[0] > 0.007
+
+
+def test_among_point_clouds_guidance_checks_on_the_fabrics_spheres() -> None:
+    """A cloud is a surface the fabric's leaf can be pushed through: plans among clouds keep
+    the fabric's spheres (JointGuidance.set_obstacles)."""
+    panda = load_robot("panda")
+    guidance = JointGuidance(panda)
+    box = PlacedObstacle(Box((0.1, 0.1, 0.1)), Placement((0.6, 0.0, 0.2)))
+    cloud = PlacedObstacle(PointCloud.from_points(np.random.default_rng(0).uniform(0.5, 0.7, (200, 3)), voxel=0.01),
+                           Placement((0.0, 0.0, 0.0)))
+    guidance.set_obstacles((box,))
+    assert guidance.checker.robot is panda.planning_robot and guidance.checker.obstacles == (box,)
+    guidance.set_obstacles((box, cloud))
+    assert guidance.checker.robot is panda and guidance.checker.obstacles == (box, cloud)

@@ -215,7 +215,7 @@ def _plan_among(guidance: JointGuidance, request: PlanRequest, obstacles: tuple[
     Raises:
         GuidanceError: if no plan can be made.
     """
-    guidance.checker.set_obstacles(obstacles)
+    guidance.set_obstacles(obstacles)
     plan = None
     if request.after == "short" and request.previous_goal is not None:   # held short of an approach
         plan = guidance.approach_from(request.q, request.previous_goal)
