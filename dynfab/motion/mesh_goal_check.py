@@ -152,11 +152,9 @@ def endpoint_tests(q: NDArray[np.float64], checker: ConfigurationChecker,
     the meshes either (:meth:`MeshGoalCheck.overshoot_free`; development kitchen/0013,
     seed 2: the robot lagged its approach by 13 mrad, then passed its goal, 2.0 mm from
     the cupboard, by 5.8 mrad along the approach and put ``panda_link5`` 2.5 mm into it;
-    among shapes since session 15, tried first, then without room past it: generated
-    object-removed cage/0003, seed 4, its goal 0.23 mm from a bar on the meshes, settled
-    ``panda_link5`` 0.33 mm into it once guidance planned with tighter spheres at links 5
-    and 6; asked alone, the room refused bookshelf_small/0001 of that set, reached
-    without it). Not among clouds: their bound already lies ``δ`` (8.7 mm for 1 cm voxels) below the
+    among shapes since session 15: generated object-removed cage/0003, seed 4, its goal
+    0.23 mm from a bar on the meshes, settled ``panda_link5`` 0.33 mm into it once guidance
+    planned with tighter spheres at links 5 and 6). Not among clouds: their bound already lies ``δ`` (8.7 mm for 1 cm voxels) below the
     measured points, and asked there, the test refused 6 of 56 goals of the points variant
     (problems 81-88) that the code without it reaches. ``(None,)``: free on the spheres,
     in collision on the meshes among shapes, no meshes, or the spheres' test."""
@@ -174,19 +172,15 @@ def endpoint_tests(q: NDArray[np.float64], checker: ConfigurationChecker,
 
     overshoot = settings.goal_overshoot if goal and not clouds and obstacle < meshes.margin else 0.0
 
-    def judged(floor: float, instead_of_spheres: bool, past: float = overshoot) -> ApproachTest:
+    def judged(floor: float, instead_of_spheres: bool) -> ApproachTest:
         return ApproachTest(lambda free, end: (meshes.segment_free(free, end, step, floor)
-                                               and meshes.overshoot_free(free, end, past, step)),
+                                               and meshes.overshoot_free(free, end, overshoot, step)),
                             instead_of_spheres)
 
     alone = judged(min(settings.approach_clearance, obstacle), True)
     both = judged(min(meshes.margin, obstacle), False)
     if not surfaces:
-        if free_on_meshes:
-            return (alone,)
-        if obstacle <= 0.0 or itself <= 0.0:
-            return (None,)
-        return (both, judged(min(meshes.margin, obstacle), False, 0.0)) if overshoot > 0.0 else (both,)
+        return (alone,) if free_on_meshes else (both,) if obstacle > 0.0 and itself > 0.0 else (None,)
     return (both, alone) if free_on_meshes and not clouds else (both,)
 
 
