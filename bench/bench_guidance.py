@@ -42,6 +42,7 @@ import statistics
 import sys
 import time
 from collections.abc import Callable, Sequence
+from typing import TypeVar
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -110,16 +111,31 @@ def _placed(obstacle: dict) -> PlacedObstacle:
     return PlacedObstacle(shape, Placement(tuple(obstacle["position"]), tuple(obstacle["orientation"])))
 
 
+T = TypeVar("T")
+
+
 def python_checker(robot: Robot) -> ConfigurationChecker:
     """The checker on its numpy path (as without a C compiler): the plain Python baseline."""
+    checker = _without_compiler(lambda: ConfigurationChecker(robot))
+    assert not checker.compiled
+    return checker
+
+
+def python_guidance(robot: Robot, settings: GuidanceSettings) -> JointGuidance:
+    """Guidance whose checkers (planning, coarse, allowances, ahead) all take the numpy path."""
+    guidance = _without_compiler(lambda: JointGuidance(robot, settings))
+    assert not guidance.checker.compiled
+    return guidance
+
+
+def _without_compiler(make: Callable[[], T]) -> T:
+    """``make()`` with the compiled checker library unavailable."""
     load = configuration_checker.load_checker_library
     configuration_checker.load_checker_library = lambda _robot: None
     try:
-        checker = ConfigurationChecker(robot)
+        return make()
     finally:
         configuration_checker.load_checker_library = load
-    assert not checker.compiled
-    return checker
 
 
 def _best_per_item(run: Callable[[], object], items: int, repeats: int = 3) -> float:
@@ -176,8 +192,7 @@ def measure_plans(robot: Robot, problems: Sequence[BenchProblem], cap: float, se
     settings = GuidanceSettings()
     guidance = JointGuidance(robot, settings)
     baseline_settings = replace(settings, path=replace(settings.path, time_limit=cap / settings.attempts))
-    baseline = JointGuidance(robot, baseline_settings)
-    baseline.checker = python_checker(robot)
+    baseline = python_guidance(robot, baseline_settings)
     if problems:  # warm-up: imports, toppra and OMPL first calls; not counted
         _plan(guidance, problems[0], seed)
     rows = []
@@ -308,12 +323,13 @@ def main(argv: list[str] | None = None) -> int:
     robot = load_robot("panda")
     problems, skipped = load_cases(args.problems, args.variant)
     path = GuidanceSettings().path
-    checks = measure_checks(robot, problems, path.margin, path.self_margin, args.configurations,
+    planning = robot.planning_robot   # the spheres guidance checks on among shapes
+    checks = measure_checks(planning, problems, path.margin, path.self_margin, args.configurations,
                             args.baseline_configurations, args.seed)
     plans = [] if args.skip_plans else measure_plans(robot, problems, args.cap, args.seed)
     conditions = {"problems": len(problems), "per_type": args.problems, "variant": args.variant,
-                  "skipped": skipped, "spheres": len(robot.collision_spheres),
-                  "pairs": len(robot.self_collision_pairs), "cpus": os.cpu_count(), "seed": args.seed,
+                  "skipped": skipped, "spheres": len(planning.collision_spheres),
+                  "pairs": len(planning.self_collision_pairs), "cpus": os.cpu_count(), "seed": args.seed,
                   "cap_s": args.cap, "margin": path.margin, "self_margin": path.self_margin,
                   "resolution": path.resolution, "planner": path.planner, "load_start": load_start,
                   "load_end": _loadavg()}
