@@ -78,6 +78,7 @@ class JointGuidance:
         self._coarse = self._planning if robot.planning_robot is robot else ConfigurationChecker(robot)
         self.checker = self._planning
         self._single = ConfigurationChecker(robot)  # one obstacle at a time (allowances: the fabric's spheres)
+        self._single_planning = ConfigurationChecker(robot.planning_robot)   # the same on the plans' (way_allowances)
         self._ahead = ConfigurationChecker(robot.planning_robot)   # what moves (blocked_ahead)
         self._mesh_check: MeshGoalCheck | None | bool = False  # made on first use; None: no meshes
         # the last focus made: the obstacles, the goal's bytes and the focused obstacles
@@ -311,6 +312,46 @@ class JointGuidance:
             self._single.set_obstacles((obstacle,))
             clearances[:, k] = self._single.batch(segment)[:, 0]
         return segment, np.maximum(0.0, np.asarray(buffers, dtype=float) + self.settings.goal_clearance - clearances)
+
+    def way_allowances(self, plan: Plan, obstacles: Sequence[PlacedObstacle],
+                       buffers: Sequence[float]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The configurations of ``plan``'s way (its polyline before an approach) every
+        ``path.resolution`` (k, n) [rad] and the allowance of each of ``obstacles`` at each
+        (k, m) [m]: what the fabric's leaves, on the robot's own spheres, need to see at
+        least what the plan's (tighter) planning spheres show less ``sphere_coverage``, at
+        most ``way_clearance``:
+
+            a_k(q) = max(0, buffer_k + min(way_clearance, p_k(q) − sphere_coverage) − c_k(q))
+
+        with ``p_k`` and ``c_k`` the planning spheres' and the fabric's spheres' clearance
+        from obstacle ``k`` alone [m]. Zero where both are the same spheres (then
+        ``c_k = p_k`` and ``buffer_k ≤ sphere_coverage``: the default 5 mm each), and for
+        meshes and point clouds (what the plan read of them is a grid's bound)."""
+        trajectory = plan.trajectory
+        if isinstance(trajectory, PhasedTrajectory):
+            phases = trajectory.phases[:-1] if plan.approach > 0.0 else trajectory.phases
+            way = (np.vstack([phases[0].waypoints[:1]] + [phase.waypoints[1:] for phase in phases]) if phases
+                   else trajectory.phases[0].waypoints[:1])
+        else:
+            way = trajectory.waypoints
+        samples = polyline_samples(way, self.settings.path.resolution)
+        table = np.zeros((len(samples), len(obstacles)))
+        if self.robot.planning_robot is self.robot:
+            return samples, table
+        settings = self.settings
+        for k, obstacle in enumerate(obstacles):
+            if isinstance(obstacle.shape, Mesh | PointCloud):
+                continue
+            self._single.set_obstacles((obstacle,))
+            fabric = self._single.batch(samples)[:, 0]
+            near = np.flatnonzero(fabric < buffers[k] + settings.way_clearance)   # elsewhere a_k = 0
+            if near.size == 0:
+                continue
+            self._single_planning.set_obstacles((obstacle,))
+            planned = self._single_planning.batch(samples[near])[:, 0]
+            seen = np.minimum(settings.way_clearance, planned - settings.sphere_coverage)
+            table[near, k] = np.maximum(0.0, buffers[k] + seen - fabric[near])
+        return samples, table
 
     def allowances(self, q: NDArray[np.float64], obstacles: Sequence[PlacedObstacle],
                    buffers: Sequence[float]) -> NDArray[np.float64]:

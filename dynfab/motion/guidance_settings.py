@@ -138,6 +138,17 @@ class GuidanceSettings:
             goal closer to an obstacle than the planner's margin (a grasp: the spheres,
             which bulge out of the meshes, overlap what the meshes clear); the obstacle
             gets that much allowance near the goal (:meth:`JointGuidance.allowances`).
+        way_clearance: clearance [m] the fabric's obstacle leaves should still see at the
+            configurations of a plan's way (before its approach), where the planning spheres
+            (:attr:`~dynfab.robots.robot.Robot.planning_spheres`, tighter than the fabric's)
+            show that much less ``sphere_coverage``: each static primitive gets the
+            allowance that takes (:meth:`JointGuidance.way_allowances`). A plan through a
+            passage its spheres clear by 14 mm, where the fabric's read 3 mm (they bulge 1 cm
+            more at ``panda_link5`` and ``panda_link6``), stalled the robot there against its
+            5 mm barrier (generated as-posed cage/0001, seed 7; chosen there, with the
+            defaults of the approach's ``goal_clearance`` and the fit's coverage).
+        sphere_coverage: how far [m] the robot's meshes may lie outside its planning spheres
+            (5 mm for the built-in Panda: :mod:`dynfab.robots.panda_spheres`).
         approach_speed: fraction of the velocity and acceleration limits the approach
             (that last segment, a phase of its own after a stop) uses [-].
         approach_lag_slow, approach_lag_stop: ``lag_slow`` and ``lag_stop`` during the
@@ -217,6 +228,8 @@ class GuidanceSettings:
     stall_margin: float = 0.03
     stall_margin_time: float = 0.5
     goal_clearance: float = 0.015
+    way_clearance: float = 0.015
+    sphere_coverage: float = 0.005
     approach_speed: float = 0.1
     approach_lag_slow: float = 0.01
     approach_lag_stop: float = 0.03

@@ -25,7 +25,10 @@ in a grasp's approach, drifts beside the checked segment
 (:mod:`dynfab.motion.reference_clock`); once the robot follows the approach its goal is
 shifted across the checked segment toward it (:mod:`dynfab.motion.approach_pull`). Off the
 approach the clock stands still while the reference is out of the robot's sight among the
-static primitives (:func:`~dynfab.motion.plan_joining.in_sight`: a corner; not meshes nor clouds).
+static primitives (:func:`~dynfab.motion.plan_joining.in_sight`: a corner; not meshes nor
+clouds). Along the plan's way the static primitives get the allowances that let the fabric's
+leaves see what the plan's tighter spheres kept
+(:meth:`~dynfab.motion.guidance.JointGuidance.way_allowances`).
 
 It asks for a replan from where the robot is (at most ``replans`` times; until the new
 one arrives the old reference's clock stands still outside a grasp's approach, so the
@@ -88,6 +91,7 @@ from dynfab.motion.reference_clock import approach_rate, in_approach, way_rate
 from dynfab.motion.plan_requests import PendingPlan, PlanRequest, plan_maker
 from dynfab.motion.replan_reasons import ReplanWatch, counted
 from dynfab.motion.straight_motion import StraightMotion
+from dynfab.motion.way_window import allowances_near
 
 __all__ = ["GuidanceStatus", "GuidedFabric", "guided_goal_config"]
 
@@ -138,6 +142,8 @@ class GuidedFabric:
         self._seed = 0
         self._segment = np.zeros((1, fabric.robot.dof))   # the approach's configurations (k, n) [rad]
         self._table = np.zeros((1, 0))                     # the allowances at each (k, m) [m]
+        self._way = np.zeros((1, fabric.robot.dof))        # the way's configurations (k, n) [rad]
+        self._way_table = np.zeros((1, 0))                 # the allowances at each (k, m) [m]
         self._q = np.zeros(fabric.robot.dof)               # the robot at the last update [rad]
         self._reference = np.zeros(fabric.robot.dof)       # q_r(τ) written last, without the pull [rad]
         self._pull = ApproachPull(settings, fabric.robot.dof)
@@ -162,11 +168,12 @@ class GuidedFabric:
 
     def set_obstacles(self, obstacles: Sequence[PlacedObstacle]) -> None:
         """The obstacles plans avoid (those that do not move; moving ones go to :meth:`update`);
-        the new obstacles get no allowance along an approach under way (a row per sample: a
+        the new obstacles get no allowance along an approach or a way under way (a row per sample: a
         camera's scene replaced mid-approach once crashed :meth:`allowances`)."""
         self._static = tuple(obstacles)
         self._sight.set_obstacles([o for o in self._static if not isinstance(o.shape, Mesh | PointCloud)])  # in_sight
         self._table = np.zeros((len(self._segment), len(self._static)))
+        self._way_table = np.zeros((len(self._way), len(self._static)))
 
     @property
     def approaching(self) -> bool:
@@ -178,10 +185,13 @@ class GuidedFabric:
         """Per static obstacle (:meth:`set_obstacles` order), how far [m] the fabric's
         spheres may enter it now: while :attr:`approaching`, the largest allowance at the
         approach's configurations from the robot's (its projection on the segment, less one
-        sample) to the goal, else zeros (module docstring)."""
-        if not self._approaching:
+        sample) to the goal, else those of the plan's way near the robot
+        (:func:`~dynfab.motion.way_window.allowances_near`; module docstring)."""
+        if self._approaching:
+            return allowances_ahead(self._segment, self._table, self._q)
+        if self._plan is None or not self._way_table.any():
             return np.zeros(len(self._static))
-        return allowances_ahead(self._segment, self._table, self._q)
+        return allowances_near(self._way, self._way_table, self._q, self._reference)
 
     def set_goal(self, goal: GoalTargets, t: float, q: NDArray[np.float64],
                  moving: Sequence[PlacedObstacle] = ()) -> None:
@@ -189,6 +199,7 @@ class GuidedFabric:
         docstring): until it arrives the fabric heads for the goal configuration alone; a
         plan that cannot be made holds the configuration the robot then has (see :attr:`status`)."""
         self._goal = goal
+        self._q = np.array(q, dtype=float)
         self._seed = 0
         self._plan = None
         self._approaching = False
@@ -203,13 +214,13 @@ class GuidedFabric:
         at ``q`` and write it into the fabric's first goal; ask for a replan if it is
         blocked ahead or progress stalled (the old reference's clock stands still until it
         arrives, outside an approach)."""
+        self._q = np.array(q, dtype=float)
         self._receive(t, q, moving)
         if self._plan is None:
             if self._pending is not None:
                 self._head_for_goal(t, q)
             return
         settings = self._settings
-        self._q = np.array(q, dtype=float)
         lag = float(np.linalg.norm(q - self._reference))   # the reference at τ, written last tick
         budget = self.status.plans + self.status.failed_plans <= settings.replans or self._home is not None   # away: back
         if self._pending is None and budget:
@@ -292,6 +303,7 @@ class GuidedFabric:
         self._close = request.after == "short"
         self._approaching = False
         self._segment, self._table = outcome.segment, outcome.table
+        self._way, self._way_table = outcome.way, outcome.way_table
         self._pull.reset()
         self._joining.set_obstacles(request.static + tuple(moving))
         self._tau = join_time(plan, np.asarray(q, dtype=float), self._joining, self._settings.path.resolution)

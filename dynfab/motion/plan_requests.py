@@ -91,6 +91,9 @@ class PlanOutcome:
         table: per configuration of ``segment`` and static obstacle, how far [m] the
             fabric's spheres may enter it there (k, m) (zeros without an approach;
             :meth:`~dynfab.motion.guidance.JointGuidance.approach_allowances`).
+        way: the configurations of the plan's way, before its approach (k, n) [rad].
+        way_table: the same for ``way`` (k, m)
+            (:meth:`~dynfab.motion.guidance.JointGuidance.way_allowances`).
     """
 
     plan: Plan | None
@@ -99,6 +102,8 @@ class PlanOutcome:
     elapsed_ms: float
     segment: NDArray[np.float64]
     table: NDArray[np.float64]
+    way: NDArray[np.float64]
+    way_table: NDArray[np.float64]
 
 
 class PendingPlan:
@@ -164,8 +169,9 @@ def make_plan(guidance: JointGuidance, request: PlanRequest,
         try:
             plan = refuge_plan(guidance, request.q, request.static, request.moving, request.seed)
         except GuidanceError as error:
-            return PlanOutcome(None, error.reason, str(error), _ms_since(began), request.q[None], none)
-        return PlanOutcome(plan, None, None, _ms_since(began), plan.goal[None], none)
+            return PlanOutcome(None, error.reason, str(error), _ms_since(began), request.q[None], none,
+                               request.q[None], none)
+        return PlanOutcome(plan, None, None, _ms_since(began), plan.goal[None], none, plan.goal[None], none)
     frozen = swept = ()
     if request.previous_goal is not None:   # what moves and touches the goal configuration is passing it
         margin = guidance.settings.path.margin
@@ -176,11 +182,12 @@ def make_plan(guidance: JointGuidance, request: PlanRequest,
     try:
         plan = _swept_plan(guidance, request, swept, frozen, publish)
     except GuidanceError as error:
-        return PlanOutcome(None, error.reason, str(error), _ms_since(began), request.q[None], none)
-    if plan.approach > 0:
-        segment, table = guidance.approach_allowances(plan, request.static, request.buffers)
-        return PlanOutcome(plan, None, None, _ms_since(began), segment, table)
-    return PlanOutcome(plan, None, None, _ms_since(began), plan.goal[None], none)
+        return PlanOutcome(None, error.reason, str(error), _ms_since(began), request.q[None], none, request.q[None],
+                           none)
+    way, way_table = guidance.way_allowances(plan, request.static, request.buffers)
+    segment, table = ((plan.goal[None], none) if plan.approach <= 0 else
+                      guidance.approach_allowances(plan, request.static, request.buffers))
+    return PlanOutcome(plan, None, None, _ms_since(began), segment, table, way, way_table)
 
 
 def _swept_plan(guidance: JointGuidance, request: PlanRequest, swept: tuple[PlacedObstacle, ...],

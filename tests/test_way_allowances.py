@@ -1,0 +1,134 @@
+"""Allowances along a plan's way (issue 19): guidance plans with tighter spheres than the
+fabric avoids with (the Panda's links 5 and 6), so the fabric's leaves get, near where the
+robot is on the plan, the allowance that lets them see what the plan's spheres kept."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from dynfab.geometry.shapes import Box, Placement
+from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
+from dynfab.motion.guidance import JointGuidance, Plan
+from dynfab.motion.joint_trajectory import time_path
+from dynfab.motion.phased_trajectory import PhasedTrajectory
+from dynfab.motion.way_window import WAY_AHEAD, allowances_near
+from dynfab.robots import load_robot
+
+START = np.array([0.0, -0.5, 0.0, -2.0, 0.0, 1.8, 0.8])
+END = np.array([0.9, 0.1, 0.3, -1.7, 0.6, 2.0, 0.4])
+BUFFER = 0.005
+
+
+@pytest.fixture(scope="module")
+def panda():
+    return load_robot("panda")
+
+
+def _plan(robot, waypoints: np.ndarray, approach: np.ndarray | None = None) -> Plan:
+    """A plan timed along ``waypoints`` (obstacles play no part), with an approach phase to
+    ``approach`` if given."""
+    limits = robot.limits
+    way = time_path(waypoints, 0.5 * limits.velocity, 0.25 * limits.acceleration)
+    if approach is None:
+        return Plan(way, waypoints[-1], 0.0, 0)
+    last = time_path(np.vstack([waypoints[-1], approach]), 0.1 * limits.velocity, 0.1 * limits.acceleration)
+    return Plan(PhasedTrajectory((way, last)), approach, 0.0, 0, float(np.linalg.norm(approach - waypoints[-1])),
+                way.duration)
+
+
+def _box_near_link5(robot, q: np.ndarray, clearance: float) -> PlacedObstacle:
+    """A 4 cm cube beside ``panda_link5`` at ``q``, its planning spheres ``clearance`` [m] from it."""
+    centre = np.asarray(robot.link_position(q, "panda_link5"), dtype=float).ravel()
+    checker = ConfigurationChecker(robot.planning_robot)
+    near, far = 0.0, 0.4
+    for _ in range(50):   # bisect the cube's offset along +x for the clearance wanted
+        offset = 0.5 * (near + far)
+        box = PlacedObstacle(Box((0.04, 0.04, 0.04)), Placement(tuple(centre + np.array([offset, 0.0, 0.0]))))
+        checker.set_obstacles([box])
+        near, far = (offset, far) if checker.clearances(q)[0] < clearance else (near, offset)
+    return box
+
+
+def test_way_allowances_let_the_fabric_see_what_the_planning_spheres_kept(panda) -> None:
+    middle = 0.5 * (START + END)
+    box = _box_near_link5(panda, middle, 0.014)
+    guidance = JointGuidance(panda)
+    way, table = guidance.way_allowances(_plan(panda, np.vstack([START, middle, END])), [box], [BUFFER])
+    np.testing.assert_allclose(way[0], START, atol=1e-12)
+    np.testing.assert_allclose(way[-1], END, atol=1e-12)
+    assert np.linalg.norm(np.diff(way, axis=0), axis=1).max() <= guidance.settings.path.resolution + 1e-12
+    fabric = ConfigurationChecker(panda, [box]).batch(way)[:, 0]
+    planned = ConfigurationChecker(panda.planning_robot, [box]).batch(way)[:, 0]
+    settings = guidance.settings
+    expected = np.maximum(0.0, BUFFER + np.minimum(settings.way_clearance, planned - settings.sphere_coverage) - fabric)
+    np.testing.assert_allclose(table[:, 0], expected, atol=1e-12)
+    assert (planned >= fabric - 1e-12).all()   # the planning spheres lie inside the fabric's here
+    at_middle = int(np.argmin(np.linalg.norm(way - middle, axis=1)))
+    assert table[at_middle, 0] > 0.002 and table[0, 0] == 0.0   # given where link 5 passes the box only
+
+
+def test_a_plans_approach_is_not_part_of_its_way(panda) -> None:
+    grasp = END + 0.1
+    guidance = JointGuidance(panda)
+    box = _box_near_link5(panda, END, 0.012)
+    way, table = guidance.way_allowances(_plan(panda, np.vstack([START, END]), approach=grasp), [box], [BUFFER])
+    np.testing.assert_allclose(way[-1], END, atol=1e-12)
+    assert table.shape == (len(way), 1) and table[-1, 0] > 0.0
+
+
+def test_no_way_allowance_without_tighter_planning_spheres(panda) -> None:
+    robot = replace(panda, planning_spheres=None, planning_pairs=())
+    assert robot.planning_robot is robot
+    box = _box_near_link5(panda, START, 0.001)
+    way, table = JointGuidance(robot).way_allowances(_plan(robot, np.vstack([START, END])), [box], [BUFFER])
+    assert table.shape == (len(way), 1) and not table.any()
+
+
+def test_way_allowances_hold_from_before_the_robot_to_just_beyond_its_reference() -> None:
+    way = np.linspace(0.0, 1.0, 21)[:, None] * np.ones((1, 3))
+    table = np.zeros((21, 2))
+    table[10, 0], table[4, 1] = 0.01, 0.02
+    at = way[3] + 1e-4
+    np.testing.assert_allclose(allowances_near(way, table, at, way[3]), [0.0, 0.02])   # 4 is ahead, 10 is not
+    np.testing.assert_allclose(allowances_near(way, table, at, way[10 - WAY_AHEAD]), [0.01, 0.02])
+    np.testing.assert_allclose(allowances_near(way, table, way[12], way[14]), [0.0, 0.0])   # both passed
+    np.testing.assert_allclose(allowances_near(way, table, way[11], way[14]), [0.01, 0.0])  # the one before counts
+
+
+
+def test_a_guided_fabric_gives_its_plans_way_allowances_where_the_robot_is(panda, monkeypatch) -> None:
+    from dynfab.motion.guidance import JointTarget
+    from dynfab.scenario.guided_controller import make_scenario_controller
+    from dynfab.scenario.references import scenario_references
+    from dynfab.scenario.schema import scenario_from_dict, validate_for_robot
+    from wall_scene import GOAL, WALL_ENTRY
+    from wall_scene import START as BEFORE_THE_WALL
+
+    data = {"robot": "panda", "planner": "dynamic-fabric", "dt": 0.01, "duration": 5.0,
+            "initial_state": {"q": BEFORE_THE_WALL.tolist()}, "goal": [{"type": "joint", "position": GOAL.tolist()}],
+            "obstacles": [WALL_ENTRY]}
+    scenario = validate_for_robot(scenario_from_dict(data), panda)
+    guided = make_scenario_controller(scenario, panda, scenario_references(scenario, panda), plan_latency=0.0).guided
+    made = guided.guidance.way_allowances
+
+    def marked(plan, obstacles, buffers):   # the plan's own way, an allowance at its middle tenth
+        way, table = made(plan, obstacles, buffers)
+        table = np.zeros_like(table)
+        table[len(way) * 9 // 20:len(way) * 11 // 20, 0] = 0.007
+        return way, table
+
+    monkeypatch.setattr(guided.guidance, "way_allowances", marked)
+    guided.set_goal(JointTarget(tuple(GOAL)), 0.0, BEFORE_THE_WALL)
+    plan, way = guided.plan, guided._way
+    assert guided.allowances() == pytest.approx([0.0])   # the robot at the start
+    given = []
+    for tau in np.arange(0.01, plan.trajectory.duration, 0.01):   # the robot on its reference
+        q = plan.trajectory.evaluate(float(guided._tau)).position
+        guided.update(float(tau), q)
+        now = guided.allowances()
+        np.testing.assert_allclose(now, allowances_near(way, guided._way_table, q, guided._reference), atol=0.0)
+        given.append(now[0])
+    assert max(given) == pytest.approx(0.007) and given[-1] == 0.0 and given[0] == 0.0
