@@ -27,17 +27,16 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import NDArray
 
-from dynfab.fabric.leaves.surface_points import moving_spheres
 from dynfab.geometry.focused_cloud import FocusedCloud
 from dynfab.geometry.shapes import Mesh, PointCloud
+from dynfab.motion.allowance_tables import AllowanceTables
 from dynfab.motion.cloud_focus import focused_obstacles
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.inverse_kinematics import IkSettings, solve_ik
-from dynfab.motion.mesh_escape_plan import EscapeScene, escape_plan, mesh_allowances
+from dynfab.motion.mesh_escape_plan import EscapeScene, escape_plan
 from dynfab.motion.mesh_goal_check import MeshGoalCheck, endpoint_tests, robot_mesh_model
-from dynfab.perception.surfaces import surface_clearance
 from dynfab.motion.joint_planning import (ApproachTest, JointPath, JointPlannerSettings, NoPathError, approach_clear,
-                                          plan_joint_path, polyline_samples)
+                                          plan_joint_path)
 from dynfab.motion.joint_trajectory import JointTrajectory, TimingError, time_path
 from dynfab.motion.guidance_settings import GuidanceSettings
 from dynfab.motion.phased_trajectory import PhasedTrajectory
@@ -77,14 +76,11 @@ class JointGuidance:
         self._planning = ConfigurationChecker(robot.planning_robot)
         self._coarse = self._planning if robot.planning_robot is robot else ConfigurationChecker(robot)
         self.checker = self._planning
-        self._single = ConfigurationChecker(robot)  # one obstacle at a time (allowances: the fabric's spheres)
-        self._single_planning = ConfigurationChecker(robot.planning_robot)   # the same on the plans' (way_allowances)
+        self._tables = AllowanceTables(robot, settings)   # what the fabric's leaves may enter (on its spheres)
         self._ahead = ConfigurationChecker(robot.planning_robot)   # what moves (blocked_ahead)
         self._mesh_check: MeshGoalCheck | None | bool = False  # made on first use; None: no meshes
         # the last focus made: the obstacles, the goal's bytes and the focused obstacles
         self._focus: tuple[tuple[PlacedObstacle, ...], bytes, tuple[PlacedObstacle, ...]] | None = None
-        self._leaf_spheres = list(moving_spheres(robot))  # those a nearest-point leaf acts on
-        self._leaf_radii = np.asarray(robot.sphere_radii, dtype=float)[self._leaf_spheres]
         kin = robot.kinematics
         self._lower, self._upper = finite_joint_bounds(kin.lower, kin.upper)
 
@@ -289,91 +285,26 @@ class JointGuidance:
 
     def approach_allowances(self, plan: Plan, obstacles: Sequence[PlacedObstacle],
                             buffers: Sequence[float]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """:meth:`allowances` along ``plan``'s approach: its configurations every
-        ``path.resolution`` from its start to the goal (k, n) [rad] and the allowances of
-        ``obstacles`` at each (k, m) [m]. The straight approach may pass closer to an
-        obstacle than the goal is (a table under a grasp), where the leaves would hold the
-        robot short of the goal (problems 21-28, as posed: table_pick); what it may pass
-        matters only until the robot is past it (:meth:`GuidedFabric.allowances`). Along the
-        meshes' plan's polyline approach (more than two configurations, among meshes without
-        clouds) the leaves see the meshes' clearance instead
-        (:func:`~dynfab.motion.mesh_escape_plan.mesh_allowances`)."""
-        if not isinstance(plan.trajectory, PhasedTrajectory):
-            raise ValueError("approach_allowances: the plan has no approach")
-        waypoints = plan.trajectory.phases[-1].waypoints
-        segment = polyline_samples(waypoints, self.settings.path.resolution)
-        if (len(waypoints) > 2 and not any(isinstance(o.shape, PointCloud) for o in obstacles)
-                and (meshes := self._meshes()) is not None):   # the meshes' plan's polyline (mesh_escape_plan)
-            spheres = np.array([[self.obstacle_clearance(q, o) for o in obstacles] for q in segment])
-            return segment, mesh_allowances(meshes.model, segment, obstacles, buffers,
-                                            spheres.reshape(len(segment), len(obstacles)), self.settings.goal_clearance)
-        clearances = np.empty((len(segment), len(obstacles)))
-        for k, obstacle in enumerate(obstacles):
-            self._single.set_obstacles((obstacle,))
-            clearances[:, k] = self._single.batch(segment)[:, 0]
-        return segment, np.maximum(0.0, np.asarray(buffers, dtype=float) + self.settings.goal_clearance - clearances)
+        """The allowances along ``plan``'s approach: its configurations (k, n) [rad] and each
+        obstacle's at each (k, m) [m] (:meth:`AllowanceTables.approach`)."""
+        return self._tables.approach(plan, obstacles, buffers, self._meshes)
 
     def way_allowances(self, plan: Plan, obstacles: Sequence[PlacedObstacle],
                        buffers: Sequence[float]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """The configurations of ``plan``'s way (its polyline before an approach) every
-        ``path.resolution`` (k, n) [rad] and the allowance of each of ``obstacles`` at each
-        (k, m) [m]: what the fabric's leaves, on the robot's own spheres, need to see at
-        least what the plan's (tighter) planning spheres show less ``sphere_coverage``, at
-        most ``way_clearance``:
-
-            a_k(q) = max(0, buffer_k + min(way_clearance, p_k(q) − sphere_coverage) − c_k(q))
-
-        with ``p_k`` and ``c_k`` the planning spheres' and the fabric's spheres' clearance
-        from obstacle ``k`` alone [m]. Zero where both are the same spheres (then
-        ``c_k = p_k`` and ``buffer_k ≤ sphere_coverage``: the default 5 mm each), and for
-        meshes and point clouds (what the plan read of them is a grid's bound)."""
-        trajectory = plan.trajectory
-        if isinstance(trajectory, PhasedTrajectory):
-            phases = trajectory.phases[:-1] if plan.approach > 0.0 else trajectory.phases
-            way = (np.vstack([phases[0].waypoints[:1]] + [phase.waypoints[1:] for phase in phases]) if phases
-                   else trajectory.phases[0].waypoints[:1])
-        else:
-            way = trajectory.waypoints
-        samples = polyline_samples(way, self.settings.path.resolution)
-        table = np.zeros((len(samples), len(obstacles)))
-        if self.robot.planning_robot is self.robot:
-            return samples, table
-        settings = self.settings
-        for k, obstacle in enumerate(obstacles):
-            if isinstance(obstacle.shape, Mesh | PointCloud):
-                continue
-            self._single.set_obstacles((obstacle,))
-            fabric = self._single.batch(samples)[:, 0]
-            near = np.flatnonzero(fabric < buffers[k] + settings.way_clearance)   # elsewhere a_k = 0
-            if near.size == 0:
-                continue
-            self._single_planning.set_obstacles((obstacle,))
-            planned = self._single_planning.batch(samples[near])[:, 0]
-            seen = np.minimum(settings.way_clearance, planned - settings.sphere_coverage)
-            table[near, k] = np.maximum(0.0, buffers[k] + seen - fabric[near])
-        return samples, table
+        """The allowances along ``plan``'s way, before its approach: its configurations (k, n)
+        [rad] and each obstacle's at each (k, m) [m] (:meth:`AllowanceTables.way`)."""
+        return self._tables.way(plan, obstacles, buffers)
 
     def allowances(self, q: NDArray[np.float64], obstacles: Sequence[PlacedObstacle],
                    buffers: Sequence[float]) -> NDArray[np.float64]:
-        """How far [m] the fabric's spheres may enter each obstacle so that its leaves,
-        which keep ``buffers[k]`` of clearance, still see ``goal_clearance`` at ``q``:
-        ``a_k = max(0, buffer_k + goal_clearance − c_k(q))``, with ``c_k`` the clearance of
-        the robot's spheres from obstacle ``k`` alone."""
-        if not obstacles:
-            return np.zeros(0)
-        clearances = np.array([self.obstacle_clearance(q, obstacle) for obstacle in obstacles])
-        return np.maximum(0.0, np.asarray(buffers, dtype=float) + self.settings.goal_clearance - clearances)
+        """How far [m] the fabric's spheres may enter each obstacle at ``q``, its leaves
+        keeping ``buffers`` (:meth:`AllowanceTables.at`)."""
+        return self._tables.at(q, obstacles, buffers)
 
     def obstacle_clearance(self, q: NDArray[np.float64], obstacle: PlacedObstacle) -> float:
-        """Clearance [m] of the robot's spheres at ``q`` from ``obstacle`` alone: the
-        checker's, or for a mesh or a point cloud what the fabric's nearest-point leaf sees
-        (:func:`~dynfab.perception.surfaces.surface_clearance` of the spheres a joint moves:
-        exact for a mesh, where the checker's grid reads up to ``h√3`` less)."""
-        if isinstance(obstacle.shape, Mesh | PointCloud):
-            centres = np.asarray(self.robot.sphere_centers(q))[self._leaf_spheres]
-            return surface_clearance(centres, self._leaf_radii, obstacle.shape, obstacle.placement)
-        self._single.set_obstacles((obstacle,))
-        return self._single.clearances(q)[0]
+        """Clearance [m] of the robot's (the fabric's) spheres at ``q`` from ``obstacle``
+        alone (:meth:`AllowanceTables.obstacle_clearance`)."""
+        return self._tables.obstacle_clearance(q, obstacle)
 
     def blocked_ahead(self, plan: Plan, tau: float, obstacles: Sequence[PlacedObstacle]) -> bool:
         """Whether the reference within ``check_horizon`` after its time ``tau`` [s] meets

@@ -1,0 +1,132 @@
+"""How far the guided fabric's spheres may enter each static obstacle, so that its leaves let
+it follow what guidance planned (issue 19): at a goal nearer an obstacle than the planner's
+margin (a grasp), along the plan's approach to it, and along the plan's way, where the plan
+was checked on tighter spheres than the fabric avoids with
+(:class:`~dynfab.motion.guidance.JointGuidance` delegates here;
+:meth:`~dynfab.motion.guided_fabric.GuidedFabric.allowances` applies them).
+
+Every allowance is read on the fabric's own spheres, one obstacle at a time: ``c_k(q)``, the
+clearance [m] of the robot's spheres at ``q`` from obstacle ``k`` alone (a mesh's or a point
+cloud's: what the fabric's nearest-point leaf sees).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from dynfab.fabric.leaves.surface_points import moving_spheres
+from dynfab.geometry.shapes import Mesh, PointCloud
+from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
+from dynfab.motion.guidance_settings import GuidanceSettings
+from dynfab.motion.joint_planning import polyline_samples
+from dynfab.motion.mesh_escape_plan import mesh_allowances
+from dynfab.motion.mesh_goal_check import MeshGoalCheck
+from dynfab.motion.phased_trajectory import PhasedTrajectory
+from dynfab.motion.plan_values import Plan
+from dynfab.perception.surfaces import surface_clearance
+from dynfab.robots.robot import Robot
+
+__all__ = ["AllowanceTables"]
+
+
+class AllowanceTables:
+    """The allowances of the module docstring for ``robot`` with ``settings``."""
+
+    def __init__(self, robot: Robot, settings: GuidanceSettings) -> None:
+        self._robot = robot
+        self._settings = settings
+        self._single = ConfigurationChecker(robot)   # one obstacle at a time, the fabric's spheres
+        self._single_planning = ConfigurationChecker(robot.planning_robot)   # the same on the plans'
+        self._leaf_spheres = list(moving_spheres(robot))   # those a nearest-point leaf acts on
+        self._leaf_radii = np.asarray(robot.sphere_radii, dtype=float)[self._leaf_spheres]
+
+    def at(self, q: NDArray[np.float64], obstacles: Sequence[PlacedObstacle],
+           buffers: Sequence[float]) -> NDArray[np.float64]:
+        """How far [m] the fabric's spheres may enter each obstacle so that its leaves,
+        which keep ``buffers[k]`` of clearance, still see ``goal_clearance`` at ``q``:
+        ``a_k = max(0, buffer_k + goal_clearance − c_k(q))``."""
+        if not obstacles:
+            return np.zeros(0)
+        clearances = np.array([self.obstacle_clearance(q, obstacle) for obstacle in obstacles])
+        return np.maximum(0.0, np.asarray(buffers, dtype=float) + self._settings.goal_clearance - clearances)
+
+    def approach(self, plan: Plan, obstacles: Sequence[PlacedObstacle], buffers: Sequence[float],
+                 meshes: Callable[[], MeshGoalCheck | None]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """:meth:`at` along ``plan``'s approach: its configurations every
+        ``path.resolution`` from its start to the goal (k, n) [rad] and the allowances of
+        ``obstacles`` at each (k, m) [m]. The straight approach may pass closer to an
+        obstacle than the goal is (a table under a grasp), where the leaves would hold the
+        robot short of the goal (problems 21-28, as posed: table_pick); what it may pass
+        matters only until the robot is past it. Along the meshes' plan's polyline approach
+        (more than two configurations, among meshes without clouds; ``meshes()`` the mesh
+        check, None without meshes) the leaves see the meshes' clearance instead
+        (:func:`~dynfab.motion.mesh_escape_plan.mesh_allowances`)."""
+        if not isinstance(plan.trajectory, PhasedTrajectory):
+            raise ValueError("approach_allowances: the plan has no approach")
+        waypoints = plan.trajectory.phases[-1].waypoints
+        segment = polyline_samples(waypoints, self._settings.path.resolution)
+        goal_clearance = self._settings.goal_clearance
+        if (len(waypoints) > 2 and not any(isinstance(o.shape, PointCloud) for o in obstacles)
+                and (check := meshes()) is not None):   # the meshes' plan's polyline (mesh_escape_plan)
+            spheres = np.array([[self.obstacle_clearance(q, o) for o in obstacles] for q in segment])
+            return segment, mesh_allowances(check.model, segment, obstacles, buffers,
+                                            spheres.reshape(len(segment), len(obstacles)), goal_clearance)
+        clearances = np.empty((len(segment), len(obstacles)))
+        for k, obstacle in enumerate(obstacles):
+            clearances[:, k] = self._clearances(self._single, segment, obstacle)
+        return segment, np.maximum(0.0, np.asarray(buffers, dtype=float) + goal_clearance - clearances)
+
+    def way(self, plan: Plan, obstacles: Sequence[PlacedObstacle],
+            buffers: Sequence[float]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The configurations of ``plan``'s way (its polyline before an approach) every
+        ``path.resolution`` (k, n) [rad] and the allowance of each of ``obstacles`` at each
+        (k, m) [m]: what the fabric's leaves, on the robot's own spheres, need to see at
+        least what the plan's (tighter) planning spheres show less ``sphere_coverage``, at
+        most ``way_clearance``:
+
+            a_k(q) = max(0, buffer_k + min(way_clearance, p_k(q) − sphere_coverage) − c_k(q))
+
+        with ``p_k`` the planning spheres' clearance from obstacle ``k`` alone [m]. Zero
+        where both are the same spheres (then ``c_k = p_k`` and ``buffer_k ≤
+        sphere_coverage``: the default 5 mm each), and for meshes and point clouds (what the
+        plan read of them is a grid's bound)."""
+        waypoints = plan.trajectory.waypoints
+        if plan.approach > 0.0:   # the approach's phase is the last: its first configuration ends the way
+            waypoints = waypoints[:len(waypoints) - len(plan.trajectory.phases[-1].waypoints) + 1]
+        settings = self._settings
+        samples = polyline_samples(waypoints, settings.path.resolution)
+        table = np.zeros((len(samples), len(obstacles)))
+        if self._robot.planning_robot is self._robot:
+            return samples, table
+        for k, obstacle in enumerate(obstacles):
+            if isinstance(obstacle.shape, Mesh | PointCloud):
+                continue
+            fabric = self._clearances(self._single, samples, obstacle)
+            near = np.flatnonzero(fabric < buffers[k] + settings.way_clearance)   # elsewhere a_k = 0
+            if near.size == 0:
+                continue
+            planned = self._clearances(self._single_planning, samples[near], obstacle)
+            seen = np.minimum(settings.way_clearance, planned - settings.sphere_coverage)
+            table[near, k] = np.maximum(0.0, buffers[k] + seen - fabric[near])
+        return samples, table
+
+    def obstacle_clearance(self, q: NDArray[np.float64], obstacle: PlacedObstacle) -> float:
+        """``c_k(q)`` [m] (module docstring): the checker's, or for a mesh or a point cloud
+        what the fabric's nearest-point leaf sees
+        (:func:`~dynfab.perception.surfaces.surface_clearance` of the spheres a joint moves:
+        exact for a mesh, where the checker's grid reads up to ``h√3`` less)."""
+        if isinstance(obstacle.shape, Mesh | PointCloud):
+            centres = np.asarray(self._robot.sphere_centers(q))[self._leaf_spheres]
+            return surface_clearance(centres, self._leaf_radii, obstacle.shape, obstacle.placement)
+        self._single.set_obstacles((obstacle,))
+        return self._single.clearances(q)[0]
+
+    @staticmethod
+    def _clearances(checker: ConfigurationChecker, samples: NDArray[np.float64],
+                    obstacle: PlacedObstacle) -> NDArray[np.float64]:
+        """The clearance [m] of ``checker``'s spheres from ``obstacle`` alone at each of ``samples`` (k,)."""
+        checker.set_obstacles((obstacle,))
+        return checker.batch(samples)[:, 0]
