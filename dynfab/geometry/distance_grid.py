@@ -13,7 +13,18 @@ configuration it accepts is free). The grid, in the mesh's frame, has nodes ``g`
   (``f`` falls at rate 1 along the segment to the nearest surface point, which crosses the
   boundary of ``B``), and ``d(g, B) ≥ EDT(g) − h√3/2`` with ``EDT`` the Euclidean distance
   transform to the nodes with ``f ≤ band₀ + h√3/2`` (every point of ``B`` is within ``h√3/2``
-  of such a node); so ``v(g) = max(band, band₀ + EDT(g) − h√3/2)``.
+  of such a node); so ``v(g) = max(band, band₀ + EDT(g) − h√3/2)``, up to about ``1.9 h``
+  below ``f(g)``.
+
+The band is :data:`BAND`, 4 cm. A robot sphere touches a mesh with its centre one radius
+away, and the Panda's moving spheres reach 7.8 cm of radius, so around the larger spheres'
+centres the nodes hold the far bound: on MotionBenchMaker's kitchen (seed 10, problem 17) a
+goal whose ``panda_link5`` spheres clear the counter by 2-5 mm reads 8-11 mm *into* it, 13-16
+mm low, and guidance refuses it. A 10 cm band reads it within a few mm and reached 2 more
+of 20 on development seed 1 (16/20), the same on seed 4 (18/20); but on fresh seed 11 one
+run (kitchen/0004) touched the kitchen with the left finger, 11.6 mm deep, near its goal, a
+run reached clean with 4 cm: hence 4 cm still (session 17; not understood yet). The exact
+distances are :mod:`dynfab.geometry.triangle_band`'s compiled loop.
 
 Between nodes, ``f`` being 1-Lipschitz gives ``f(p) ≥ f(g_j) − ‖p − g_j‖`` for every corner
 ``g_j`` of the cell, hence
@@ -45,9 +56,12 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.ndimage import distance_transform_edt
 
 from dynfab.geometry.mesh_shape import Mesh
+from dynfab.geometry.triangle_band import triangle_band
 
-__all__ = ["DistanceGrid", "MAX_NODES", "distance_grid", "grid_key", "point_triangle_distances"]
+__all__ = ["BAND", "DistanceGrid", "MAX_NODES", "distance_grid", "grid_key"]
 
+#: Nodes this close to a triangle get exact distances [m] (module docstring).
+BAND = 0.04
 #: Most nodes of one grid (64 MB).
 MAX_NODES = 8_000_000
 #: Version of the build, part of the disk cache's key.
@@ -101,7 +115,7 @@ class DistanceGrid:
         return result.reshape(p.shape[:-1])
 
 
-def distance_grid(mesh: Mesh, pitch: float = 0.01, margin: float = 0.1, band: float = 0.04,
+def distance_grid(mesh: Mesh, pitch: float = 0.01, margin: float = 0.1, band: float = BAND,
                   cache: Path | None = None) -> DistanceGrid:
     """The lower-bound grid of ``mesh`` (module docstring); kept on the mesh per arguments and,
     with ``cache``, on disk by the mesh's content (:func:`grid_key`): the same triangles in
@@ -164,16 +178,7 @@ def _build(mesh: Mesh, pitch: float, margin: float, band: float) -> DistanceGrid
     band = max(band, 2 * pitch)
     origin = low - margin
     shape = np.ceil(extent / pitch).astype(int) + 1
-    exact = np.full(tuple(shape), np.inf)
-    triangles = mesh.vertices[mesh.faces]
-    for triangle in triangles:
-        first = np.maximum(np.floor((triangle.min(axis=0) - band - origin) / pitch).astype(int), 0)
-        last = np.minimum(np.ceil((triangle.max(axis=0) + band - origin) / pitch).astype(int), shape - 1)
-        axes = [np.arange(first[a], last[a] + 1) for a in range(3)]
-        index = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-        distances = point_triangle_distances(origin + index * pitch, triangle)
-        block = exact[first[0]:last[0] + 1, first[1]:last[1] + 1, first[2]:last[2] + 1]
-        np.minimum(block, distances.reshape(block.shape), out=block)
+    exact = triangle_band(mesh.vertices[mesh.faces], origin, pitch, tuple(int(n) for n in shape), band)
     inner = band - pitch
     half_diagonal = 0.5 * math.sqrt(3) * pitch
     near = exact <= inner + half_diagonal
@@ -181,37 +186,3 @@ def _build(mesh: Mesh, pitch: float, margin: float, band: float) -> DistanceGrid
     far = np.maximum(band, inner + transform - half_diagonal)
     values = np.where(exact <= band, exact, far)  # beyond band a triangle left out may be nearer
     return DistanceGrid(origin, pitch, values, low, high)
-
-
-def point_triangle_distances(points: NDArray[np.float64], triangle: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Exact distances (N,) [m] of points (N, 3) to a triangle (3, 3) (Ericson, Real-Time
-    Collision Detection, 5.1.5: the closest point by the Voronoi region it lies in)."""
-    a, b, c = triangle
-    ab, ac = b - a, c - a
-    ap = points - a
-    d1, d2 = ap @ ab, ap @ ac
-    bp = points - b
-    d3, d4 = bp @ ab, bp @ ac
-    cp = points - c
-    d5, d6 = cp @ ab, cp @ ac
-    va = d3 * d6 - d5 * d4
-    vb = d5 * d2 - d1 * d6
-    vc = d1 * d4 - d3 * d2
-    with np.errstate(divide="ignore", invalid="ignore"):
-        denominator = va + vb + vc
-        v = np.where(denominator != 0, vb / denominator, 0.0)
-        w = np.where(denominator != 0, vc / denominator, 0.0)
-        closest = a + v[:, None] * ab + w[:, None] * ac  # inside the face
-        edge_ab = (vc <= 0) & (d1 >= 0) & (d3 <= 0)
-        t = np.clip(d1 / np.where(d1 - d3 != 0, d1 - d3, 1.0), 0, 1)
-        closest = np.where(edge_ab[:, None], a + t[:, None] * ab, closest)
-        edge_ac = (vb <= 0) & (d2 >= 0) & (d6 <= 0)
-        t = np.clip(d2 / np.where(d2 - d6 != 0, d2 - d6, 1.0), 0, 1)
-        closest = np.where(edge_ac[:, None], a + t[:, None] * ac, closest)
-        edge_bc = (va <= 0) & ((d4 - d3) >= 0) & ((d5 - d6) >= 0)
-        t = np.clip((d4 - d3) / np.where((d4 - d3) + (d5 - d6) != 0, (d4 - d3) + (d5 - d6), 1.0), 0, 1)
-        closest = np.where(edge_bc[:, None], b + t[:, None] * (c - b), closest)
-    closest = np.where(((d1 <= 0) & (d2 <= 0))[:, None], a, closest)
-    closest = np.where(((d3 >= 0) & (d4 <= d3))[:, None], b, closest)
-    closest = np.where(((d6 >= 0) & (d5 <= d6))[:, None], c, closest)
-    return np.linalg.norm(points - closest, axis=1)

@@ -27,7 +27,7 @@ from dynfab.fabric.leaves.surface_points import moving_spheres
 from dynfab.robots.collision_model import cache_dir
 from dynfab.robots.robot import Robot
 
-__all__ = ["CheckerLibrary", "load_checker_library"]
+__all__ = ["CheckerLibrary", "cached_library", "load_checker_library"]
 
 _FLAGS = ("-O2", "-shared", "-fPIC")
 _KERNEL = Path(__file__).with_name("checker_kernel.c")
@@ -62,22 +62,29 @@ class CheckerLibrary:
 def load_checker_library(robot: Robot) -> CheckerLibrary | None:
     """The robot's compiled checker, built on first use; ``None`` without a working C
     compiler (the caller then evaluates the CasADi expression instead)."""
+    path = cached_library(_source(robot), "checker", f"the collision checker of {robot.name}")
+    return None if path is None else CheckerLibrary(path)
+
+
+def cached_library(source: str, what: str, title: str) -> Path | None:
+    """The shared library compiled from the C ``source`` (``-O2``), cached in the cache
+    folder as ``{what}-{sha256}.so`` under the digest of the source, compiler and flags and
+    loaded only if its bytes hash to the digest beside it; compiled on first use with a note
+    on stderr naming ``title``. ``None`` without a working C compiler, or if it fails."""
     compiler = find_compiler()
     if compiler is None:
         return None
-    source = _source(robot)
     key = hashlib.sha256(f"{compiler.path} {compiler.version} {' '.join(_FLAGS)}\n{source}".encode()).hexdigest()
-    path = cache_dir() / f"checker-{key}.so"
+    path = cache_dir() / f"{what}-{key}.so"
     if not _verified(path):
-        print(f"dynfab: compiling the collision checker of {robot.name} (once; cached in {path.parent}) ...",
-              file=sys.stderr, flush=True)
+        print(f"dynfab: compiling {title} (once; cached in {path.parent}) ...", file=sys.stderr, flush=True)
         start = time.perf_counter()
         try:
-            _compile(source, compiler, path)
+            _compile(source, compiler, path, what)
         except (OSError, RuntimeError):
             return None
-        print(f"dynfab: compiled the checker in {time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
-    return CheckerLibrary(path)
+        print(f"dynfab: compiled {title} in {time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
+    return path
 
 
 def _source(robot: Robot) -> str:
@@ -181,8 +188,8 @@ def _verified(path: Path) -> bool:
         return False
 
 
-def _compile(source: str, compiler: Compiler, path: Path) -> None:
-    data = compile_shared_library(source, compiler, _FLAGS, "checker")
+def _compile(source: str, compiler: Compiler, path: Path, what: str) -> None:
+    data = compile_shared_library(source, compiler, _FLAGS, what)
     write_atomic(path, data)
     write_atomic(path.with_suffix(".sha256"), hashlib.sha256(data).hexdigest().encode())
 
