@@ -20,11 +20,15 @@ The band is :data:`BAND`, 4 cm. A robot sphere touches a mesh with its centre on
 away, and the Panda's moving spheres reach 7.8 cm of radius, so around the larger spheres'
 centres the nodes hold the far bound: on MotionBenchMaker's kitchen (seed 10, problem 17) a
 goal whose ``panda_link5`` spheres clear the counter by 2-5 mm reads 8-11 mm *into* it, 13-16
-mm low, and guidance refuses it. A 10 cm band reads it within a few mm and reached 2 more
-of 20 on development seed 1 (16/20), the same on seed 4 (18/20); but on fresh seed 11 one
-run (kitchen/0004) touched the kitchen with the left finger, 11.6 mm deep, near its goal, a
-run reached clean with 4 cm: hence 4 cm still (session 17; not understood yet). The exact
-distances are :mod:`dynfab.geometry.triangle_band`'s compiled loop.
+mm low, and guidance refuses it. A 10 cm band (tried in session 17) reads it within a few mm
+and reached 2 more of 20 on development seed 1 (16/20), the same on seed 4 (18/20); but on
+fresh seed 11 one run (kitchen/0004) touched the kitchen with a finger, 11 mm deep: its plan,
+now free to pass nearer, swept the hand 12-16 mm past a cupboard's top edge at 0.5 m/s, the
+robot lagged 0.07 rad behind it where the leaves braked, and the finger's sphere slid over
+the edge and down its face (the nearest-point leaf is passive once a sphere is inside). The
+same run is reached clean with 4 cm, so 4 cm stays until the fabric follows a tight way
+without cutting its corners. The exact distances are :mod:`dynfab.geometry.triangle_band`'s
+compiled loop.
 
 Between nodes, ``f`` being 1-Lipschitz gives ``f(p) ≥ f(g_j) − ‖p − g_j‖`` for every corner
 ``g_j`` of the cell, hence
