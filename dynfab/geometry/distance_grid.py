@@ -25,7 +25,8 @@ and reached 2 more of 20 on development seed 1 (16/20), the same on seed 4 (18/2
 fresh seed 11 one run (kitchen/0004) touched the kitchen with a finger, 11 mm deep: its plan,
 now free to pass nearer, swept the hand 12-16 mm past a cupboard's top edge at 0.5 m/s, the
 robot lagged 0.07 rad behind it where the leaves braked, and the finger's sphere slid over
-the edge and down its face (the nearest-point leaf is passive once a sphere is inside). The
+the edge and 11 mm into its face for 0.3 s (the nearest-point leaf, at its clamp there, did
+not push it out sooner). The
 same run is reached clean with 4 cm, so 4 cm stays until the fabric follows a tight way
 without cutting its corners. The exact distances are :mod:`dynfab.geometry.triangle_band`'s
 compiled loop.
