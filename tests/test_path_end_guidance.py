@@ -83,9 +83,10 @@ def test_the_targets_of_a_path_end_are_its_last_point_for_the_goal_point_and_the
     data["goal"].append({"type": "axis", "link": "panda_hand", "axis": [0, 0, 1], "direction": [0, 0, -1]})
     scenario = validate_for_robot(scenario_from_dict(data), panda)
     targets = goal_targets(scenario, panda, scenario_references(scenario, panda))
-    assert targets[0] == PointTarget("panda_hand", targets[0].position, (0.0, 0.0, 0.1), (0, 2), None)
+    assert targets[0] == PointTarget("panda_hand", targets[0].position, (0.0, 0.0, 0.1), (0, 2), None,
+                                     scenario.goals[0].tolerance)   # the goal's tolerances come along
     assert targets[0].position == pytest.approx((0.45, 0.35), abs=1e-12)
-    assert targets[1] == AxisTarget("panda_hand", (0.0, 0.0, 1.0), (0.0, 0.0, -1.0))
+    assert targets[1] == AxisTarget("panda_hand", (0.0, 0.0, 1.0), (0.0, 0.0, -1.0), scenario.goals[1].angle_tolerance)
     with pytest.raises(ValueError, match="goal\\[0\\] is a path goal"):
         goal_targets(scenario, panda)
 

@@ -21,7 +21,7 @@ and to avoid what was not in the plan. A plan that fails is retried with the nex
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -32,7 +32,8 @@ from dynfab.geometry.shapes import Mesh, PointCloud
 from dynfab.motion.allowance_tables import AllowanceTables
 from dynfab.motion.cloud_focus import focused_obstacles
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
-from dynfab.motion.inverse_kinematics import IkSettings, solve_ik
+from dynfab.motion.goal_region import nearby_targets
+from dynfab.motion.inverse_kinematics import AxisTarget, IkResult, IkSettings, PointTarget, solve_ik
 from dynfab.motion.mesh_escape_plan import EscapeScene, escape_plan
 from dynfab.motion.mesh_goal_check import MeshGoalCheck, endpoint_tests, robot_mesh_model
 from dynfab.motion.joint_planning import (ApproachTest, JointPath, JointPlannerSettings, NoPathError, approach_clear,
@@ -113,22 +114,45 @@ class JointGuidance:
                           self._ik_settings(seed), self._lower, self._upper)
         if result.q is None:
             meshes = self._meshes()
-
-            def free(x: NDArray[np.float64]) -> bool:   # the grid, else the exact spheres, else the meshes
-                return (self.checker.free(x, 0.0, self_margin) or self.checker.exact_free(x, 0.0, self_margin)
-                        or (meshes is not None and meshes.free(x)))
-
-            result = solve_ik(self.robot, list(goal), q, free, replace(self.settings.ik_retry, seed=seed),
+            result = solve_ik(self.robot, list(goal), q, self._merely_free(), replace(self.settings.ik_retry, seed=seed),
                               self._lower, self._upper)
             if result.q is None and meshes is not None:   # nearer the meshes than their margin: as a grasp
                 floor = self.settings.mesh_goal_floor
                 result = solve_ik(self.robot, list(goal), q, lambda x: meshes.free(x, floor),
                                   replace(self.settings.ik_retry, seed=seed), self._lower, self._upper)
+            if result.q is None:
+                result = self._inside_tolerance(goal, q, seed, result)
         if result.q is None:
             found = (f"{result.converged} solutions within the limits, all in collision" if result.converged
                      else "no solution within the joint limits")
             raise GuidanceError("no_ik_solution", f"inverse kinematics: {found} ({result.seeds} seeds)")
         return result.q
+
+    def _merely_free(self) -> Callable[[NDArray[np.float64]], bool]:
+        """Whether a configuration is free on the planning spheres' grid at margin 0, else on
+        their exact distances, else on the robot's meshes by ``mesh_margin`` (the second
+        inverse-kinematics search's test)."""
+        meshes, self_margin = self._meshes(), self.settings.path.self_margin
+
+        def free(x: NDArray[np.float64]) -> bool:
+            return (self.checker.free(x, 0.0, self_margin) or self.checker.exact_free(x, 0.0, self_margin)
+                    or (meshes is not None and meshes.free(x)))
+        return free
+
+    def _inside_tolerance(self, goal: Sequence[PointTarget | AxisTarget], q: NDArray[np.float64], seed: int,
+                          failed: IkResult) -> IkResult:
+        """The first solution, free by :meth:`_merely_free`, of up to ``goal_region_targets``
+        nearby targets the goal still accepts (:func:`~dynfab.motion.goal_region.nearby_targets`
+        within ``goal_region`` of its tolerances), or ``failed``."""
+        if not any(target.tolerance > 0.0 for target in goal):
+            return failed
+        rng, free = np.random.default_rng(seed), self._merely_free()
+        for k in range(self.settings.goal_region_targets):
+            targets = nearby_targets(goal, self.settings.goal_region, rng)
+            result = solve_ik(self.robot, targets, q, free, self._ik_settings(seed + 1 + k), self._lower, self._upper)
+            if result.q is not None:
+                return result
+        return failed
 
     def set_obstacles(self, obstacles: Sequence[PlacedObstacle]) -> None:
         """Check against ``obstacles`` from now on: on the robot's planning spheres, or among

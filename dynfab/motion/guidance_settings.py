@@ -50,6 +50,11 @@ class GuidanceSettings:
             for table_bars/0010 and 0023 are 2.6 and 2.1 mm from a bar, and the robot that
             reached them came 2.1 and 0.3 mm nearer (0.46 and 1.8 mm at the least): a floor of
             1 mm leaves no room for that.
+        goal_region: fraction of a task goal's tolerances within which, when no solution of
+            the exact goal is found free (nor, among meshes, by ``mesh_goal_floor``), nearby
+            targets are tried (:mod:`dynfab.motion.goal_region`) [-]: the fabric settles at
+            the solution within millimetres, the rest of the tolerance is left for that.
+        goal_region_targets: nearby targets tried, each with ``ik``'s seeds [-].
         goal_overshoot: how far [rad] past a goal among meshes or shapes (not clouds) nearer them
             than ``mesh_margin`` its approach must be clear too (:func:`~dynfab.motion.mesh_goal_check.endpoint_tests`):
             the fabric settling at such a goal passed it by 5.8 mrad along its approach
@@ -202,6 +207,8 @@ class GuidanceSettings:
     ik_retry: IkSettings = field(default_factory=lambda: IkSettings(seeds=240, time_limit=2.0))
     mesh_margin: float = 0.003
     mesh_goal_floor: float = 0.002
+    goal_region: float = 0.5
+    goal_region_targets: int = 8
     goal_overshoot: float = 0.01
     tight_margin: float = 0.0
     approach_clearance: float = 0.005

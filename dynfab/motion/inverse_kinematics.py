@@ -36,22 +36,26 @@ __all__ = ["AxisTarget", "IkResult", "IkSettings", "PointTarget", "solve_ik"]
 @dataclass(frozen=True)
 class PointTarget:
     """A point on ``link`` (``offset`` in the link frame [m]) at ``position`` [m] on ``axes``
-    (indices into x, y, z) of the ``parent_link`` frame (``None``: the root)."""
+    (indices into x, y, z) of the ``parent_link`` frame (``None``: the root); its goal is
+    reached within ``tolerance`` [m] of it (0: exactly; :mod:`dynfab.motion.goal_region`)."""
 
     link: str
     position: tuple[float, ...]
     offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
     axes: tuple[int, ...] = (0, 1, 2)
     parent_link: str | None = None
+    tolerance: float = 0.0
 
 
 @dataclass(frozen=True)
 class AxisTarget:
-    """The unit ``axis`` of ``link`` (link frame) along the unit world ``direction``."""
+    """The unit ``axis`` of ``link`` (link frame) along the unit world ``direction``; its
+    goal is reached within ``tolerance`` [rad] of it (0: exactly)."""
 
     link: str
     axis: tuple[float, float, float]
     direction: tuple[float, float, float]
+    tolerance: float = 0.0
 
 
 Target = PointTarget | AxisTarget

@@ -368,15 +368,16 @@ def _task_targets(goal: GoalSpec, robot: Robot, position: tuple[float, ...] | No
     """The targets of a static goal (``position``: where its point goes [m], None for an axis goal)."""
     link = goal.link or robot.goal_link
     if goal.type == "axis":
-        return [AxisTarget(link, tuple(goal.axis), tuple(goal.direction))]
+        return [AxisTarget(link, tuple(goal.axis), tuple(goal.direction), goal.angle_tolerance)]
     assert position is not None
     targets: list[PointTarget | AxisTarget] = [PointTarget(link, tuple(position), tuple(goal.offset),
-                                                           tuple(goal_axes(goal, robot)), goal.parent_link)]
+                                                           tuple(goal_axes(goal, robot)), goal.parent_link,
+                                                           goal.tolerance)]
     if goal.type == "pose":
         rotation = quaternion_matrix(goal.orientation)
         for axis in range(3):
             unit = tuple(float(v) for v in np.eye(3)[axis])
-            targets.append(AxisTarget(link, unit, tuple(float(v) for v in rotation[:, axis])))
+            targets.append(AxisTarget(link, unit, tuple(float(v) for v in rotation[:, axis]), goal.angle_tolerance))
     return targets
 
 

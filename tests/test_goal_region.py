@@ -1,0 +1,94 @@
+"""Goals inside their tolerance (dynfab.motion.goal_region): nearby targets stay within the
+fraction of the tolerances asked, a pose stays a frame, and a pose goal whose every exact
+solution puts the hand into a block is planned to a free pose the goal still accepts."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from dynfab.geometry.shapes import Box, Placement
+from dynfab.motion.configuration_checker import PlacedObstacle
+from dynfab.motion.goal_region import nearby_targets
+from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance
+from dynfab.motion.inverse_kinematics import AxisTarget, PointTarget
+from dynfab.robots import load_robot
+from wall_scene import START, hand_pose_targets
+
+#: The goal configuration: the hand above the block, pointing down [rad].
+ABOVE = np.array([0.0, 0.2, 0.0, -2.0, 0.0, 2.2, 0.785])
+POSITION_TOLERANCE, ANGLE_TOLERANCE = 0.02, 0.1
+
+
+def _pose(position_tolerance: float, angle_tolerance: float) -> list[PointTarget | AxisTarget]:
+    rotation = Rotation.from_rotvec([0.3, -0.2, 0.5]).as_matrix()
+    return [PointTarget("panda_hand", (0.4, 0.1, 0.3), tolerance=position_tolerance),
+            *(AxisTarget("panda_hand", tuple(np.eye(3)[k]), tuple(rotation[:, k]), angle_tolerance) for k in range(3))]
+
+
+def test_nearby_targets_stay_within_the_fraction_and_a_pose_stays_a_frame() -> None:
+    rng = np.random.default_rng(0)
+    goal = _pose(POSITION_TOLERANCE, ANGLE_TOLERANCE)
+    offsets, angles = [], []
+    for _ in range(500):
+        point, *axes = nearby_targets(goal, 0.5, rng)
+        offsets.append(np.linalg.norm(np.subtract(point.position, goal[0].position)))
+        frame = np.column_stack([axis.direction for axis in axes])
+        np.testing.assert_allclose(frame.T @ frame, np.eye(3), atol=1e-12)     # still orthonormal
+        reference = np.column_stack([axis.direction for axis in goal[1:]])
+        angles.append(Rotation.from_matrix(frame @ reference.T).magnitude())
+    assert max(offsets) <= 0.5 * POSITION_TOLERANCE + 1e-12 and max(offsets) > 0.45 * POSITION_TOLERANCE
+    assert max(angles) <= 0.5 * ANGLE_TOLERANCE + 1e-12 and max(angles) > 0.45 * ANGLE_TOLERANCE
+
+
+def test_targets_without_tolerance_stay_where_they_are() -> None:
+    goal = _pose(0.0, 0.0)
+    assert nearby_targets(goal, 0.5, np.random.default_rng(1)) == goal
+
+
+@pytest.fixture(scope="module")
+def blocked() -> tuple[object, PlacedObstacle, list[PointTarget | AxisTarget]]:
+    """The Panda, a block whose top is 3 mm above the lowest point of the hand's and the
+    fingers' spheres at ABOVE, and the hand's pose there: every exact solution overlaps it."""
+    panda = load_robot("panda")
+    planning = panda.planning_robot
+    centres = np.array(planning.sphere_centers(ABOVE)).astype(float)
+    radii = np.asarray(planning.sphere_radii)
+    hand = np.array([("hand" in s.link or "finger" in s.link) for s in planning.collision_spheres])
+    lowest = float((centres[hand, 2] - radii[hand]).min())
+    x, y = centres[hand, 0].mean(), centres[hand, 1].mean()
+    block = PlacedObstacle(Box((0.12, 0.12, 0.1)), Placement((float(x), float(y), lowest + 0.003 - 0.05)))
+    return panda, block, hand_pose_targets(panda, ABOVE)
+
+
+def _tolerant(targets: list[PointTarget | AxisTarget]) -> list[PointTarget | AxisTarget]:
+    return [replace(t, tolerance=POSITION_TOLERANCE if isinstance(t, PointTarget) else ANGLE_TOLERANCE)
+            for t in targets]
+
+
+def test_a_pose_whose_exact_solutions_overlap_a_block_is_solved_inside_its_tolerance(blocked) -> None:
+    panda, block, exact = blocked
+    guidance = JointGuidance(panda)
+    guidance.set_obstacles([block])
+    with pytest.raises(GuidanceError) as refused:
+        guidance.goal_configuration(exact, START)
+    assert refused.value.reason == "no_ik_solution"
+    solution = guidance.goal_configuration(_tolerant(exact), START)
+    assert guidance.checker.exact_free(solution, 0.0, guidance.settings.path.self_margin)
+    moved = np.linalg.norm(panda.link_position(solution, "panda_hand") - np.asarray(exact[0].position))
+    assert moved <= guidance.settings.goal_region * POSITION_TOLERANCE + 1e-6
+    turned = np.asarray(panda.kinematics.transform(solution, "panda_hand"))[:3, :3]
+    target = np.column_stack([t.direction for t in exact[1:]])
+    assert Rotation.from_matrix(turned @ target.T).magnitude() <= guidance.settings.goal_region * ANGLE_TOLERANCE + 1e-4
+
+
+def test_without_the_region_the_tolerant_pose_is_refused(blocked) -> None:
+    panda, block, exact = blocked
+    guidance = JointGuidance(panda, replace(GuidanceSettings(), goal_region_targets=0))
+    guidance.set_obstacles([block])
+    with pytest.raises(GuidanceError) as refused:
+        guidance.goal_configuration(_tolerant(exact), START)
+    assert refused.value.reason == "no_ik_solution"
