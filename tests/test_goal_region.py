@@ -13,7 +13,7 @@ from scipy.spatial.transform import Rotation
 from dynfab.geometry.shapes import Box, Placement
 from dynfab.motion.configuration_checker import PlacedObstacle
 from dynfab.motion.goal_region import nearby_targets
-from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance
+from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance, JointTarget
 from dynfab.motion.inverse_kinematics import AxisTarget, PointTarget
 from dynfab.robots import load_robot
 from wall_scene import START, hand_pose_targets
@@ -92,3 +92,50 @@ def test_without_the_region_the_tolerant_pose_is_refused(blocked) -> None:
     with pytest.raises(GuidanceError) as refused:
         guidance.goal_configuration(_tolerant(exact), START)
     assert refused.value.reason == "no_ik_solution"
+
+
+@pytest.fixture(scope="module")
+def wall_goal():
+    """The Panda, guidance among the mesh wall, and a joint goal its meshes clear by 2.5 mm
+    (the spheres overlap the wall there)."""
+    from test_mesh_near_goals import GOAL_CLEARANCE
+    from wall_scene import MESH_WALL, goal_near_the_wall
+    panda = load_robot("panda")
+    guidance = JointGuidance(panda)
+    guidance.set_obstacles([MESH_WALL])
+    meshes = guidance._meshes()
+    far, close = goal_near_the_wall(panda, 0.0), goal_near_the_wall(panda, 0.0)
+    close[0] += 0.06
+    for _ in range(40):
+        middle = (far + close) / 2
+        far, close = (middle, close) if meshes.clearance(middle)[0] > GOAL_CLEARANCE else (far, middle)
+    return guidance, meshes, far, MESH_WALL
+
+
+def test_a_roomier_joint_goal_lies_inside_half_its_tolerance_farther_from_the_meshes(wall_goal) -> None:
+    guidance, meshes, near, _ = wall_goal
+    roomier = guidance._roomier_goal(JointTarget(tuple(near), 0.05), near, 0)
+    assert roomier is not None
+    assert np.linalg.norm(roomier - near) <= guidance.settings.goal_region * 0.05 + 1e-12
+    assert meshes.clearance(roomier)[0] > meshes.clearance(near)[0] + 1e-3
+    assert meshes.free(roomier, guidance.settings.mesh_goal_floor)
+    assert guidance._roomier_goal(JointTarget(tuple(near)), near, 0) is None      # no tolerance: the goal as given
+
+
+def test_a_joint_goal_with_no_way_in_is_planned_again_to_a_roomier_one(wall_goal, monkeypatch) -> None:
+    guidance, _, near, wall = wall_goal
+    tried: list[np.ndarray] = []
+
+    def no_way_into_near(self, start, target, *args):
+        tried.append(np.array(target))
+        if np.allclose(target, near):
+            raise GuidanceError("goal_in_collision", "no escape")
+        return "planned"
+
+    monkeypatch.setattr(JointGuidance, "_plan_to", no_way_into_near)
+    start = near.copy()
+    start[0] = -2.2
+    assert guidance.plan(start, JointTarget(tuple(near), 0.05), [wall]) == "planned"
+    assert len(tried) == 2 and np.linalg.norm(tried[1] - near) <= guidance.settings.goal_region * 0.05 + 1e-12
+    with pytest.raises(GuidanceError):
+        guidance.plan(start, JointTarget(tuple(near)), [wall])

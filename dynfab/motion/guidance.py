@@ -181,6 +181,41 @@ class JointGuidance:
         self.set_obstacles(obstacles)
         start = np.clip(np.asarray(q, dtype=float), self._lower, self._upper)
         target = self.goal_configuration(goal, start, seed)
+        try:
+            return self._plan_to(start, target, obstacles, seed, wide, began)
+        except GuidanceError as failure:
+            roomier = self._roomier_goal(goal, target, seed) if failure.reason == "goal_in_collision" else None
+            if roomier is None:
+                raise
+        self.set_obstacles(obstacles)   # the first attempts may have left a cloud's focus
+        return self._plan_to(start, roomier, obstacles, seed, wide, began)
+
+    def _roomier_goal(self, goal: GoalTargets, target: NDArray[np.float64], seed: int) -> NDArray[np.float64] | None:
+        """For a joint goal with a tolerance whose plan found no way into ``target``: of
+        ``goal_region_samples`` configurations uniform in the ball of radius ``goal_region``
+        times the tolerance about it (within the limits), the one free on the robot's meshes
+        by ``mesh_goal_floor`` that is farthest from them, if farther than ``target`` is;
+        else None (no tolerance, no meshes, none roomier). The goal is reached within its
+        tolerance there (:mod:`dynfab.motion.goal_region` does the same for task goals,
+        before planning)."""
+        meshes = self._meshes()
+        if not isinstance(goal, JointTarget) or goal.tolerance <= 0.0 or meshes is None:
+            return None
+        rng = np.random.default_rng(seed)
+        count, n = self.settings.goal_region_samples, target.size
+        directions = rng.normal(size=(count, n))
+        directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+        radii = self.settings.goal_region * goal.tolerance * rng.uniform(size=(count, 1)) ** (1.0 / n)
+        best, room = None, meshes.clearance(target)[0]
+        for candidate in np.clip(target + radii * directions, self._lower, self._upper):
+            clearance = meshes.clearance(candidate)[0]
+            if clearance > room and meshes.free(candidate, self.settings.mesh_goal_floor):
+                best, room = candidate, clearance
+        return best
+
+    def _plan_to(self, start: NDArray[np.float64], target: NDArray[np.float64], obstacles: Sequence[PlacedObstacle],
+                 seed: int, wide: bool, began: float) -> Plan:
+        """:meth:`plan`'s attempts from ``start`` to the goal configuration ``target``."""
         tries = self._tries(seed, wide)
         focus = self.settings.cloud_focus
         first = len(tries)

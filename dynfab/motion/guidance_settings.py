@@ -55,6 +55,9 @@ class GuidanceSettings:
             targets are tried (:mod:`dynfab.motion.goal_region`) [-]: the fabric settles at
             the solution within millimetres, the rest of the tolerance is left for that.
         goal_region_targets: nearby targets tried, each with ``ik``'s seeds [-].
+        goal_region_samples: configurations inside half of a joint goal's tolerance whose
+            clearance on the meshes is compared when no way into the goal is found
+            (:meth:`JointGuidance._roomier_goal`) [-].
         goal_overshoot: how far [rad] past a goal among meshes or shapes (not clouds) nearer them
             than ``mesh_margin`` its approach must be clear too (:func:`~dynfab.motion.mesh_goal_check.endpoint_tests`):
             the fabric settling at such a goal passed it by 5.8 mrad along its approach
@@ -209,6 +212,7 @@ class GuidanceSettings:
     mesh_goal_floor: float = 0.002
     goal_region: float = 0.5
     goal_region_targets: int = 8
+    goal_region_samples: int = 64
     goal_overshoot: float = 0.01
     tight_margin: float = 0.0
     approach_clearance: float = 0.005

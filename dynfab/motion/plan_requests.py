@@ -231,7 +231,9 @@ def _plan_among(guidance: JointGuidance, request: PlanRequest, obstacles: tuple[
     if plan is None:
         target = guidance.goal_configuration(request.goal, request.q, request.seed)
         publish(target)
-        plan = guidance.plan(request.q, JointTarget(tuple(target)), obstacles, seed=request.seed, wide=request.wide)
+        tolerance = request.goal.tolerance if isinstance(request.goal, JointTarget) else 0.0
+        plan = guidance.plan(request.q, JointTarget(tuple(target), tolerance), obstacles, seed=request.seed,
+                             wide=request.wide)
     return plan
 
 

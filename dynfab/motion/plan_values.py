@@ -18,9 +18,12 @@ __all__ = ["GoalTargets", "GuidanceError", "JointTarget", "Plan"]
 
 @dataclass(frozen=True)
 class JointTarget:
-    """A goal configuration (n,) [rad or m]."""
+    """A goal configuration (n,) [rad or m], reached within ``tolerance`` of it (the
+    Euclidean norm over the joints; 0: exactly; :meth:`JointGuidance.plan` may then plan to
+    a roomier configuration inside half of it)."""
 
     q: tuple[float, ...]
+    tolerance: float = 0.0
 
 
 GoalTargets = JointTarget | Sequence[PointTarget | AxisTarget]

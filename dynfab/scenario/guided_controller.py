@@ -351,7 +351,7 @@ def goal_targets(scenario: Scenario, robot: Robot, references: References | None
     ``references.goals[i]`` at rest)."""
     joint = next((goal for goal in scenario.goals if goal.type == "joint"), None)
     if joint is not None:
-        return JointTarget(tuple(joint.position))
+        return JointTarget(tuple(joint.position), joint.tolerance)
     targets: list[PointTarget | AxisTarget] = []
     for i, goal in enumerate(scenario.goals):
         position = goal.position
