@@ -25,15 +25,54 @@ the tolerance is left for that). Targets without a tolerance stay where they are
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from dynfab.motion.inverse_kinematics import AxisTarget, PointTarget
+from dynfab.motion.inverse_kinematics import AxisTarget, IkResult, IkSettings, PointTarget, solve_ik
+from dynfab.motion.mesh_goal_check import MeshGoalCheck
+from dynfab.robots.robot import Robot
 
-__all__ = ["nearby_targets"]
+__all__ = ["nearby_solution", "nearby_targets", "roomier_configuration"]
+
+
+def nearby_solution(robot: Robot, goal: Sequence[PointTarget | AxisTarget], q: NDArray[np.float64],
+                    free: Callable[[NDArray[np.float64]], bool], fraction: float, count: int, ik: IkSettings,
+                    bounds: tuple[NDArray[np.float64], NDArray[np.float64]]) -> IkResult | None:
+    """The first solution ``free`` accepts of up to ``count`` nearby targets
+    (:func:`nearby_targets` within ``fraction`` of the tolerances; the ``k``-th solved with
+    ``ik`` seeded ``ik.seed + 1 + k``, the targets drawn from ``ik.seed``), nearest ``q``
+    within ``bounds`` (lower, upper); None if none is found or no target has a tolerance."""
+    if not any(target.tolerance > 0.0 for target in goal):
+        return None
+    rng = np.random.default_rng(ik.seed)
+    for k in range(count):
+        result = solve_ik(robot, nearby_targets(goal, fraction, rng), q, free, replace(ik, seed=ik.seed + 1 + k),
+                          *bounds)
+        if result.q is not None:
+            return result
+    return None
+
+
+def roomier_configuration(target: NDArray[np.float64], radius: float, meshes: MeshGoalCheck, floor: float,
+                          count: int, bounds: tuple[NDArray[np.float64], NDArray[np.float64]],
+                          rng: np.random.Generator) -> NDArray[np.float64] | None:
+    """Of ``count`` configurations uniform in the ball of ``radius`` [rad] about ``target``
+    (clipped to ``bounds``), the one free on the robot's ``meshes`` by ``floor`` [m] that is
+    farthest from the scene on them, if farther than ``target`` is; else None (a joint goal's
+    counterpart of :func:`nearby_solution`, for a goal with no way in)."""
+    directions = rng.normal(size=(count, target.size))
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    radii = radius * rng.uniform(size=(count, 1)) ** (1.0 / target.size)
+    best, room = None, meshes.clearance(target)[0]
+    for candidate in np.clip(target + radii * directions, *bounds):
+        clearance = meshes.clearance(candidate)[0]
+        if clearance > room and meshes.free(candidate, floor):
+            best, room = candidate, clearance
+    return best
 
 
 def nearby_targets(targets: Sequence[PointTarget | AxisTarget], fraction: float,

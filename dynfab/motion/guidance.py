@@ -32,8 +32,8 @@ from dynfab.geometry.shapes import Mesh, PointCloud
 from dynfab.motion.allowance_tables import AllowanceTables
 from dynfab.motion.cloud_focus import focused_obstacles
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
-from dynfab.motion.goal_region import nearby_targets
-from dynfab.motion.inverse_kinematics import AxisTarget, IkResult, IkSettings, PointTarget, solve_ik
+from dynfab.motion.goal_region import nearby_solution, roomier_configuration
+from dynfab.motion.inverse_kinematics import IkSettings, solve_ik
 from dynfab.motion.mesh_escape_plan import EscapeScene, escape_plan
 from dynfab.motion.mesh_goal_check import MeshGoalCheck, endpoint_tests, robot_mesh_model
 from dynfab.motion.joint_planning import (ApproachTest, JointPath, JointPlannerSettings, NoPathError, approach_clear,
@@ -121,7 +121,8 @@ class JointGuidance:
                 result = solve_ik(self.robot, list(goal), q, lambda x: meshes.free(x, floor),
                                   replace(self.settings.ik_retry, seed=seed), self._lower, self._upper)
             if result.q is None:
-                result = self._inside_tolerance(goal, q, seed, result)
+                result = nearby_solution(self.robot, goal, q, self._merely_free(), self.settings.goal_region,
+                                         self.settings.goal_region_targets, self._ik_settings(seed), self.bounds) or result
         if result.q is None:
             found = (f"{result.converged} solutions within the limits, all in collision" if result.converged
                      else "no solution within the joint limits")
@@ -138,21 +139,6 @@ class JointGuidance:
             return (self.checker.free(x, 0.0, self_margin) or self.checker.exact_free(x, 0.0, self_margin)
                     or (meshes is not None and meshes.free(x)))
         return free
-
-    def _inside_tolerance(self, goal: Sequence[PointTarget | AxisTarget], q: NDArray[np.float64], seed: int,
-                          failed: IkResult) -> IkResult:
-        """The first solution, free by :meth:`_merely_free`, of up to ``goal_region_targets``
-        nearby targets the goal still accepts (:func:`~dynfab.motion.goal_region.nearby_targets`
-        within ``goal_region`` of its tolerances), or ``failed``."""
-        if not any(target.tolerance > 0.0 for target in goal):
-            return failed
-        rng, free = np.random.default_rng(seed), self._merely_free()
-        for k in range(self.settings.goal_region_targets):
-            targets = nearby_targets(goal, self.settings.goal_region, rng)
-            result = solve_ik(self.robot, targets, q, free, self._ik_settings(seed + 1 + k), self._lower, self._upper)
-            if result.q is not None:
-                return result
-        return failed
 
     def set_obstacles(self, obstacles: Sequence[PlacedObstacle]) -> None:
         """Check against ``obstacles`` from now on: on the robot's planning spheres, or among
@@ -201,17 +187,9 @@ class JointGuidance:
         meshes = self._meshes()
         if not isinstance(goal, JointTarget) or goal.tolerance <= 0.0 or meshes is None:
             return None
-        rng = np.random.default_rng(seed)
-        count, n = self.settings.goal_region_samples, target.size
-        directions = rng.normal(size=(count, n))
-        directions /= np.linalg.norm(directions, axis=1, keepdims=True)
-        radii = self.settings.goal_region * goal.tolerance * rng.uniform(size=(count, 1)) ** (1.0 / n)
-        best, room = None, meshes.clearance(target)[0]
-        for candidate in np.clip(target + radii * directions, self._lower, self._upper):
-            clearance = meshes.clearance(candidate)[0]
-            if clearance > room and meshes.free(candidate, self.settings.mesh_goal_floor):
-                best, room = candidate, clearance
-        return best
+        return roomier_configuration(target, self.settings.goal_region * goal.tolerance, meshes,
+                                     self.settings.mesh_goal_floor, self.settings.goal_region_samples, self.bounds,
+                                     np.random.default_rng(seed))
 
     def _plan_to(self, start: NDArray[np.float64], target: NDArray[np.float64], obstacles: Sequence[PlacedObstacle],
                  seed: int, wide: bool, began: float) -> Plan:
