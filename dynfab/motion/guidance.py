@@ -21,7 +21,7 @@ and to avoid what was not in the plan. A plan that fails is retried with the nex
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -32,8 +32,8 @@ from dynfab.geometry.shapes import Mesh, PointCloud
 from dynfab.motion.allowance_tables import AllowanceTables
 from dynfab.motion.cloud_focus import focused_obstacles
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
-from dynfab.motion.goal_region import nearby_solution, roomier_configuration
-from dynfab.motion.inverse_kinematics import IkSettings, solve_ik
+from dynfab.motion.goal_configuration import GoalSearch
+from dynfab.motion.goal_region import roomier_configuration
 from dynfab.motion.mesh_escape_plan import EscapeScene, escape_plan
 from dynfab.motion.mesh_goal_check import MeshGoalCheck, endpoint_tests, robot_mesh_model
 from dynfab.motion.joint_planning import (ApproachTest, JointPath, JointPlannerSettings, NoPathError, approach_clear,
@@ -47,8 +47,6 @@ from dynfab.robots.robot import Robot
 
 __all__ = ["GoalTargets", "GuidanceError", "GuidanceSettings", "JointGuidance", "JointTarget", "Plan"]
 
-#: a value within this of a joint limit counts as at the limit [rad or m]
-LIMIT_SLACK = 1e-6
 #: an approach shorter than this is none: the robot is at the goal [rad]
 SHORTEST_APPROACH = 1e-6
 #: failures a plan among point clouds makes again with the clouds focused around its goal
@@ -92,53 +90,13 @@ class JointGuidance:
         return self._lower, self._upper
 
     def goal_configuration(self, goal: GoalTargets, q: NDArray[np.float64], seed: int = 0) -> NDArray[np.float64]:
-        """The configuration to plan to: a joint goal (clipped into the limits when within
-        :data:`LIMIT_SLACK`), or the collision-free IK solution nearest ``q`` (clear by the
-        planner's margin, else by ``ik_retry`` merely free on the spheres or free on the
-        meshes).
+        """The configuration to plan to from ``q``
+        (:meth:`~dynfab.motion.goal_configuration.GoalSearch.configuration`).
 
         Raises:
             GuidanceError: ``goal_outside_limits`` or ``no_ik_solution``.
         """
-        if isinstance(goal, JointTarget):
-            target = np.asarray(goal.q, dtype=float)
-            outside = np.flatnonzero((target < self._lower - LIMIT_SLACK) | (target > self._upper + LIMIT_SLACK))
-            if outside.size:
-                names = self.robot.kinematics.joint_names
-                j = int(outside[0])
-                raise GuidanceError("goal_outside_limits", f"the goal puts {names[j]} at {target[j]:.6g}, outside "
-                                    f"its limits [{self._lower[j]:.6g}, {self._upper[j]:.6g}]")
-            return np.clip(target, self._lower, self._upper)
-        margin, self_margin = self.settings.path.margin, self.settings.path.self_margin
-        result = solve_ik(self.robot, list(goal), q, lambda x: self.checker.free(x, margin, self_margin),
-                          self._ik_settings(seed), self._lower, self._upper)
-        if result.q is None:
-            meshes = self._meshes()
-            result = solve_ik(self.robot, list(goal), q, self._merely_free(), replace(self.settings.ik_retry, seed=seed),
-                              self._lower, self._upper)
-            if result.q is None and meshes is not None:   # nearer the meshes than their margin: as a grasp
-                floor = self.settings.mesh_goal_floor
-                result = solve_ik(self.robot, list(goal), q, lambda x: meshes.free(x, floor),
-                                  replace(self.settings.ik_retry, seed=seed), self._lower, self._upper)
-            if result.q is None:
-                result = nearby_solution(self.robot, goal, q, self._merely_free(), self.settings.goal_region,
-                                         self.settings.goal_region_targets, self._ik_settings(seed), self.bounds) or result
-        if result.q is None:
-            found = (f"{result.converged} solutions within the limits, all in collision" if result.converged
-                     else "no solution within the joint limits")
-            raise GuidanceError("no_ik_solution", f"inverse kinematics: {found} ({result.seeds} seeds)")
-        return result.q
-
-    def _merely_free(self) -> Callable[[NDArray[np.float64]], bool]:
-        """Whether a configuration is free on the planning spheres' grid at margin 0, else on
-        their exact distances, else on the robot's meshes by ``mesh_margin`` (the second
-        inverse-kinematics search's test)."""
-        meshes, self_margin = self._meshes(), self.settings.path.self_margin
-
-        def free(x: NDArray[np.float64]) -> bool:
-            return (self.checker.free(x, 0.0, self_margin) or self.checker.exact_free(x, 0.0, self_margin)
-                    or (meshes is not None and meshes.free(x)))
-        return free
+        return GoalSearch(self.robot, self.checker, self._meshes, self.settings, self.bounds).configuration(goal, q, seed)
 
     def set_obstacles(self, obstacles: Sequence[PlacedObstacle]) -> None:
         """Check against ``obstacles`` from now on: on the robot's planning spheres, or among
@@ -403,6 +361,3 @@ class JointGuidance:
             self._mesh_check.set_obstacles(self.checker.obstacles)
             return self._mesh_check
         return None
-
-    def _ik_settings(self, seed: int) -> IkSettings:
-        return replace(self.settings.ik, seed=seed)
