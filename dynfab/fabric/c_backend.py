@@ -48,8 +48,6 @@ from dynfab.robots.collision_model import cache_dir
 #: cache folder.
 COMPILE_FLAGS: tuple[str, ...] = ("-O1", "-ffp-contract=off", "-shared", "-fPIC")
 #: format of the cache entries; bump when their layout changes
-#: Flags of the hand-written kernels' shared libraries (:func:`cached_library`).
-KERNEL_FLAGS: tuple[str, ...] = ("-O2", "-shared", "-fPIC")
 _FORMAT = 1
 _FUNCTION_NAME = "fabric"
 
@@ -228,39 +226,3 @@ def write_atomic(path: Path, data: bytes) -> None:
     except BaseException:
         Path(temporary).unlink(missing_ok=True)
         raise
-
-
-def cached_library(source: str, what: str, title: str, flags: tuple[str, ...] = KERNEL_FLAGS) -> Path | None:
-    """The shared library compiled from the C ``source`` with ``flags``, cached in the cache
-    folder as ``{what}-{sha256}.so`` under the digest of the source, compiler and flags and
-    loaded only if its bytes hash to the digest beside it; compiled on first use with a note
-    on stderr naming ``title``. ``None`` without a working C compiler, or if it fails."""
-    compiler = find_compiler()
-    if compiler is None:
-        return None
-    key = hashlib.sha256(f"{compiler.path} {compiler.version} {' '.join(flags)}\n{source}".encode()).hexdigest()
-    path = cache_dir() / f"{what}-{key}.so"
-    if not _verified_library(path):
-        print(f"dynfab: compiling {title} (once; cached in {path.parent}) ...", file=sys.stderr, flush=True)
-        start = time.perf_counter()
-        try:
-            _compile_library(source, compiler, path, what, flags)
-        except (OSError, RuntimeError):
-            return None
-        print(f"dynfab: compiled {title} in {time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
-    return path
-
-
-def _verified_library(path: Path) -> bool:
-    """Whether ``path`` exists and its bytes hash to the digest in its side file."""
-    try:
-        recorded = path.with_suffix(".sha256").read_text(encoding="utf-8").strip()
-        return recorded == hashlib.sha256(path.read_bytes()).hexdigest()
-    except OSError:
-        return False
-
-
-def _compile_library(source: str, compiler: Compiler, path: Path, what: str, flags: tuple[str, ...]) -> None:
-    data = compile_shared_library(source, compiler, flags, what)
-    write_atomic(path, data)
-    write_atomic(path.with_suffix(".sha256"), hashlib.sha256(data).hexdigest().encode())

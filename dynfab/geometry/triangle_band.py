@@ -24,8 +24,6 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from dynfab.fabric.c_backend import cached_library
-
 __all__ = ["numpy_triangle_band", "point_triangle_distances", "triangle_band"]
 
 _SOURCE = Path(__file__).with_name("triangle_band.c")
@@ -69,6 +67,8 @@ def numpy_triangle_band(triangles: NDArray[np.float64], origin: NDArray[np.float
 @cache
 def _compiled() -> ctypes._CFuncPtr | None:
     """The compiled ``dynfab_triangle_band``, or None without a working compiler."""
+    from dynfab.motion.checker_library import cached_library   # the checker's compile-and-cache
+
     path = cached_library(_SOURCE.read_text(encoding="utf-8"), "triangle-band", "the mesh distance grids' loop")
     if path is None:
         return None

@@ -13,18 +13,23 @@ file is rebuilt, never loaded).
 from __future__ import annotations
 
 import ctypes
+import hashlib
+import sys
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
-from dynfab.fabric.c_backend import cached_library
+from dynfab.fabric.c_backend import Compiler, compile_shared_library, find_compiler, write_atomic
 from dynfab.fabric.leaves.surface_points import moving_spheres
+from dynfab.robots.collision_model import cache_dir
 from dynfab.robots.robot import Robot
 
-__all__ = ["CheckerLibrary", "load_checker_library"]
+__all__ = ["CheckerLibrary", "cached_library", "load_checker_library"]
 
+_FLAGS = ("-O2", "-shared", "-fPIC")
 _KERNEL = Path(__file__).with_name("checker_kernel.c")
 _DOUBLES = ctypes.POINTER(ctypes.c_double)
 
@@ -59,6 +64,27 @@ def load_checker_library(robot: Robot) -> CheckerLibrary | None:
     compiler (the caller then evaluates the CasADi expression instead)."""
     path = cached_library(_source(robot), "checker", f"the collision checker of {robot.name}")
     return None if path is None else CheckerLibrary(path)
+
+
+def cached_library(source: str, what: str, title: str) -> Path | None:
+    """The shared library compiled from the C ``source`` (``-O2``), cached in the cache
+    folder as ``{what}-{sha256}.so`` under the digest of the source, compiler and flags and
+    loaded only if its bytes hash to the digest beside it; compiled on first use with a note
+    on stderr naming ``title``. ``None`` without a working C compiler, or if it fails."""
+    compiler = find_compiler()
+    if compiler is None:
+        return None
+    key = hashlib.sha256(f"{compiler.path} {compiler.version} {' '.join(_FLAGS)}\n{source}".encode()).hexdigest()
+    path = cache_dir() / f"{what}-{key}.so"
+    if not _verified(path):
+        print(f"dynfab: compiling {title} (once; cached in {path.parent}) ...", file=sys.stderr, flush=True)
+        start = time.perf_counter()
+        try:
+            _compile(source, compiler, path, what)
+        except (OSError, RuntimeError):
+            return None
+        print(f"dynfab: compiled {title} in {time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
+    return path
 
 
 def _source(robot: Robot) -> str:
@@ -151,6 +177,21 @@ def _groups(robot: Robot) -> _Groups:
         pair_start.append(len(pairs) // 2)
     return _Groups(tuple(start), tuple(members), tuple(group_radii), tuple(moves), tuple(pair_start), tuple(pair_groups),
                    tuple(pairs))
+
+
+def _verified(path: Path) -> bool:
+    """Whether ``path`` exists and its bytes hash to the digest in its side file."""
+    try:
+        recorded = path.with_suffix(".sha256").read_text(encoding="utf-8").strip()
+        return recorded == hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError:
+        return False
+
+
+def _compile(source: str, compiler: Compiler, path: Path, what: str) -> None:
+    data = compile_shared_library(source, compiler, _FLAGS, what)
+    write_atomic(path, data)
+    write_atomic(path.with_suffix(".sha256"), hashlib.sha256(data).hexdigest().encode())
 
 
 def as_pointer(array: np.ndarray) -> ctypes._Pointer:
