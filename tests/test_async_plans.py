@@ -103,7 +103,7 @@ def test_in_simulation_the_robot_moves_toward_the_goal_until_the_plan_arrives_an
 
 
 def test_a_guided_run_with_a_plan_latency_reaches_its_goal_and_reproduces(panda) -> None:
-    scenario = scenario_from_dict(_scenario(duration=6.0))
+    scenario = scenario_from_dict(_scenario(duration=9.0))   # reached at 7.2 s (5.3 s before the way slowed near the wall)
     first, second = run_scenario(scenario), run_scenario(scenario)
     assert first.metrics.success and first.metrics.guided and not first.metrics.collision
     np.testing.assert_array_equal(first.record.q, second.record.q)   # plans made at once, applied on a tick

@@ -6,11 +6,13 @@ meshes refuse too keeps the spheres' test and fails with its reason."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 import dynfab.motion.joint_planning as joint_planning
-from dynfab.motion.guidance import GuidanceError, JointGuidance, JointTarget
+from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance, JointTarget
 from dynfab.motion.mesh_goal_check import MeshGoalCheck
 from dynfab.robots import load_robot
 from dynfab.scenario.runner import run_scenario
@@ -56,8 +58,12 @@ def test_the_meshes_decide_the_way_out_of_a_start_they_find_free(panda, touching
 
 
 def test_among_meshes_the_meshes_alone_judge_endpoints_they_find_free(panda, touching, monkeypatch) -> None:
-    guidance = JointGuidance(panda)
+    # AWAY's spheres clear the wall by 12.0 mm; the mesh grid reads 9.5 mm there (its bound
+    # between exact nodes): a margin of 5 mm keeps AWAY free, as the test needs
+    settings = GuidanceSettings()
+    guidance = JointGuidance(panda, replace(settings, path=replace(settings.path, margin=0.005)))
     guidance.checker.set_obstacles([MESH_WALL])
+    assert guidance.checker.free(AWAY, 0.005, 0.0)
     assert guidance._meshes().free(touching)   # coal: the robot's meshes against the wall's triangles
     monkeypatch.setattr(joint_planning, "_no_deeper", lambda *args: False)   # the spheres refuse every segment
     to_wall = guidance.plan(AWAY, JointTarget(tuple(touching)), [MESH_WALL])

@@ -3,13 +3,15 @@ reference's check that sees it about to cross, and a replan that leaves its line
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from dynfab.geometry.distance import placed_distance
 from dynfab.geometry.shapes import Box, Capsule, Placement, Sphere
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
-from dynfab.motion.guidance import JointGuidance, JointTarget
+from dynfab.motion.guidance import GuidanceSettings, JointGuidance, JointTarget
 from dynfab.motion.joint_planning import polyline_samples
 from dynfab.motion.plan_requests import PlanRequest, make_plan
 from dynfab.motion.swept_obstacles import swept_clear_of, swept_obstacle
@@ -30,9 +32,15 @@ def panda():
     return load_robot("panda")
 
 
+#: the reference at one speed along its way: the tests place a sphere by the reference's
+#: time (at :data:`NOW`), and where the way passes near the wall a reference slowed there
+#: (``slow_clearance``) would be elsewhere at that time
+STEADY = replace(GuidanceSettings(), slow_clearance=0.0)
+
+
 @pytest.fixture(scope="module")
 def wall_plan(panda):
-    return JointGuidance(panda).plan(START, JointTarget(tuple(GOAL)), [WALL])
+    return JointGuidance(panda, STEADY).plan(START, JointTarget(tuple(GOAL)), [WALL])
 
 
 def _coming(panda, q: np.ndarray, velocity: np.ndarray = VELOCITY) -> PlacedObstacle:
@@ -78,7 +86,7 @@ NOW = 1.2
 
 
 def test_the_reference_check_sees_a_sphere_about_to_cross_it(panda, wall_plan) -> None:
-    guidance = JointGuidance(panda)
+    guidance = JointGuidance(panda, STEADY)
     horizon = guidance.settings.sweep_horizon
     sphere = _coming(panda, wall_plan.trajectory.evaluate(NOW + 0.5 * guidance.settings.check_horizon).position)
     assert guidance.obstacle_clearance(wall_plan.trajectory.evaluate(NOW).position,
@@ -92,7 +100,7 @@ def _wall_controller(panda):
             "initial_state": {"q": START.tolist()}, "goal": [{"type": "joint", "position": GOAL.tolist()}],
             "obstacles": [WALL_ENTRY]}
     scenario = validate_for_robot(scenario_from_dict(data), panda)
-    return make_scenario_controller(scenario, panda, scenario_references(scenario, panda), plan_latency=0.0)
+    return make_scenario_controller(scenario, panda, scenario_references(scenario, panda), STEADY, plan_latency=0.0)
 
 
 @pytest.mark.parametrize("speed, blocked", [(1.0, 1), (0.0, 0)])

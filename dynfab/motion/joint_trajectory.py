@@ -6,7 +6,9 @@ TOPP-RA (Pham & Pham 2018, the ``toppra`` package) under
 
     |q̇_i(t)| ≤ v_i,   |q̈_i(t)| ≤ a_i,
 
-starting and ending at rest (TOPP-RA keeps the limits at its grid points; the result is
+starting and ending at rest, the velocity limits optionally scaled along the path by a
+factor ``σ(q(s)) ∈ (0, 1]`` (a guided fabric's reference slows where the path is tight:
+:meth:`~dynfab.motion.guidance.JointGuidance.speed_scale`) (TOPP-RA keeps the limits at its grid points; the result is
 played slower where sampling finds them exceeded in between; its path velocities are
 evaluated as toppra's ``ParametrizeConstAccel`` does, vectorised), and the result is
 :class:`JointTrajectory`, the reference
@@ -19,6 +21,7 @@ while it strays more than ``deviation`` radians.
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from dataclasses import dataclass
 from types import ModuleType
 from typing import TYPE_CHECKING
@@ -29,7 +32,12 @@ from numpy.typing import NDArray
 from dynfab.motion.joint_planning import polyline_samples
 from dynfab.motion.trajectories import Samples, Trajectory
 
-__all__ = ["ConstantAcceleration", "JointTrajectory", "TimingError", "time_path"]
+__all__ = ["ConstantAcceleration", "JointTrajectory", "SpeedScale", "TimingError", "time_path"]
+
+#: ``σ``: configurations (m, n) [rad] ↦ factors (m,) in (0, 1] of the velocity limits there
+SpeedScale = Callable[[NDArray[np.float64]], NDArray[np.float64]]
+#: the smallest ``σ`` a timing uses (TOPP-RA needs a velocity > 0 everywhere) [-]
+LEAST_SPEED_SCALE = 1e-2
 
 if TYPE_CHECKING:
     import toppra
@@ -167,7 +175,7 @@ class TimingSettings:
 
 
 def time_path(waypoints: NDArray[np.float64], velocity: NDArray[np.float64], acceleration: NDArray[np.float64],
-              settings: TimingSettings = TimingSettings()) -> JointTrajectory:
+              settings: TimingSettings = TimingSettings(), speed_scale: SpeedScale | None = None) -> JointTrajectory:
     """The time-optimal timing (within the limits) of a spline near ``waypoints`` (module docstring).
 
     Args:
@@ -175,6 +183,8 @@ def time_path(waypoints: NDArray[np.float64], velocity: NDArray[np.float64], acc
         velocity: velocity limits (n,) [rad/s].
         acceleration: acceleration limits (n,) [rad/s²].
         settings: resampling and deviation.
+        speed_scale: ``σ``, the factor of ``velocity`` at the path's configurations (module
+            docstring); None: 1 everywhere.
 
     Raises:
         TimingError: if TOPP-RA fails.
@@ -190,7 +200,7 @@ def time_path(waypoints: NDArray[np.float64], velocity: NDArray[np.float64], acc
         if _deviation(path, waypoints) <= settings.deviation:
             break
         spacing /= 2
-    timed = _timed(path, velocity, acceleration, settings)
+    timed = _timed(path, velocity, acceleration, settings, speed_scale)
     return JointTrajectory(timed, waypoints, _slowdown(timed, velocity, acceleration))
 
 
@@ -230,18 +240,31 @@ def _slowdown(timed: ConstantAcceleration, velocity: NDArray[np.float64], accele
 
 
 def _timed(path: toppra.SplineInterpolator, velocity: NDArray[np.float64], acceleration: NDArray[np.float64],
-           settings: TimingSettings) -> ConstantAcceleration:
+           settings: TimingSettings, speed_scale: SpeedScale | None = None) -> ConstantAcceleration:
     low, high = path.path_interval
     count = max(100, int(settings.gridpoints * (high - low)))
+    gridpoints = np.linspace(low, high, count + 1)
     algorithm = _toppra().algorithm
     constraints = list(_constraints(tuple(map(float, velocity)), tuple(map(float, acceleration))))
-    instance = algorithm.TOPPRA(constraints, path, gridpoints=np.linspace(low, high, count + 1),
+    if speed_scale is not None:
+        constraints[0] = _scaled_velocity(velocity, gridpoints, speed_scale(path(gridpoints)))
+    instance = algorithm.TOPPRA(constraints, path, gridpoints=gridpoints,
                                 solver_wrapper="seidel")   # the one toppra picks for linear constraints
     instance.compute_parameterization(0.0, 0.0)
     data = instance.problem_data
     if data.return_code != algorithm.ParameterizationReturnCode.Ok:
         raise TimingError("TOPP-RA found no timing of the planned path within the limits")
     return ConstantAcceleration(path, data.gridpoints, data.sd_vec)
+
+
+def _scaled_velocity(velocity: NDArray[np.float64], gridpoints: NDArray[np.float64],
+                     scale: NDArray[np.float64]) -> object:
+    """TOPP-RA's joint velocity constraint ``|q̇_i| ≤ σ(s) v_i`` with ``σ`` given at the grid
+    points (at least :data:`LEAST_SPEED_SCALE`, at most 1; linear between them)."""
+    factors = np.clip(np.asarray(scale, dtype=float), LEAST_SPEED_SCALE, 1.0)
+    bounds = np.column_stack([-velocity, velocity])
+    return _toppra().constraint.JointVelocityConstraintVarying(
+        lambda s: bounds * float(np.interp(s, gridpoints, factors)))
 
 
 @functools.lru_cache(maxsize=16)

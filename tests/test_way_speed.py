@@ -1,0 +1,61 @@
+"""The reference slows where its way is tight: velocity limits scaled along the path
+(``time_path(..., speed_scale)``) and guidance's ``σ(q) = clip(c(q) / slow_clearance,
+slow_speed, 1)``."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from dynfab.motion.guidance import JointGuidance, JointTarget
+from dynfab.motion.guidance_settings import GuidanceSettings
+from dynfab.motion.joint_trajectory import time_path
+from dynfab.robots import load_robot
+from wall_scene import START, WALL
+
+WAYPOINTS = np.array([[0.0, 0.0], [1.0, 0.5], [1.2, -0.4], [2.0, 0.0]])
+VELOCITY = np.array([1.0, 0.8])
+ACCELERATION = np.array([2.0, 3.0])
+
+
+def _slow_in_the_middle(qs: np.ndarray) -> np.ndarray:
+    """0.2 where ``q_0`` is within 0.3 of 1.1, else 1."""
+    return np.where(np.abs(qs[:, 0] - 1.1) < 0.3, 0.2, 1.0)
+
+
+def test_a_scaled_timing_keeps_the_scaled_limits_and_is_the_plain_one_where_the_scale_is_one() -> None:
+    plain = time_path(WAYPOINTS, VELOCITY, ACCELERATION)
+    scaled = time_path(WAYPOINTS, VELOCITY, ACCELERATION, speed_scale=_slow_in_the_middle)
+    times = np.linspace(0.0, scaled.duration, 4001)
+    q, qdot, qddot = scaled.sample(times)
+    inner = np.abs(q[:, 0] - 1.1) < 0.25   # off the scale's steps
+    used = np.max(np.abs(qdot[inner]) / (0.2 * VELOCITY), axis=1)   # of the scaled limits
+    assert np.median(used) <= 1.0   # kept at TOPP-RA's grid points, over it between them
+    assert used.max() <= 1.2        # (most at the sharp corner (1.2, -0.4))
+    assert np.all(np.abs(qdot) <= VELOCITY * (1 + 1e-9)) and np.all(np.abs(qddot) <= ACCELERATION * (1 + 1e-9))
+    np.testing.assert_allclose(q[-1], WAYPOINTS[-1], atol=1e-6)
+    assert scaled.duration > plain.duration + 1.0   # the middle is crossed at a fifth of the speed
+    same = time_path(WAYPOINTS, VELOCITY, ACCELERATION, speed_scale=lambda qs: np.ones(len(qs)))
+    assert same.duration == pytest.approx(plain.duration, rel=1e-9)
+
+
+def test_guidance_slows_its_reference_where_the_way_passes_close_to_the_wall() -> None:
+    panda = load_robot("panda")
+    goal = START.copy()
+    goal[0] = -1.3   # behind the wall: the way goes around it
+    settings = GuidanceSettings()
+    slow, fast = JointGuidance(panda, settings), JointGuidance(panda, replace(settings, slow_clearance=0.0))
+    plan = slow.plan(START, JointTarget(goal), [WALL])
+    times = np.linspace(0.0, plan.trajectory.duration, 3001)
+    q, qdot, _ = plan.trajectory.sample(times)
+    ratio = np.max(np.abs(qdot) / panda.limits.velocity, axis=1)   # fraction of the limits used
+    scale = slow.speed_scale(q)
+    assert scale.min() < 1.0   # the way does pass within slow_clearance of the wall
+    assert np.all(ratio <= settings.speed * np.maximum(scale, settings.slow_speed) + 0.03)
+    clearance = slow.checker.batch(q)[:, 0]
+    np.testing.assert_allclose(scale, np.clip(clearance / settings.slow_clearance, settings.slow_speed, 1.0))
+    unslowed = fast.plan(START, JointTarget(goal), [WALL])
+    np.testing.assert_allclose(unslowed.trajectory.waypoints, plan.trajectory.waypoints)   # the same path
+    assert plan.trajectory.duration > unslowed.trajectory.duration
