@@ -70,7 +70,7 @@ def test_run_without_json_prints_a_readable_table(tmp_path: Path, capsys: pytest
     assert code == 0
     names = {line.split(":")[0].strip() for line in out.splitlines()}
     assert names == JSON_KEYS | {"sphere_clearance", "self_collision", "min_self_distance", "contacts", "link_contacts",
-                                 "guided", "plans", "plan_time_ms", "recovered", "fallbacks", "failure", "final_distance"}
+                                 "guided", "plans", "plan_time_ms", "recovered", "fallbacks", "goal_moved", "failure", "final_distance"}
 
 
 def test_run_as_subprocess(tmp_path: Path) -> None:

@@ -13,7 +13,7 @@ from scipy.spatial.transform import Rotation
 from dynfab.geometry.shapes import Box, Placement
 from dynfab.motion.configuration_checker import PlacedObstacle
 from dynfab.motion.goal_region import nearby_targets
-from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance, JointTarget
+from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance, JointTarget, Plan
 from dynfab.motion.inverse_kinematics import AxisTarget, PointTarget
 from dynfab.robots import load_robot
 from wall_scene import START, hand_pose_targets
@@ -76,7 +76,8 @@ def test_a_pose_whose_exact_solutions_overlap_a_block_is_solved_inside_its_toler
     with pytest.raises(GuidanceError) as refused:
         guidance.goal_configuration(exact, START)
     assert refused.value.reason == "no_ik_solution"
-    solution = guidance.goal_configuration(_tolerant(exact), START)
+    solution, moved = guidance._goal_search().solution(_tolerant(exact), START)
+    assert moved
     assert guidance.checker.exact_free(solution, 0.0, guidance.settings.path.self_margin)
     moved = np.linalg.norm(panda.link_position(solution, "panda_hand") - np.asarray(exact[0].position))
     assert moved <= guidance.settings.goal_region * POSITION_TOLERANCE + 1e-6
@@ -130,12 +131,18 @@ def test_a_joint_goal_with_no_way_in_is_planned_again_to_a_roomier_one(wall_goal
         tried.append(np.array(target))
         if np.allclose(target, near):
             raise GuidanceError("goal_in_collision", "no escape")
-        return "planned"
+        return Plan(None, np.array(target), 0.0, 0)   # what is planned does not matter here
 
     monkeypatch.setattr(JointGuidance, "_plan_to", no_way_into_near)
     start = near.copy()
     start[0] = -2.2
-    assert guidance.plan(start, JointTarget(tuple(near), 0.05), [wall]) == "planned"
+    plan = guidance.plan(start, JointTarget(tuple(near), 0.05), [wall])
     assert len(tried) == 2 and np.linalg.norm(tried[1] - near) <= guidance.settings.goal_region * 0.05 + 1e-12
+    np.testing.assert_array_equal(plan.goal, tried[1])
+    assert plan.goal_moved   # the metrics say the goal was reached within its tolerance
+    tried.clear()
+    far = near.copy()
+    far[0] -= 0.3
+    assert not guidance.plan(start, JointTarget(tuple(far), 0.05), [wall]).goal_moved
     with pytest.raises(GuidanceError):
         guidance.plan(start, JointTarget(tuple(near)), [wall])

@@ -46,19 +46,20 @@ def test_tables_flag_contradicted_successes_and_read_guidance_metrics_when_prese
     reached = {"success": True, "goal_reached": True, "time_to_goal": 3.0, "path_length": 1.0}
     records = [
         _record("box/0009", reached, _CLEAN),  # before guidance lands: no plans, no failure
+        _record("box/0013", {**reached, "guided": True, "plans": 1, "plan_time_ms": 15.0, "goal_moved": True}, _CLEAN),
         _record("box/0010", {**reached, "guided": True, "plans": 2, "plan_time_ms": 12.0}, _TOUCH),
         _record("box/0011", {"success": False, "goal_reached": False, "guided": True, "plans": 4,
                              "plan_time_ms": 30.0, "failure": "no_path"}, _CLEAN),
         _record("box/0012", None, None, invalid="goal: panda_joint4 = -0.043 is outside [-3.0718, -0.0698]"),
     ]
     outcomes = [case_outcome(r) for r in records]
-    assert [o.success for o in outcomes] == [True, False, False, False]
-    assert [o.contradicted for o in outcomes] == [False, True, False, False]
-    assert [o.failure for o in outcomes] == [None, "mesh_collision", "no_path", None]
+    assert [o.success for o in outcomes] == [True, True, False, False, False]
+    assert [o.contradicted for o in outcomes] == [False, False, True, False, False]
+    assert [o.failure for o in outcomes] == [None, None, "mesh_collision", "no_path", None]
     box, _ = type_rows(outcomes, ["box"])
-    assert (box.problems, box.invalid, box.success, box.collisions, box.contradicted) == (4, 1, 1, 1, 1)
+    assert (box.problems, box.invalid, box.success, box.collisions, box.contradicted) == (5, 1, 2, 1, 1)
     assert box.failures == {"mesh_collision": 1, "no_path": 1}
-    assert (box.median_plan_time_ms, box.mean_plans, box.guided) == (21.0, 3.0, 2)
+    assert (box.median_plan_time_ms, box.mean_plans, box.guided, box.goal_moved) == (15.0, 7 / 3, 3, 1)
     assert box.median_time_to_goal_s == 3.0
 
 

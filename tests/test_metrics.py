@@ -25,7 +25,7 @@ JSON_KEYS = [
     "path_length", "summed_error", "solver_time_ms", "steps", "orientation_error", "sphere_clearance",
     "self_collision", "min_self_distance", "max_velocity_ratio", "max_acceleration_ratio", "contacts",
     "link_contacts",
-    "guided", "plans", "plan_time_ms", "recovered", "fallbacks", "failure", "final_distance",
+    "guided", "plans", "plan_time_ms", "recovered", "fallbacks", "goal_moved", "failure", "final_distance",
 ]
 
 

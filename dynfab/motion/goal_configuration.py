@@ -62,6 +62,15 @@ class GoalSearch:
         Raises:
             GuidanceError: ``goal_outside_limits`` or ``no_ik_solution``.
         """
+        return self.solution(goal, q, seed)[0]
+
+    def solution(self, goal: GoalTargets, q: NDArray[np.float64], seed: int = 0) -> tuple[NDArray[np.float64], bool]:
+        """:meth:`configuration`, and whether it reaches a target moved inside the goal's
+        tolerances (search 4) rather than the goal itself.
+
+        Raises:
+            GuidanceError: ``goal_outside_limits`` or ``no_ik_solution``.
+        """
         lower, upper = self.bounds
         if isinstance(goal, JointTarget):
             target = np.asarray(goal.q, dtype=float)
@@ -71,7 +80,7 @@ class GoalSearch:
                 j = int(outside[0])
                 raise GuidanceError("goal_outside_limits", f"the goal puts {names[j]} at {target[j]:.6g}, outside "
                                     f"its limits [{lower[j]:.6g}, {upper[j]:.6g}]")
-            return np.clip(target, lower, upper)
+            return np.clip(target, lower, upper), False
         settings = self.settings
         margin, self_margin = settings.path.margin, settings.path.self_margin
         ik = replace(settings.ik, seed=seed)
@@ -86,13 +95,15 @@ class GoalSearch:
                 result = solve_ik(self.robot, list(goal), q, lambda x: meshes.free(x, floor),
                                   replace(settings.ik_retry, seed=seed), lower, upper)
             if result.q is None:
-                result = nearby_solution(self.robot, goal, q, self.merely_free(), settings.goal_region,
-                                         settings.goal_region_targets, ik, self.bounds) or result
+                nearby = nearby_solution(self.robot, goal, q, self.merely_free(), settings.goal_region,
+                                         settings.goal_region_targets, ik, self.bounds)
+                if nearby is not None and nearby.q is not None:
+                    return nearby.q, True
         if result.q is None:
             found = (f"{result.converged} solutions within the limits, all in collision" if result.converged
                      else "no solution within the joint limits")
             raise GuidanceError("no_ik_solution", f"inverse kinematics: {found} ({result.seeds} seeds)")
-        return result.q
+        return result.q, False
 
     def merely_free(self) -> Callable[[NDArray[np.float64]], bool]:
         """Whether a configuration is free on the planning spheres' grid at margin 0, else on

@@ -96,7 +96,11 @@ class JointGuidance:
         Raises:
             GuidanceError: ``goal_outside_limits`` or ``no_ik_solution``.
         """
-        return GoalSearch(self.robot, self.checker, self._meshes, self.settings, self.bounds).configuration(goal, q, seed)
+        return self._goal_search().configuration(goal, q, seed)
+
+    def _goal_search(self) -> GoalSearch:
+        """The goal configuration's searches against the checker's obstacles."""
+        return GoalSearch(self.robot, self.checker, self._meshes, self.settings, self.bounds)
 
     def set_obstacles(self, obstacles: Sequence[PlacedObstacle]) -> None:
         """Check against ``obstacles`` from now on: on the robot's planning spheres, or among
@@ -124,15 +128,15 @@ class JointGuidance:
         began = time.perf_counter()
         self.set_obstacles(obstacles)
         start = np.clip(np.asarray(q, dtype=float), self._lower, self._upper)
-        target = self.goal_configuration(goal, start, seed)
+        target, moved = self._goal_search().solution(goal, start, seed)
         try:
-            return self._plan_to(start, target, obstacles, seed, wide, began)
+            return replace(self._plan_to(start, target, obstacles, seed, wide, began), goal_moved=moved)
         except GuidanceError as failure:
             roomier = self._roomier_goal(goal, target, seed) if failure.reason == "goal_in_collision" else None
             if roomier is None:
                 raise
         self.set_obstacles(obstacles)   # the first attempts may have left a cloud's focus
-        return self._plan_to(start, roomier, obstacles, seed, wide, began)
+        return replace(self._plan_to(start, roomier, obstacles, seed, wide, began), goal_moved=True)
 
     def _roomier_goal(self, goal: GoalTargets, target: NDArray[np.float64], seed: int) -> NDArray[np.float64] | None:
         """For a joint goal with a tolerance whose plan found no way into ``target``: of

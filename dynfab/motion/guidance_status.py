@@ -21,6 +21,8 @@ class GuidanceStatus:
         replans_blocked: replans because the reference ahead was blocked [-].
         replans_stalled: replans because progress stalled [-].
         refuges: plans to a refuge from what moves through the goal (:mod:`dynfab.motion.making_way`) [-].
+        goal_moved: the plan followed reaches a target moved inside the goal's tolerance,
+            not the goal itself (:attr:`~dynfab.motion.plan_values.Plan.goal_moved`).
         failure: why the last plan failed (:class:`~dynfab.motion.guidance.GuidanceError`
             reasons); None if it did not.
     """
@@ -33,4 +35,5 @@ class GuidanceStatus:
     replans_blocked: int = 0
     replans_stalled: int = 0
     refuges: int = 0
+    goal_moved: bool = False
     failure: str | None = None

@@ -54,6 +54,8 @@ class Plan:
             than its margin); 0 if the goal was free [rad].
         approach_start: when the approach begins on the reference's clock [s] (its
             duration without one).
+        goal_moved: ``goal`` reaches a target moved inside the goal's tolerance, not the
+            goal itself (:mod:`dynfab.motion.goal_region`).
     """
 
     trajectory: JointTrajectory | PhasedTrajectory
@@ -62,3 +64,4 @@ class Plan:
     checks: int
     approach: float = 0.0
     approach_start: float = 0.0
+    goal_moved: bool = False

@@ -1,6 +1,6 @@
 """How a run went, in its metrics: guidance, recovery, fallbacks and, for a failure, why
 (docs/design.md section 5.5: ``guided``, ``plans``, ``plan_time_ms``, ``recovered``, ``fallbacks``,
-``failure``).
+``goal_moved``, ``failure``).
 
 A ``success`` the fabric earned alone reads ``guided: false, recovered: 0, fallbacks: 0``.
 Every controller a run can have fills these keys:
@@ -46,16 +46,16 @@ def with_outcome(metrics: Metrics, controller: Controller | None, goal_positions
         outcome.update(guided=status.guided and not fell_back,
                        plans=status.plans + recoveries, plan_time_ms=status.plan_time_ms,
                        recovered=status.replans_blocked + status.replans_stalled + status.refuges + recoveries,
-                       fallbacks=controller.fallback_count + fell_back)
+                       fallbacks=controller.fallback_count + fell_back, goal_moved=status.goal_moved)
         if fell_back and not metrics.success:
             outcome["failure"] = status.failure
     elif isinstance(controller, MpcController):
-        outcome.update(guided=False, plans=0, recovered=0, fallbacks=controller.failures)
+        outcome.update(guided=False, plans=0, recovered=0, fallbacks=controller.failures, goal_moved=False)
     elif controller is not None:   # a fabric controller, with stall recovery or without
         recoveries = len(getattr(controller, "recovery_times", []))
         planner = getattr(controller, "planner", None)
         outcome.update(guided=False, plans=recoveries, recovered=recoveries,
-                       fallbacks=int(getattr(planner, "fallback_count", 0)))
+                       fallbacks=int(getattr(planner, "fallback_count", 0)), goal_moved=False)
     return dataclasses.replace(metrics, **outcome)
 
 
