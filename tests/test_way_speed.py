@@ -9,6 +9,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from dynfab.geometry.point_cloud import PointCloud
+from dynfab.geometry.shapes import Placement
+from dynfab.motion.configuration_checker import PlacedObstacle
 from dynfab.motion.guidance import JointGuidance, JointTarget
 from dynfab.motion.guidance_settings import GuidanceSettings
 from dynfab.motion.joint_trajectory import time_path
@@ -59,3 +62,21 @@ def test_guidance_slows_its_reference_where_the_way_passes_close_to_the_wall() -
     unslowed = fast.plan(START, JointTarget(goal), [WALL])
     np.testing.assert_allclose(unslowed.trajectory.waypoints, plan.trajectory.waypoints)   # the same path
     assert plan.trajectory.duration > unslowed.trajectory.duration
+
+
+def test_point_clouds_do_not_slow_the_way_and_the_shapes_beside_them_do() -> None:
+    panda = load_robot("panda")
+    guidance = JointGuidance(panda)
+    hand = np.asarray(panda.link_position(START, "panda_hand")).ravel()
+    points = hand + np.random.default_rng(0).uniform(-0.1, 0.1, (400, 2)) @ np.array([[1.0, 0.0, 0.0],
+                                                                                      [0.0, 1.0, 0.0]])
+    points[:, 2] -= 0.07   # a patch of floor 7 cm under the hand
+    cloud = PlacedObstacle(PointCloud.from_points(points, voxel=0.01), Placement((0.0, 0.0, 0.0)))
+    q = np.tile(START, (5, 1)) + np.linspace(0.0, 0.4, 5)[:, None]
+    guidance.set_obstacles((cloud,))
+    assert guidance.checker.batch(q)[:, 0].min() < guidance.settings.slow_clearance   # near it: it would slow
+    np.testing.assert_array_equal(guidance.speed_scale(q), np.ones(5))
+    guidance.set_obstacles((cloud, WALL))
+    alone = JointGuidance(panda)
+    alone.set_obstacles((WALL,))
+    np.testing.assert_array_equal(guidance.speed_scale(q), alone.speed_scale(q))   # the wall's, on the planning spheres

@@ -99,7 +99,8 @@ class GuidanceSettings:
         speed: fraction of the velocity limits the reference uses [-].
         slow_clearance, slow_speed: on the way (before an approach) the reference's velocity
             limits are further scaled by ``σ(q) = clip(c(q) / slow_clearance, slow_speed, 1)``,
-            ``c(q)`` the planning spheres' clearance from the plan's obstacles [m]: where the
+            ``c(q)`` the planning spheres' clearance from the plan's obstacles but point
+            clouds (:meth:`JointGuidance.speed_scale` says why) [m]: where the
             way is tight the reference slows, so the robot lags less behind it and does not
             cut a corner the plan rounds closely (:meth:`JointGuidance.speed_scale`);
             ``slow_clearance`` 0 keeps the speed. Set before measuring (session 18), checked
