@@ -15,6 +15,7 @@ from dynfab.motion.configuration_checker import PlacedObstacle
 from dynfab.motion.goal_region import nearby_targets
 from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance, JointTarget, Plan
 from dynfab.motion.inverse_kinematics import AxisTarget, PointTarget
+from dynfab.motion.plan_requests import PlanRequest, make_plan
 from dynfab.robots import load_robot
 from wall_scene import START, hand_pose_targets
 
@@ -76,7 +77,7 @@ def test_a_pose_whose_exact_solutions_overlap_a_block_is_solved_inside_its_toler
     with pytest.raises(GuidanceError) as refused:
         guidance.goal_configuration(exact, START)
     assert refused.value.reason == "no_ik_solution"
-    solution, moved = guidance._goal_search().solution(_tolerant(exact), START)
+    solution, moved = guidance.goal_solution(_tolerant(exact), START)
     assert moved
     assert guidance.checker.exact_free(solution, 0.0, guidance.settings.path.self_margin)
     moved = np.linalg.norm(panda.link_position(solution, "panda_hand") - np.asarray(exact[0].position))
@@ -84,6 +85,21 @@ def test_a_pose_whose_exact_solutions_overlap_a_block_is_solved_inside_its_toler
     turned = np.asarray(panda.kinematics.transform(solution, "panda_hand"))[:3, :3]
     target = np.column_stack([t.direction for t in exact[1:]])
     assert Rotation.from_matrix(turned @ target.T).magnitude() <= guidance.settings.goal_region * ANGLE_TOLERANCE + 1e-4
+
+
+def test_a_plan_request_to_a_pose_solved_inside_its_tolerance_says_the_goal_moved(blocked) -> None:
+    """The plan requests of a guided fabric solve a task goal before planning to the joint
+    configuration: the plan they return carries the moved target (its metrics' ``goal_moved``)."""
+    panda, block, exact = blocked
+    guidance = JointGuidance(panda)
+
+    def outcome(goal):
+        return make_plan(guidance, PlanRequest(0.0, START, goal, (block,), (), None, 0, False, (0.0,)))
+
+    moved = outcome(_tolerant(exact))
+    assert moved.plan is not None and moved.plan.goal_moved
+    free_goal = _tolerant(hand_pose_targets(panda, START))   # the start's own pose, far above the block
+    assert not outcome(free_goal).plan.goal_moved
 
 
 def test_without_the_region_the_tolerant_pose_is_refused(blocked) -> None:

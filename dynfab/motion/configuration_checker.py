@@ -109,8 +109,9 @@ class ConfigurationChecker:
 
     def set_obstacles(self, obstacles: Sequence[PlacedObstacle]) -> None:
         """Check against ``obstacles`` from now on (a mesh's distance grid is built on its
-        first use, and kept on disk: 0.1-9 s per mesh (MBM kitchen, table_bars), :mod:`dynfab.geometry.distance_grid`; a point cloud's
-        in 0.05-1 s, :mod:`dynfab.geometry.cloud_grid`)."""
+        first use, and kept on disk: 0.1-9 s per mesh of MBM kitchen and table_bars,
+        :mod:`dynfab.geometry.distance_grid`; a point cloud's in 0.05-1 s,
+        :mod:`dynfab.geometry.cloud_grid`)."""
         self._obstacles = tuple(obstacles)
         self._rows = _buffer(self._obstacles)
         self._rows_pointer = as_pointer(self._rows)

@@ -77,7 +77,7 @@ class JointGuidance:
         self.checker = self._planning
         self._tables = AllowanceTables(robot, settings)   # what the fabric's leaves may enter (on its spheres)
         self._ahead = ConfigurationChecker(robot.planning_robot)   # what moves (blocked_ahead)
-        self._slowing = ConfigurationChecker(robot.planning_robot)   # what slows the way (speed_scale)
+        self._slowing = ConfigurationChecker(robot.planning_robot)   # the shapes beside clouds (speed_scale)
         self._mesh_check: MeshGoalCheck | None | bool = False  # made on first use; None: no meshes
         # the last focus made: the obstacles, the goal's bytes and the focused obstacles
         self._focus: tuple[tuple[PlacedObstacle, ...], bytes, tuple[PlacedObstacle, ...]] | None = None
@@ -97,11 +97,18 @@ class JointGuidance:
         Raises:
             GuidanceError: ``goal_outside_limits`` or ``no_ik_solution``.
         """
-        return self._goal_search().configuration(goal, q, seed)
+        return self.goal_solution(goal, q, seed)[0]
 
-    def _goal_search(self) -> GoalSearch:
-        """The goal configuration's searches against the checker's obstacles."""
-        return GoalSearch(self.robot, self.checker, self._meshes, self.settings, self.bounds)
+    def goal_solution(self, goal: GoalTargets, q: NDArray[np.float64],
+                      seed: int = 0) -> tuple[NDArray[np.float64], bool]:
+        """:meth:`goal_configuration`, and whether it reaches a target moved inside the goal's
+        tolerances rather than the goal itself
+        (:meth:`~dynfab.motion.goal_configuration.GoalSearch.solution`).
+
+        Raises:
+            GuidanceError: ``goal_outside_limits`` or ``no_ik_solution``.
+        """
+        return GoalSearch(self.robot, self.checker, self._meshes, self.settings, self.bounds).solution(goal, q, seed)
 
     def set_obstacles(self, obstacles: Sequence[PlacedObstacle]) -> None:
         """Check against ``obstacles`` from now on: on the robot's planning spheres, or among
@@ -129,7 +136,7 @@ class JointGuidance:
         began = time.perf_counter()
         self.set_obstacles(obstacles)
         start = np.clip(np.asarray(q, dtype=float), self._lower, self._upper)
-        target, moved = self._goal_search().solution(goal, start, seed)
+        target, moved = self.goal_solution(goal, start, seed)
         try:
             return replace(self._plan_to(start, target, obstacles, seed, wide, began), goal_moved=moved)
         except GuidanceError as failure:
@@ -339,11 +346,15 @@ class JointGuidance:
         crawled, and cage runs ran out of their 20 s (MBM points ``--seed 7``, cage 81-96:
         10/16 slowed, 14/16 not)."""
         settings = self.settings
-        solid = [o for o in self.checker.obstacles if not isinstance(o.shape, PointCloud)]
+        obstacles = self.checker.obstacles
+        solid = [o for o in obstacles if not isinstance(o.shape, PointCloud)]
         if not solid:
             return np.ones(len(qs))
-        self._slowing.set_obstacles(solid)
-        clearance = self._slowing.batch(qs)[:, 0]
+        checker = self.checker   # without clouds: the planning spheres' checker, these obstacles set
+        if len(solid) < len(obstacles):   # with them: the planning spheres against the rest
+            self._slowing.set_obstacles(solid)
+            checker = self._slowing
+        clearance = checker.batch(qs)[:, 0]
         return np.clip(clearance / settings.slow_clearance, settings.slow_speed, 1.0)
 
     def _approach_timed(self, segment: NDArray[np.float64]) -> JointTrajectory:

@@ -21,8 +21,9 @@ class GuidanceStatus:
         replans_blocked: replans because the reference ahead was blocked [-].
         replans_stalled: replans because progress stalled [-].
         refuges: plans to a refuge from what moves through the goal (:mod:`dynfab.motion.making_way`) [-].
-        goal_moved: the plan followed reaches a target moved inside the goal's tolerance,
-            not the goal itself (:attr:`~dynfab.motion.plan_values.Plan.goal_moved`).
+        goal_moved: a plan followed so far reaches a target moved inside the goal's
+            tolerance, not the goal itself (:attr:`~dynfab.motion.plan_values.Plan.goal_moved`;
+            a replan to the same goal configuration does not say it again).
         failure: why the last plan failed (:class:`~dynfab.motion.guidance.GuidanceError`
             reasons); None if it did not.
     """

@@ -298,7 +298,7 @@ class GuidedFabric:
             return True  # a failed replan keeps following the old reference
         if first:
             self._watch.scale_to(float(np.linalg.norm(request.q - plan.goal)))
-        self.status = replace(self.status, goal_moved=plan.goal_moved)
+        self.status = replace(self.status, goal_moved=self.status.goal_moved or plan.goal_moved)
         self._plan = plan
         self._home = request.previous_goal if request.after == "refuge" else None
         self._close = request.after == "short"

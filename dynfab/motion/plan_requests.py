@@ -27,7 +27,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -229,11 +229,12 @@ def _plan_among(guidance: JointGuidance, request: PlanRequest, obstacles: tuple[
     if plan is None and request.previous_goal is not None and not isinstance(request.goal, JointTarget):
         plan = _replan_to(guidance, request, obstacles, publish)
     if plan is None:
-        target = guidance.goal_configuration(request.goal, request.q, request.seed)
+        target, moved = guidance.goal_solution(request.goal, request.q, request.seed)
         publish(target)
         tolerance = request.goal.tolerance if isinstance(request.goal, JointTarget) else 0.0
         plan = guidance.plan(request.q, JointTarget(tuple(target), tolerance), obstacles, seed=request.seed,
                              wide=request.wide)
+        plan = replace(plan, goal_moved=plan.goal_moved or moved)   # a task goal's target, moved before planning
     return plan
 
 

@@ -70,10 +70,10 @@ class Metrics:
         fallbacks: Safe actions taken: fabric outputs replaced by braking, plus one if
             guidance could not plan and the fabric alone took over; for the MPC, solves
             that failed (the last plan, or braking, was executed).
-        goal_moved: Guidance's plan reached a target moved inside the goal's tolerance
-            (a task goal's within half its position and angle tolerances, a joint goal's
-            configuration within half its tolerance; :mod:`dynfab.motion.goal_region`), not
-            the goal itself; False for controllers that do not move goals.
+        goal_moved: A plan guidance followed in the run went to a target moved inside the
+            goal's tolerance (a task goal's within half its position and angle tolerances, a
+            joint goal's configuration within half its tolerance; :mod:`dynfab.motion.goal_region`),
+            not the goal itself; False for controllers that do not move goals.
         failure: Why the run failed, None on success: a guidance reason
             (``goal_outside_limits``, ``no_ik_solution``, ``start_in_collision``,
             ``goal_in_collision``, ``no_path``) when guidance could not plan, else

@@ -147,7 +147,8 @@ def _row(name: str, cases: Sequence[CaseOutcome]) -> TypeRow:
         sum(c.contradicted for c in ran), sum(c.refused is not None for c in cases),
         _median([c.time_to_goal for c in successes]), _median([c.path_length for c in successes]),
         _median([c.plan_time_ms for c in ran]), _mean([c.plans for c in ran]),
-        sum(bool(c.guided) for c in ran), sum(bool(c.goal_moved) for c in successes), dict(sorted(Counter(c.failure for c in cases if c.failure).items())))
+        sum(bool(c.guided) for c in ran), sum(bool(c.goal_moved) for c in successes),
+        dict(sorted(Counter(c.failure for c in cases if c.failure).items())))
 
 
 def _median(values: Sequence[float | None]) -> float | None:
