@@ -140,3 +140,33 @@ def test_a_motion_is_free_exactly_when_its_configurations_step_apart_are(panda, 
         assert plain.motion_free(a, b, step, margin, self_margin)[0] == expected
         outcomes.append(expected)
     assert any(outcomes) and not all(outcomes)
+
+
+def test_obstacles_set_again_around_the_same_meshes_read_as_a_fresh_checker_reads_them(panda) -> None:
+    import trimesh
+
+    from dynfab.geometry.point_cloud import PointCloud
+    from dynfab.geometry.shapes import Mesh
+
+    rng = np.random.default_rng(5)
+    box = trimesh.creation.box(extents=(0.3, 0.05, 0.4))
+    mesh = Mesh(box.vertices, box.faces, "slab")
+    cloud = PointCloud.from_points(rng.uniform((0.2, -0.3, 0.0), (0.5, 0.3, 0.02), (3000, 3)), 0.01)
+    at = Placement((0.0, 0.0, 0.0))
+
+    def scene(shift: float) -> list[PlacedObstacle]:   # the same mesh and cloud, primitives and the mesh moved
+        return [PlacedObstacle(Sphere(0.1), Placement((0.4 + shift, 0.2, 0.5))),
+                PlacedObstacle(mesh, Placement((0.45, -0.2 + shift, 0.4))), PlacedObstacle(cloud, at),
+                PlacedObstacle(Box((0.1, 0.1, 0.1)), Placement((0.3, 0.0, 0.8 - shift)))]
+
+    checker = ConfigurationChecker(panda, scene(0.0))
+    qs = rng.uniform(panda.kinematics.lower, panda.kinematics.upper, (100, panda.dof))
+    first = checker.batch(qs)
+    buffer = checker._rows
+    checker.set_obstacles(scene(0.15))
+    assert checker._rows is buffer   # written in place, the grids not copied again
+    moved = checker.batch(qs)
+    np.testing.assert_array_equal(moved, ConfigurationChecker(panda, scene(0.15)).batch(qs))
+    assert np.any(moved[:, 0] != first[:, 0])
+    checker.set_obstacles(scene(0.15)[:3])   # one fewer: a new buffer, read as fresh
+    np.testing.assert_array_equal(checker.batch(qs), ConfigurationChecker(panda, scene(0.15)[:3]).batch(qs))

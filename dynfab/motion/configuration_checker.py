@@ -100,6 +100,8 @@ class ConfigurationChecker:
         self._out_pointer = as_pointer(self._out)
         self._centres: ca.Function | None = None  # the numpy path's forward kinematics, made on first use
         self._moving = moving_spheres(robot)       # the spheres c_obs is over
+        self._obstacles: tuple[PlacedObstacle, ...] = ()
+        self._rows = np.zeros(0)
         self.set_obstacles(obstacles)
 
     @property
@@ -111,8 +113,20 @@ class ConfigurationChecker:
         """Check against ``obstacles`` from now on (a mesh's distance grid is built on its
         first use, and kept on disk: 0.1-9 s per mesh of MBM kitchen and table_bars,
         :mod:`dynfab.geometry.distance_grid`; a point cloud's in 0.05-1 s,
-        :mod:`dynfab.geometry.cloud_grid`)."""
-        self._obstacles = tuple(obstacles)
+        :mod:`dynfab.geometry.cloud_grid`). Where the same meshes and clouds (the same
+        objects) stand at the same places in the list as before, only the rows are written
+        into the buffer in place: the grids (13-32 MB a mesh of MBM kitchen) are not copied
+        again (a guided run sets its checkers' obstacles at every plan)."""
+        obstacles = tuple(obstacles)
+        if self._rows.size and _same_grids(self._obstacles, obstacles):
+            head = self._rows[:len(obstacles) * _ROW].reshape(-1, _ROW)
+            rows = np.array([_row(o) for o in obstacles]).reshape(-1, _ROW)
+            gridded = [_gridded(o) for o in obstacles]
+            rows[gridded, 13] = head[gridded, 13]   # the grids' offsets, as they were
+            head[:] = rows
+            self._obstacles = obstacles
+            return
+        self._obstacles = obstacles
         self._rows = _buffer(self._obstacles)
         self._rows_pointer = as_pointer(self._rows)
         self._rows_address = ctypes.c_void_p(self._rows.ctypes.data)
@@ -203,6 +217,18 @@ class ConfigurationChecker:
         return out
 
 
+def _gridded(obstacle: PlacedObstacle) -> bool:
+    """Whether the kernel reads ``obstacle`` from a distance grid (a mesh or a point cloud)."""
+    return isinstance(obstacle.shape, Mesh | PointCloud)
+
+
+def _same_grids(old: Sequence[PlacedObstacle], new: Sequence[PlacedObstacle]) -> bool:
+    """Whether ``new`` has as many obstacles as ``old`` and the same gridded shapes (the same
+    objects) at the same places: then the buffer's grids serve it as they are."""
+    return len(old) == len(new) and all(
+        _gridded(a) == _gridded(b) and (not _gridded(a) or a.shape is b.shape) for a, b in zip(old, new))
+
+
 def _buffer(obstacles: Sequence[PlacedObstacle]) -> NDArray[np.float64]:
     """The kernel's obstacle buffer: one row per obstacle, then the meshes' grids, each
     mesh row's dimensions[0] the offset of its grid from the row's start [doubles]."""
@@ -210,7 +236,7 @@ def _buffer(obstacles: Sequence[PlacedObstacle]) -> NDArray[np.float64]:
     grids = []
     end = rows.size
     for k, obstacle in enumerate(obstacles):
-        if isinstance(obstacle.shape, Mesh | PointCloud):
+        if _gridded(obstacle):
             shape = obstacle.shape
             grid = (distance_grid(shape, cache=cache_dir() / "distance-grids") if isinstance(shape, Mesh)
                     else _cloud_grid(shape)).packed()
