@@ -16,7 +16,7 @@ from dynfab.motion.guidance import JointGuidance, JointTarget
 from dynfab.motion.guidance_settings import GuidanceSettings
 from dynfab.motion.joint_trajectory import time_path
 from dynfab.robots import load_robot
-from wall_scene import START, WALL
+from wall_scene import MESH_WALL, START, WALL
 
 WAYPOINTS = np.array([[0.0, 0.0], [1.0, 0.5], [1.2, -0.4], [2.0, 0.0]])
 VELOCITY = np.array([1.0, 0.8])
@@ -44,13 +44,18 @@ def test_a_scaled_timing_keeps_the_scaled_limits_and_is_the_plain_one_where_the_
     assert same.duration == pytest.approx(plain.duration, rel=1e-9)
 
 
-def test_guidance_slows_its_reference_where_the_way_passes_close_to_the_wall() -> None:
+#: the mesh wall 3 cm farther from the base: the goal behind it, where the base's spheres are
+#: 12 mm from the box, reads 9.5 mm on the mesh's grid, within the planner's 1 cm margin
+FARTHER_WALL = replace(MESH_WALL, placement=Placement((0.48, 0.0, 0.35)))
+
+
+def test_guidance_slows_its_reference_where_the_way_passes_close_to_a_mesh_wall() -> None:
     panda = load_robot("panda")
     goal = START.copy()
     goal[0] = -1.3   # behind the wall: the way goes around it
     settings = GuidanceSettings()
     slow, fast = JointGuidance(panda, settings), JointGuidance(panda, replace(settings, slow_clearance=0.0))
-    plan = slow.plan(START, JointTarget(goal), [WALL])
+    plan = slow.plan(START, JointTarget(goal), [FARTHER_WALL])
     times = np.linspace(0.0, plan.trajectory.duration, 3001)
     q, qdot, _ = plan.trajectory.sample(times)
     ratio = np.max(np.abs(qdot) / panda.limits.velocity, axis=1)   # fraction of the limits used
@@ -59,12 +64,12 @@ def test_guidance_slows_its_reference_where_the_way_passes_close_to_the_wall() -
     assert np.all(ratio <= settings.speed * np.maximum(scale, settings.slow_speed) + 0.03)
     clearance = slow.checker.batch(q)[:, 0]
     np.testing.assert_allclose(scale, np.clip(clearance / settings.slow_clearance, settings.slow_speed, 1.0))
-    unslowed = fast.plan(START, JointTarget(goal), [WALL])
+    unslowed = fast.plan(START, JointTarget(goal), [FARTHER_WALL])
     np.testing.assert_allclose(unslowed.trajectory.waypoints, plan.trajectory.waypoints)   # the same path
     assert plan.trajectory.duration > unslowed.trajectory.duration
 
 
-def test_point_clouds_do_not_slow_the_way_and_the_shapes_beside_them_do() -> None:
+def test_point_clouds_and_primitives_do_not_slow_the_way_and_the_meshes_beside_them_do() -> None:
     panda = load_robot("panda")
     guidance = JointGuidance(panda)
     hand = np.asarray(panda.link_position(START, "panda_hand")).ravel()
@@ -76,7 +81,12 @@ def test_point_clouds_do_not_slow_the_way_and_the_shapes_beside_them_do() -> Non
     guidance.set_obstacles((cloud,))
     assert guidance.checker.batch(q)[:, 0].min() < guidance.settings.slow_clearance   # near it: it would slow
     np.testing.assert_array_equal(guidance.speed_scale(q), np.ones(5))
-    guidance.set_obstacles((cloud, WALL))
+    guidance.set_obstacles((WALL,))   # the box (in_sight guards the way among primitives)
+    assert guidance.checker.batch(q)[:, 0].min() < guidance.settings.slow_clearance
+    np.testing.assert_array_equal(guidance.speed_scale(q), np.ones(5))
+    guidance.set_obstacles((cloud, WALL, MESH_WALL))
     alone = JointGuidance(panda)
-    alone.set_obstacles((WALL,))
-    np.testing.assert_array_equal(guidance.speed_scale(q), alone.speed_scale(q))   # the wall's, on the planning spheres
+    alone.set_obstacles((MESH_WALL,))
+    scale = alone.speed_scale(q)
+    assert scale.min() < 1.0
+    np.testing.assert_array_equal(guidance.speed_scale(q), scale)   # the mesh's, on the planning spheres

@@ -77,7 +77,7 @@ class JointGuidance:
         self.checker = self._planning
         self._tables = AllowanceTables(robot, settings)   # what the fabric's leaves may enter (on its spheres)
         self._ahead = ConfigurationChecker(robot.planning_robot)   # what moves (blocked_ahead)
-        self._slowing = ConfigurationChecker(robot.planning_robot)   # the shapes beside clouds (speed_scale)
+        self._slowing = ConfigurationChecker(robot.planning_robot)   # the meshes among other shapes (speed_scale)
         self._mesh_check: MeshGoalCheck | None | bool = False  # made on first use; None: no meshes
         # the last focus made: the obstacles, the goal's bytes and the focused obstacles
         self._focus: tuple[tuple[PlacedObstacle, ...], bytes, tuple[PlacedObstacle, ...]] | None = None
@@ -336,23 +336,27 @@ class JointGuidance:
 
     def speed_scale(self, qs: NDArray[np.float64]) -> NDArray[np.float64]:
         """``σ(q) = clip(c(q) / slow_clearance, slow_speed, 1)`` [-] at each of ``qs`` (m, n),
-        ``c`` the planning spheres' clearance from the checker's obstacles but point clouds
-        [m] (1 without such obstacles): the factor of the way's velocity limits
-        (:class:`GuidanceSettings`). A robot lagging ``e`` behind a reference that turns a
-        corner is pulled across it by about ``e`` times its lever; slower, it lags less (MBM
-        kitchen seed 11/0004 with a 10 cm mesh band: 0.07 rad behind at 0.5 of the limits, a
-        finger 11 mm into a cupboard). Point clouds do not slow it: their grids read the
-        larger spheres far lower than they are (a 3 cm exact band, the noise), the way
-        crawled, and cage runs ran out of their 20 s (MBM points ``--seed 7``, cage 81-96:
-        10/16 slowed, 14/16 not)."""
+        ``c`` the planning spheres' clearance from the checker's mesh obstacles [m] (1 without
+        meshes): the factor of the way's velocity limits (:class:`GuidanceSettings`). A robot
+        lagging ``e`` behind a reference that turns a corner is pulled across it by about ``e``
+        times its lever; slower, it lags less (MBM kitchen seed 11/0004 with a 10 cm mesh band:
+        0.07 rad behind at 0.5 of the limits, a finger 11 mm into a cupboard). Only meshes slow
+        it:
+
+        - primitives have their own guard, the reference waits where it is out of sight of the
+          robot (:func:`~dynfab.motion.plan_joining.in_sight`), and slowed among them the way
+          cost cage runs their 20 s (MBM object removed, cage 81-96: 14/16 slowed, 16/16 not);
+        - point clouds' grids read the larger spheres far lower than they are (a 3 cm exact
+          band, the noise), and the way crawled (MBM points ``--seed 7``, cage 81-96: 10/16
+          slowed, 14/16 not)."""
         settings = self.settings
         obstacles = self.checker.obstacles
-        solid = [o for o in obstacles if not isinstance(o.shape, PointCloud)]
-        if not solid:
+        meshes = [o for o in obstacles if isinstance(o.shape, Mesh)]
+        if not meshes:
             return np.ones(len(qs))
-        checker = self.checker   # without clouds: the planning spheres' checker, these obstacles set
-        if len(solid) < len(obstacles):   # with them: the planning spheres against the rest
-            self._slowing.set_obstacles(solid)
+        checker = self.checker   # only meshes: the planning spheres' checker, these obstacles set
+        if len(meshes) < len(obstacles):   # among others: the planning spheres against the meshes alone
+            self._slowing.set_obstacles(meshes)
             checker = self._slowing
         clearance = checker.batch(qs)[:, 0]
         return np.clip(clearance / settings.slow_clearance, settings.slow_speed, 1.0)

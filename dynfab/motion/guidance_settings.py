@@ -99,14 +99,16 @@ class GuidanceSettings:
         speed: fraction of the velocity limits the reference uses [-].
         slow_clearance, slow_speed: on the way (before an approach) the reference's velocity
             limits are further scaled by ``σ(q) = clip(c(q) / slow_clearance, slow_speed, 1)``,
-            ``c(q)`` the planning spheres' clearance from the plan's obstacles but point
-            clouds (:meth:`JointGuidance.speed_scale` says why) [m]: where the
+            ``c(q)`` the planning spheres' clearance from the plan's mesh obstacles
+            (:meth:`JointGuidance.speed_scale` says why not from the others) [m]: where the
             way is tight the reference slows, so the robot lags less behind it and does not
             cut a corner the plan rounds closely (:meth:`JointGuidance.speed_scale`);
             ``slow_clearance`` 0 keeps the speed. Set before measuring (session 18), checked
             on MBM kitchen seed 11/0004 (development: 11 mm into a cupboard with the mesh
-            grid's 10 cm band at full speed, 16.8 mm clear so). Generated MBM seed 12 as
-            posed: 53/56 with it and without it, the mean time to goal 8.4 s instead of 7.3 s.
+            grid's 10 cm band at full speed, 16.8 mm clear so). Among primitives it cost time
+            and gained nothing (generated MBM seed 12 as posed: 53/56 with it and without it,
+            the mean time to goal 8.4 s instead of 7.3 s; cage runs out of time), so from
+            session 19 only meshes slow the way.
         acceleration: fraction of the acceleration limits the reference uses [-]: the
             fabric tracks it with a lag that grows with it, and a lag as it brakes at a
             grasp's approach overshoots into the object.
