@@ -14,7 +14,7 @@ import dynfab
 from dynfab.fabric.leaves.barrier import Barrier
 from dynfab.fabric.leaves.goal import GoalAttractor
 from dynfab.fabric.leaves.surface_points import NearestSurfaceAvoidance
-from dynfab.geometry.cloud_far_side import FAR_SIDE_ANGLE, far_side_points
+from dynfab.geometry.cloud_far_side import FAR_SIDE_ANGLE, SphereMotion, far_side_points, segment_distances
 from dynfab.geometry.point_cloud import PointCloud
 from dynfab.perception.surfaces import SurfaceFeed
 from dynfab.robots.robot import CollisionSphere
@@ -140,6 +140,43 @@ def test_a_far_wall_beyond_the_reach_is_not_written() -> None:
     assert not far.found[0]
 
 
+def _slot_between_walls_over_a_floor(other_wall: float) -> PointCloud:
+    """Walls y = 0.05 and y = ``other_wall`` (x, z in [-0.3, 0.3] x [0, 0.4]) over the floor z = 0,
+    sampled every 5 mm."""
+    a, b = np.meshgrid(np.arange(-0.3, 0.3001, 0.005), np.arange(0.0, 0.4001, 0.005))
+    walls = [np.column_stack([a.ravel(), np.full(a.size, y), b.ravel()]) for y in (0.05, other_wall)]
+    x, y = np.meshgrid(np.arange(-0.3, 0.3001, 0.005), np.arange(other_wall, 0.0501, 0.005))
+    return PointCloud.from_points(np.concatenate([*walls, np.column_stack([x.ravel(), y.ravel(), np.zeros(x.size)])]),
+                                  0.01)
+
+
+@pytest.mark.parametrize("other_wall", [-0.06, -0.3])
+def test_a_sphere_falling_between_two_walls_gets_the_floor_ahead_as_its_far_side_point(other_wall: float) -> None:
+    # table_pick/0089 as a cloud (--seed 8): a hand descending between two objects saw only their
+    # sides and met the table top when it was the nearest point, too fast to stop
+    cloud = _slot_between_walls_over_a_floor(other_wall)
+    centre = np.array([[0.0, 0.01, 0.15]])   # 4 cm from the wall y = 0.05, 15 cm above the floor
+    points, normals, found = _first(cloud, centre)
+    assert normals[0] @ (0.0, -1.0, 0.0) > 0.97   # the wall (voxel centres: not quite square)
+    reach = np.array([0.35])
+    at_rest = far_side_points(cloud, centre, points, normals, found, reach)
+    if other_wall > -0.1:   # at rest the other wall is the far side; far away, there is none
+        assert at_rest.found[0] and at_rest.normals[0] @ (0.0, 1.0, 0.0) > 0.97
+    else:
+        assert not at_rest.found[0]
+    falling = np.array([[0.0, 0.0, -1.2]])   # stops 18 cm lower at 4 m/s²: under the floor
+    moving = far_side_points(cloud, centre, points, normals, found, reach,
+                             SphereMotion(falling, np.array([0.02]), BRAKING.braking))
+    assert moving.found[0]
+    assert moving.normals[0] @ (0.0, 0.0, 1.0) > 0.97   # the floor
+    assert moving.distances[0] == pytest.approx(0.15 - cloud.lowering, abs=0.006)
+    # rising along the wall: the wall's point ahead is no threat, the rest's choice stands
+    rising = far_side_points(cloud, centre, points, normals, found, reach,
+                             SphereMotion(-falling, np.array([0.02]), BRAKING.braking))
+    assert rising.found[0] == at_rest.found[0]
+    np.testing.assert_array_equal(rising.points[rising.found], at_rest.points[at_rest.found])
+
+
 def test_the_scenario_leaf_of_a_cloud_has_a_far_side_slot_per_sphere_and_the_cloud_writer_writes_it_too(
         arm: dynfab.Robot) -> None:
     from dynfab.perception.nearest_cloud_points import NearestCloudPoints
@@ -163,3 +200,13 @@ def test_the_scenario_leaf_of_a_cloud_has_a_far_side_slot_per_sphere_and_the_clo
     NearestCloudPoints(arm, leaf, views, backend="vm").write(q, PointCloud(corner, 0.01))
     for key, expected in written.items():
         np.testing.assert_allclose(views[key], expected, rtol=0.0, atol=1e-12, err_msg=key)
+
+
+def test_segment_distances_match_a_dense_sampling_of_each_segment() -> None:
+    rng = np.random.default_rng(11)
+    starts, ends, points = rng.normal(size=(3, 50, 3))
+    ends[0] = starts[0]   # a segment of length 0: the distance to its point
+    t = np.linspace(0.0, 1.0, 20001)
+    sampled = starts[:, None, :] + t[None, :, None] * (ends - starts)[:, None, :]
+    expected = np.min(np.linalg.norm(sampled - points[:, None, :], axis=2), axis=1)
+    np.testing.assert_allclose(segment_distances(starts, ends, points), expected, atol=1e-6)

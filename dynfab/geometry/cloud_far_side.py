@@ -26,11 +26,33 @@ and written as the nearest points are, ``c + δ n`` (δ the voxel half-diagonal)
 ``‖x − c‖ − δ`` is a lower bound of the distance to a measured point, as the first one's is.
 Any kept point gives a lower bound of the distance to the cloud, so the second slot never
 overstates a clearance; it adds a second barrier where two sides are near.
+
+**Moving spheres: the surface ahead.** A braking leaf (deceleration ``a_b``) acts on the
+clearance left after a stop. Given the sphere's velocity ``v`` [m/s] and radius ``r``
+(:class:`SphereMotion`), the cloud is queried a third time, where the sphere would stop,
+
+    x_s = x + v ‖v‖ / (2 a_b),
+
+and its answer ``c`` is a candidate only if the sphere would touch it on its way there,
+``dist(c, [x, x_s]) − δ < r`` (a sphere sliding along a wall finds the same wall ahead, at
+about its own distance: not a threat, and its tangent plane, turned across the sphere's way,
+would brake it for nothing). The candidates (of all three queries) are ranked by the clearance
+after a stop rather than by their distance: with ``g = ‖x − c‖ − δ`` and ``ġ = n · v`` (the
+distance's rate, ``c`` static),
+
+    b = g − min(ġ, 0)² / (2 a_b)                                                  [m],
+
+the least ``b`` is written. A hand descending between two objects toward the table under
+them saw the objects' sides (its nearest points, and the other object as its far side) and
+met the table top only once it was the nearest point, 44 mm away at 0.9 m/s, too late to
+stop: held-out MotionBenchMaker table_pick/0089 as a cloud (``--seed 8``) put the hand
+15 mm into the true table. Without ``v`` (or ``a_b``) ``b = g``: the nearest candidate wins.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
@@ -38,7 +60,8 @@ from numpy.typing import NDArray
 from dynfab.geometry.mesh_distance import NearestPoints
 from dynfab.geometry.point_cloud import PointCloud
 
-__all__ = ["FAR_SIDE_ANGLE", "FAR_SIDE_SHIFTS", "far_side_points"]
+__all__ = ["FAR_SIDE_ANGLE", "FAR_SIDE_SHIFTS", "SphereMotion", "braking_clearance", "far_side_points",
+           "segment_distances", "stopping_points"]
 
 #: How far beyond the query point the cloud is queried, in multiples of ``x − p`` [-]
 #: (chosen a priori, not tuned; module docstring).
@@ -49,14 +72,59 @@ FAR_SIDE_SHIFTS = (0.25, 1.0)
 FAR_SIDE_ANGLE = math.pi / 4
 
 
+@dataclass(frozen=True)
+class SphereMotion:
+    """How the query points move: spheres braking at a known deceleration.
+
+    Attributes:
+        velocities: The sphere centres' velocities (N, 3) [m/s].
+        radii: The spheres' radii (N,) [m].
+        braking: The leaf's braking deceleration ``a_b`` [m/s²].
+    """
+
+    velocities: NDArray[np.float64]
+    radii: NDArray[np.float64]
+    braking: float
+
+
+def stopping_points(centres: NDArray[np.float64], velocities: NDArray[np.float64], braking: float) -> NDArray[np.float64]:
+    """Where spheres at ``centres`` (N, 3) [m] moving at ``velocities`` (N, 3) [m/s] stop
+    braking at ``braking`` [m/s²]: ``x + v ‖v‖ / (2 a_b)`` (N, 3) [m]."""
+    speeds = np.linalg.norm(velocities, axis=1)
+    return centres + velocities * (speeds / (2.0 * braking))[:, None]
+
+
+def segment_distances(starts: NDArray[np.float64], ends: NDArray[np.float64],
+                      points: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Per row, the distance [m] from ``points`` (N, 3) to the segment from ``starts`` to
+    ``ends`` (N, 3): ``‖a + t (b − a) − c‖``, ``t = clip((c − a)·(b − a)/‖b − a‖², 0, 1)``."""
+    along = ends - starts
+    lengths = np.einsum("ij,ij->i", along, along)
+    t = np.clip(np.einsum("ij,ij->i", points - starts, along) / np.maximum(lengths, 1e-24), 0.0, 1.0)
+    return np.linalg.norm(starts + t[:, None] * along - points, axis=1)
+
+
+def braking_clearance(distances: NDArray[np.float64], directions: NDArray[np.float64],
+                      motion: SphereMotion | None) -> NDArray[np.float64]:
+    """The clearance left after a stop, ``b = g − min(n · v, 0)² / (2 a_b)`` [m], of points at
+    ``distances`` g (N,) [m] in ``directions`` n (N, 3) (from the point to the sphere) from
+    spheres in ``motion`` (velocities v, deceleration a_b); ``g`` itself without it (module
+    docstring)."""
+    if motion is None:
+        return np.asarray(distances, dtype=float)
+    rates = np.einsum("ij,ij->i", np.nan_to_num(directions), motion.velocities)
+    return distances - np.minimum(rates, 0.0) ** 2 / (2.0 * motion.braking)
+
+
 def far_side_points(cloud: PointCloud, centres: NDArray[np.float64], nearest: NDArray[np.float64],
-                    normals: NDArray[np.float64], has_nearest: NDArray[np.bool_],
-                    reach: NDArray[np.float64]) -> NearestPoints:
+                    normals: NDArray[np.float64], has_nearest: NDArray[np.bool_], reach: NDArray[np.float64],
+                    motion: SphereMotion | None = None) -> NearestPoints:
     """Per query point ``x`` (``centres`` (N, 3) [m]) with a nearest surface point (``nearest``
     (N, 3) [m], its unit direction to ``x`` in ``normals`` (N, 3), where ``has_nearest``):
     the kept point of ``cloud`` on its far side moved toward ``x`` by ``δ``, the direction
     to ``x``, the distance ``‖x − c‖ − δ`` [m] and whether one was found within ``reach``
-    (N,) [m] (module docstring)."""
+    (N,) [m]. With the spheres' ``motion``, also the point ahead, and the least clearance
+    after a stop wins (module docstring)."""
     x = np.asarray(centres, dtype=float).reshape(-1, 3)
     count = len(x)
     points, directions = np.full((count, 3), np.nan), np.full((count, 3), np.nan)
@@ -64,31 +132,45 @@ def far_side_points(cloud: PointCloud, centres: NDArray[np.float64], nearest: ND
     rows = np.flatnonzero(has_nearest)
     if cloud.empty or len(rows) == 0:
         return NearestPoints(points, directions, distances, np.zeros(count, dtype=bool))
-    for shift in FAR_SIDE_SHIFTS:
-        _closer_far_side(cloud, x, nearest, normals, rows, reach, shift, points, directions, distances)
+    moved = None if motion is None else SphereMotion(np.asarray(motion.velocities, dtype=float).reshape(-1, 3)[rows],
+                                                     np.asarray(motion.radii, dtype=float)[rows], motion.braking)
+    queries = [(x[rows] + shift * (x[rows] - nearest[rows]), None) for shift in FAR_SIDE_SHIFTS]
+    if moved is not None:
+        queries.append((stopping_points(x[rows], moved.velocities, moved.braking), moved.radii))
+    ranks = np.full(len(rows), np.inf)
+    for beyond, touching in queries:
+        _better_far_side(cloud, x, normals, rows, reach, beyond, touching, moved, ranks, points, directions,
+                         distances)
     return NearestPoints(points, directions, distances, np.isfinite(distances))
 
 
-def _closer_far_side(cloud: PointCloud, x: NDArray[np.float64], nearest: NDArray[np.float64],
-                     normals: NDArray[np.float64], rows: NDArray[np.intp], reach: NDArray[np.float64], shift: float,
+def _better_far_side(cloud: PointCloud, x: NDArray[np.float64], normals: NDArray[np.float64],
+                     rows: NDArray[np.intp], reach: NDArray[np.float64], beyond: NDArray[np.float64],
+                     touching: NDArray[np.float64] | None, motion: SphereMotion | None, ranks: NDArray[np.float64],
                      points: NDArray[np.float64], directions: NDArray[np.float64],
                      distances: NDArray[np.float64]) -> None:
-    """The candidates of one query beyond ``x[rows]`` (``x + shift (x − p)``), written into
-    ``points``, ``directions`` and ``distances`` where they are kept and nearer than what is
-    there (module docstring)."""
-    beyond = x[rows] + shift * (x[rows] - nearest[rows])
-    bound = float(np.max(shift * np.linalg.norm(x[rows] - nearest[rows], axis=1) + reach[rows])) + cloud.lowering
+    """The candidates of one query ``beyond`` (one row per ``x[rows]``), written into
+    ``points``, ``directions`` and ``distances`` where they are kept and rank lower (``ranks``,
+    per row: :func:`braking_clearance`) than what is there; with ``touching`` (radii, per
+    row [m]), only candidates within ``radius + δ`` of the segment from ``x`` to their query point
+    (module docstring)."""
+    bound = float(np.max(np.linalg.norm(beyond - x[rows], axis=1) + reach[rows])) + cloud.lowering
     gaps, index = cloud.tree.query(beyond, distance_upper_bound=bound)
-    hit = np.isfinite(gaps)
-    rows, index = rows[hit], index[hit]
-    candidates = cloud.points[index]
-    offsets = x[rows] - candidates
+    hit = np.flatnonzero(np.isfinite(gaps))
+    candidates = cloud.points[index[hit]]
+    offsets = x[rows[hit]] - candidates
     lengths = np.linalg.norm(offsets, axis=1)
     unit = offsets / np.maximum(lengths, 1e-12)[:, None]
-    turned = np.einsum("ij,ij->i", unit, normals[rows]) < math.cos(FAR_SIDE_ANGLE)
+    turned = np.einsum("ij,ij->i", unit, normals[rows[hit]]) < math.cos(FAR_SIDE_ANGLE)
     gap = lengths - cloud.lowering
-    keep = turned & (lengths > 1e-12) & (gap <= reach[rows]) & (gap < distances[rows])
-    rows, unit, gap, candidates = rows[keep], unit[keep], gap[keep], candidates[keep]
-    points[rows] = candidates + cloud.lowering * unit
-    directions[rows] = unit
-    distances[rows] = gap
+    here = None if motion is None else SphereMotion(motion.velocities[hit], motion.radii[hit], motion.braking)
+    rank = braking_clearance(gap, unit, here)
+    keep = turned & (lengths > 1e-12) & (gap <= reach[rows[hit]]) & (rank < ranks[hit])
+    if touching is not None:
+        keep &= segment_distances(x[rows[hit]], beyond[hit], candidates) - cloud.lowering < touching[hit]
+    hit, unit, gap, candidates = hit[keep], unit[keep], gap[keep], candidates[keep]
+    ranks[hit] = rank[keep]
+    written = rows[hit]
+    points[written] = candidates + cloud.lowering * unit
+    directions[written] = unit
+    distances[written] = gap

@@ -26,7 +26,9 @@ lowering ``δ = h√3/2``, :class:`~dynfab.geometry.point_cloud.PointCloud`), a 
    The written point lies ``δ`` from ``c_i`` toward the sphere, so the leaf's clearance
    ``‖x_i − c_i‖ − δ − r_i`` never exceeds the distance to a measured point;
 4. with a ``far_side`` leaf, its second ``K`` slots: two more KD-tree queries beyond each
-   centre and a third compiled function (:mod:`dynfab.perception.far_side_writer`).
+   centre (three with a braking leaf: also where each sphere would stop, its velocity
+   ``J_{x_i}(q) q̇`` a second output of step 1) and a third compiled function
+   (:mod:`dynfab.perception.far_side_writer`).
 
 The values are those of :class:`~dynfab.perception.surfaces.SurfaceFeed` (the scenario's
 feed) given the same cloud, ``q`` and ``q̇``. An empty cloud skips the queries and writes
@@ -49,9 +51,8 @@ from dynfab.fabric import c_backend
 from dynfab.fabric.backends import default_backend
 from dynfab.fabric.leaves.surface_points import NearestSurfaceAvoidance
 from dynfab.fabric.parameters import LeafViews
-from dynfab.geometry.cloud_far_side import FAR_SIDE_SHIFTS
 from dynfab.geometry.point_cloud import PointCloud
-from dynfab.perception.far_side_writer import beyond, far_side_function
+from dynfab.perception.far_side_writer import beyond, far_side_function, query_count
 from dynfab.robots.robot import Robot
 
 __all__ = ["NearestCloudPoints"]
@@ -84,7 +85,8 @@ class NearestCloudPoints:
         self.index: NDArray[np.integer] = np.zeros(count, dtype=np.int64)
         self._count = count
         self._far_side = leaf.far_side
-        self._grows = leaf.barrier.braking is not None   # the reach depends on q̇
+        self._braking = leaf.barrier.braking
+        self._grows = self._braking is not None   # the reach depends on q̇
         self._static_reach = float(self.reach.max()) if count else 0.0
         self._q = np.zeros(robot.kinematics.dof)
         self._qdot = np.zeros(robot.kinematics.dof)
@@ -94,8 +96,9 @@ class NearestCloudPoints:
         self._reach = self._input[3 * count:4 * count]
         self._nearest = self._input[4 * count:7 * count].reshape(count, 3)
         self._found = self._input[7 * count:8 * count]
-        # far-side candidates: per shift [c_s (3K), f_s (K)]
-        self._far = np.zeros(4 * count * len(FAR_SIDE_SHIFTS))
+        self._velocities = np.zeros((count, 3))   # the sphere centres' velocities [m/s] (braking leaves)
+        # far-side candidates: per query [c_s (3K), f_s (K)]
+        self._far = np.zeros(4 * count * query_count(self._braking))
         if count == 0:
             self._evaluate_centres = self._evaluate_writer = self._evaluate_far = _nothing
             return
@@ -106,6 +109,7 @@ class NearestCloudPoints:
         self._centres_buffer.set_arg(0, memoryview(self._q))
         self._centres_buffer.set_arg(1, memoryview(self._qdot))
         self._centres_buffer.set_res(0, memoryview(self._input[:4 * count]))
+        self._centres_buffer.set_res(1, memoryview(self._velocities.reshape(-1)))
         writer = _evaluable(_writer_function(count), backend)
         self._writer_buffer, self._evaluate_writer = writer.buffer()
         self._writer_buffer.set_arg(0, memoryview(self._input))
@@ -113,12 +117,13 @@ class NearestCloudPoints:
             self._writer_buffer.set_res(slot, memoryview(self._first(key)))
         self._evaluate_far = _nothing
         if self._far_side:
-            far = _evaluable(far_side_function(count, _COMPILED_NAME), backend)
+            far = _evaluable(far_side_function(radii, _COMPILED_NAME, self._braking), backend)
             self._far_buffer, self._evaluate_far = far.buffer()
             self._far_buffer.set_arg(0, memoryview(self._input))
             self._far_buffer.set_arg(1, memoryview(self._first("normals")))
             self._far_buffer.set_arg(2, memoryview(self._first("active")))
             self._far_buffer.set_arg(3, memoryview(self._far))
+            self._far_buffer.set_arg(4, memoryview(self._velocities.reshape(-1)))
             for slot, key in enumerate(_OUTPUTS):
                 self._far_buffer.set_res(slot, memoryview(self._second(key)))
 
@@ -158,11 +163,12 @@ class NearestCloudPoints:
             self._write_far_side(cloud)
 
     def _write_far_side(self, cloud: PointCloud) -> None:
-        """The far-side slots (step 4 of the module docstring): a query per shift, then the
-        compiled choice."""
+        """The far-side slots (step 4 of the module docstring): a query per shift (and the
+        stopping points), then the compiled choice."""
         count = self._count
         for s, (queries, bound) in enumerate(beyond(self._centres, self._first("points").reshape(count, 3),
-                                                    self._first("active"), self._reach, cloud.lowering)):
+                                                    self._first("active"), self._reach, cloud.lowering,
+                                                    self._velocities, self._braking)):
             block = self._far[4 * count * s:4 * count * (s + 1)]
             if cloud.empty:
                 block[3 * count:] = 0.0
@@ -193,15 +199,16 @@ def _writable(views: LeafViews, key: str, leaf: str) -> NDArray[np.float64]:
 
 def _centres_function(robot: Robot, spheres: list[int], reach: NDArray[np.float64],
                       braking: float | None) -> ca.Function:
-    """Step 1 of the module docstring: ``(q, q̇) ↦ [x (3K, row-major), reach (K)]``."""
+    """Step 1 of the module docstring: ``(q, q̇) ↦ ([x (3K, row-major), reach (K)], ẋ (3K,
+    row-major))``."""
     q = ca.SX.sym("q", robot.kinematics.dof)
     qdot = ca.SX.sym("qdot", robot.kinematics.dof)
     centres = robot.sphere_centers(q)[spheres, :]
+    velocities = ca.reshape(ca.jtimes(ca.vec(centres), q, qdot), centres.shape)
     grown = ca.DM(reach)
     if braking is not None:
-        velocities = ca.reshape(ca.jtimes(ca.vec(centres), q, qdot), centres.shape)
         grown = grown + ca.sum2(velocities**2) / (2.0 * braking)
-    return ca.Function(_COMPILED_NAME, [q, qdot], [ca.vertcat(ca.vec(centres.T), grown)])
+    return ca.Function(_COMPILED_NAME, [q, qdot], [ca.vertcat(ca.vec(centres.T), grown), ca.vec(velocities.T)])
 
 
 def _writer_function(count: int) -> ca.Function:

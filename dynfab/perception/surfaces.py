@@ -50,7 +50,7 @@ from numpy.typing import NDArray
 
 from dynfab.fabric.leaves.surface_points import NearestSurfaceAvoidance
 from dynfab.fabric.parameters import LeafViews
-from dynfab.geometry.cloud_far_side import far_side_points
+from dynfab.geometry.cloud_far_side import SphereMotion, braking_clearance, far_side_points
 from dynfab.geometry.mesh_distance import NearestPoints, nearest_on_mesh
 from dynfab.geometry.mesh_shape import Mesh
 from dynfab.geometry.point_cloud import PointCloud
@@ -96,8 +96,9 @@ class SurfaceFeed:
         qdot = ca.SX.sym("qdot", robot.kinematics.dof)
         centres = robot.sphere_centers(q)[list(leaf.spheres), :] if leaf.spheres else ca.SX(0, 3)
         self._centres = ca.Function("sphere_centres", [q], [centres])
-        speeds = ca.sqrt(ca.sum2(ca.reshape(ca.jtimes(ca.vec(centres), q, qdot), centres.shape) ** 2))
-        self._speeds = ca.Function("sphere_speeds", [q, qdot], [speeds])
+        velocities = ca.reshape(ca.jtimes(ca.vec(centres), q, qdot), centres.shape)
+        self._velocities = ca.Function("sphere_velocities", [q, qdot], [velocities])
+        self._speeds = ca.Function("sphere_speeds", [q, qdot], [ca.sqrt(ca.sum2(velocities**2))])
 
     def cloud_reach(self, q: NDArray[np.float64], qdot: NDArray[np.float64] | None) -> NDArray[np.float64]:
         """Per sphere, how far from its centre a cloud's points are looked for [m]:
@@ -143,8 +144,10 @@ class SurfaceFeed:
         active = np.isfinite(best)
         normals[~active] = (0.0, 0.0, 1.0)
         if self.leaf.far_side:
+            motion = None if qdot is None or self._braking is None else SphereMotion(
+                np.asarray(self._velocities(q, qdot), dtype=float).reshape(-1, 3), self._radii, self._braking)
             far_points, far_normals, far_active = self._far_side(centres, points, normals, active, clouds,
-                                                                 allowances, reach)
+                                                                 allowances, reach, motion)
             points, normals = np.concatenate([points, far_points]), np.concatenate([normals, far_normals])
             velocities = np.concatenate([velocities, np.zeros_like(velocities)])
             active = np.concatenate([active, far_active])
@@ -156,16 +159,22 @@ class SurfaceFeed:
     @staticmethod
     def _far_side(centres: NDArray[np.float64], points: NDArray[np.float64], normals: NDArray[np.float64],
                   active: NDArray[np.bool_], clouds: Sequence[PointCloud], allowances: Sequence[float],
-                  reach: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
-        """The far-side slots (:mod:`dynfab.geometry.cloud_far_side`): per sphere the
-        nearest far-side point of the clouds, less each cloud's allowance as the first
-        slots are, its normal and whether there is one (static: velocity 0)."""
+                  reach: NDArray[np.float64], motion: SphereMotion | None
+                  ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
+        """The far-side slots (:mod:`dynfab.geometry.cloud_far_side`): per sphere the far-side
+        point of the clouds with the least clearance after a stop (the nearest without the
+        spheres' ``motion``), less each cloud's allowance as the first slots are, its normal
+        and whether there is one (static: velocity 0)."""
         count = len(centres)
         best = np.full(count, np.inf)
         far_points, far_normals = np.zeros((count, 3)), np.tile((0.0, 0.0, 1.0), (count, 1))
         for cloud, allowance in zip(clouds, allowances, strict=True):
-            found = far_side_points(cloud, centres, points, normals, active, reach - allowance)  # within reach
-            _keep_nearer(found, allowance, np.inf, best, far_points, far_normals)
+            found = far_side_points(cloud, centres, points, normals, active, reach - allowance, motion)  # within reach
+            rank = braking_clearance(found.distances + allowance, found.normals, motion)
+            better = found.found & (rank < best)
+            best[better] = rank[better]
+            far_points[better] = found.points[better] - allowance * found.normals[better]
+            far_normals[better] = found.normals[better]
         return far_points, far_normals, np.isfinite(best)
 
 
