@@ -14,12 +14,12 @@ from dynfab.motion.approach_pull import ApproachPull
 from dynfab.motion.approach_segment import across_segment, along_segment, segment_offset
 from dynfab.motion.guidance import GuidanceSettings, JointTarget
 from dynfab.motion.reference_clock import in_approach
-from dynfab.robots import load_robot
 from dynfab.scenario.guided_controller import make_scenario_controller
 from dynfab.scenario.references import scenario_references
 from dynfab.scenario.schema import scenario_from_dict, validate_for_robot
 from dynfab.sim import simulate
 from wall_scene import WALL_ENTRY, goal_near_the_wall
+from coarse_panda import panda_on_planning_spheres
 
 START = np.array([-1.3, 0.3, 0.0, -1.8, 0.0, 2.1, 0.8])
 DT = 0.01
@@ -27,7 +27,7 @@ DT = 0.01
 
 @pytest.fixture(scope="module")
 def panda():
-    return load_robot("panda")
+    return panda_on_planning_spheres()
 
 
 @pytest.fixture(scope="module")

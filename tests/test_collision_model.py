@@ -16,6 +16,7 @@ from dynfab.robots.builtin import panda_robot
 from dynfab.robots.collision_model import CollisionModel, auto_collision_model, fit_body_spheres, fit_link_spheres
 from dynfab.robots.link_meshes import LinkMeshError, link_collision_meshes
 from dynfab.robots.franka import DYNFAB_LINKS, franka_kinematics
+from dynfab.robots.panda_fine_spheres import PANDA_FINE_SPHERES
 from dynfab.robots.panda_sphere_fit import HAND_LINKS, PLANNING_TIGHT_LINKS
 from dynfab.robots.panda_spheres import PANDA_FITTED_SPHERES
 from dynfab.robots.robot import CollisionSphere
@@ -256,8 +257,18 @@ def test_builtin_panda_spheres_cover_frankas_meshes_within_5_mm(table: str) -> N
     """The built-in Panda's tables (panda_spheres.py) against example-robot-data's meshes,
     link by link (the hand body and each finger have spheres of their own): no point of
     an independent dense sample lies more than 5 mm outside."""
-    kinematics = franka_kinematics()
     spheres, franka_of = _franka_spheres(table)
+    links = _covered_within_5_mm(spheres)
+    counts = {link: int(np.sum(links == link)) for link in DYNFAB_LINKS}
+    _, count, _, most, _ = TABLES[table]
+    assert len(spheres) == count and max(counts.values()) <= most, counts
+    assert set(counts) == set(franka_of.values())
+
+
+def _covered_within_5_mm(spheres: list[CollisionSphere]) -> np.ndarray:
+    """Assert that no point of an independent dense sample of each Franka link's meshes lies
+    more than 5 mm outside the spheres (Franka's link names) of that link; each sphere's link."""
+    kinematics = franka_kinematics()
     links = np.array([s.link for s in spheres])
     centres = np.array([s.center for s in spheres])
     radii = np.array([s.radius for s in spheres])
@@ -265,10 +276,7 @@ def test_builtin_panda_spheres_cover_frankas_meshes_within_5_mm(table: str) -> N
         meshes = link_collision_meshes(kinematics.model, link)
         outside = outside_distances(_independent_surface(meshes), centres[links == link], radii[links == link])
         assert outside.max() <= 0.005 + 1e-9, (link, outside.max())
-    counts = {link: int(np.sum(links == link)) for link in DYNFAB_LINKS}
-    _, count, _, most, _ = TABLES[table]
-    assert len(spheres) == count and max(counts.values()) <= most, counts
-    assert set(counts) == set(franka_of.values())
+    return links
 
 
 def _stick_out(meshes: list[trimesh.Trimesh], centre: np.ndarray, radius: float) -> float:
@@ -355,3 +363,20 @@ def test_builtin_panda_pairs_follow_the_rules_and_see_every_mesh_contact(fingers
 def test_unknown_panda_sphere_model_is_refused() -> None:
     with pytest.raises(ValueError, match="sphere_model"):
         panda_robot("guessed")
+
+
+def test_builtin_panda_fine_spheres_cover_frankas_meshes_within_5_mm_and_reach_at_most_5_mm_out() -> None:
+    """Guidance's second look (panda_fine_spheres.py), every link: no point of an
+    independent dense sample of a link's meshes more than 5 mm outside its spheres, no
+    sphere more than 5 mm out of them (measured on the spheres' surfaces)."""
+    kinematics = franka_kinematics()
+    franka_of = {dynfab: franka for franka, dynfab in DYNFAB_LINKS.items()}
+    spheres = [CollisionSphere(franka_of[link], center, radius) for link, center, radius in PANDA_FINE_SPHERES]
+    assert len(spheres) == 396
+    assert panda_robot("fitted").planning_robot.fine_robot.collision_spheres == tuple(
+        CollisionSphere(link, center, radius) for link, center, radius in PANDA_FINE_SPHERES)
+    _covered_within_5_mm(spheres)
+    meshes = {link: link_collision_meshes(kinematics.model, link) for link in DYNFAB_LINKS}
+    for sphere in spheres:
+        reach = _stick_out(meshes[sphere.link], np.array(sphere.center), sphere.radius)
+        assert reach <= 0.005 + 1e-4, (sphere.link, reach)   # 0.1 mm: the sample's spacing on the sphere

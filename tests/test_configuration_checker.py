@@ -4,6 +4,8 @@ distances by dynfab.geometry.distance), on random configurations and every shape
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -45,7 +47,8 @@ def _reference(robot, obstacles, q: np.ndarray) -> tuple[float, float]:
 
 @pytest.fixture(scope="module")
 def panda():
-    return load_robot("panda")
+    """The fabric's spheres alone (no fine spheres: the kernel against its reference)."""
+    return replace(load_robot("panda"), fine_spheres=None)
 
 
 def test_compiled_kernel_equals_the_numpy_distances(panda) -> None:
@@ -170,3 +173,59 @@ def test_obstacles_set_again_around_the_same_meshes_read_as_a_fresh_checker_read
     assert np.any(moved[:, 0] != first[:, 0])
     checker.set_obstacles(scene(0.15)[:3])   # one fewer: a new buffer, read as fresh
     np.testing.assert_array_equal(checker.batch(qs), ConfigurationChecker(panda, scene(0.15)[:3]).batch(qs))
+
+
+def test_fine_spheres_give_the_larger_clearance_and_every_answer_agrees_with_it() -> None:
+    robot = load_robot("panda").planning_robot
+    assert robot.fine_robot is not None
+    rng = np.random.default_rng(8)
+    obstacles = _scene(rng)
+    checker = ConfigurationChecker(robot, obstacles)
+    coarse = ConfigurationChecker(replace(robot, fine_spheres=None), obstacles)
+    fine = ConfigurationChecker(robot.fine_robot, obstacles)
+    qs = rng.uniform(robot.kinematics.lower, robot.kinematics.upper, (1000, robot.dof))
+    values = checker.batch(qs)
+    expected = coarse.batch(qs)
+    expected[:, 0] = np.maximum(expected[:, 0], fine.batch(qs)[:, 0])
+    np.testing.assert_array_equal(values, expected)
+    margin, self_margin = 0.01, 0.0
+    ok = (values[:, 0] >= margin) & (values[:, 1] >= self_margin)
+    only_fine = ok & ~((coarse.batch(qs)[:, 0] >= margin) & (values[:, 1] >= self_margin))
+    assert only_fine.sum() >= 5   # configurations the fine spheres free
+    assert [checker.free(q, margin, self_margin) for q in qs] == list(ok)
+    assert checker.clearances(qs[0]) == pytest.approx(tuple(values[0]), abs=0.0)
+    for start in range(0, 1000, 50):
+        blocked = np.flatnonzero(~ok[start:start + 50])
+        assert checker.first_blocked(qs[start:start + 50], margin, self_margin) == (blocked[0] if blocked.size else -1)
+    for a, b in zip(qs[:-1:7], qs[1::7]):   # a motion is free exactly when its configurations are
+        free, checked = checker.motion_free(a, b, 0.05, margin, self_margin)
+        count = max(1, int(np.ceil(np.linalg.norm(b - a) / 0.05)))
+        steps = a + (np.arange(count, 0, -1) / count)[:, None] * (b - a)
+        assert free == bool(np.all(checker.batch(steps)[:, 0] >= margin) and np.all(checker.batch(steps)[:, 1] >= 0.0))
+        assert checked >= 1
+
+
+def test_the_second_look_leaves_meshes_and_clouds_to_the_planning_spheres() -> None:
+    import trimesh
+
+    from dynfab.geometry.point_cloud import PointCloud
+    from dynfab.geometry.shapes import Mesh
+
+    robot = load_robot("panda").planning_robot
+    plain = replace(robot, fine_spheres=None)
+    rng = np.random.default_rng(9)
+    slab = trimesh.creation.box(extents=(0.4, 0.05, 0.5))
+    surfaces = [PlacedObstacle(Mesh(slab.vertices, slab.faces, "slab"), Placement((0.45, -0.25, 0.35))),
+                PlacedObstacle(PointCloud.from_points(rng.uniform((0.2, 0.2, 0.0), (0.6, 0.5, 0.02), (2000, 3)), 0.01),
+                               Placement((0.0, 0.0, 0.0)))]
+    primitives = _scene(rng)[:6]
+    qs = rng.uniform(robot.kinematics.lower, robot.kinematics.upper, (400, robot.dof))
+    mixed = ConfigurationChecker(robot, primitives + surfaces)
+    looked = np.minimum(np.maximum(ConfigurationChecker(plain, primitives).batch(qs)[:, 0],
+                                   ConfigurationChecker(robot.fine_robot, primitives).batch(qs)[:, 0]),
+                        ConfigurationChecker(plain, surfaces).batch(qs)[:, 0])
+    values = mixed.batch(qs)
+    np.testing.assert_allclose(values[:, 0], looked, rtol=0.0, atol=1e-12)
+    assert [mixed.free(q, 0.01, 0.0) for q in qs] == list((values[:, 0] >= 0.01) & (values[:, 1] >= 0.0))
+    only_surfaces = ConfigurationChecker(robot, surfaces)   # no second look: its own spheres' clearance
+    np.testing.assert_array_equal(only_surfaces.batch(qs), ConfigurationChecker(plain, surfaces).batch(qs))

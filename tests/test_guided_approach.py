@@ -21,11 +21,11 @@ from dynfab.motion.joint_planning import (ApproachTest, JointPlannerSettings, No
                                           plan_joint_path)
 from dynfab.motion.mesh_goal_check import MeshGoalCheck, robot_mesh_model
 from dynfab.motion.phased_trajectory import PhasedTrajectory
-from dynfab.robots import load_robot
 from dynfab.scenario.guided_controller import make_scenario_controller
 from dynfab.scenario.references import scenario_references
 from dynfab.scenario.schema import scenario_from_dict, validate_for_robot
 from wall_scene import WALL, goal_near_the_wall
+from coarse_panda import panda_on_planning_spheres
 
 START = np.array([-1.3, 0.3, 0.0, -1.8, 0.0, 2.1, 0.8])
 DT = 0.01
@@ -34,7 +34,7 @@ FAST = JointPlannerSettings(time_limit=0.5)
 
 @pytest.fixture(scope="module")
 def panda():
-    return load_robot("panda")
+    return panda_on_planning_spheres()
 
 
 @pytest.fixture(scope="module")

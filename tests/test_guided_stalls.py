@@ -13,11 +13,11 @@ from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObst
 from dynfab.motion.guidance import JointGuidance, JointTarget
 from dynfab.motion.inverse_kinematics import PointTarget
 from dynfab.motion.plan_requests import PlanRequest, make_plan
-from dynfab.robots import load_robot
 from dynfab.scenario.references import scenario_references
 from dynfab.scenario.guided_controller import make_scenario_controller
 from dynfab.scenario.schema import scenario_from_dict, validate_for_robot
 from wall_scene import GOAL, START, WALL, WALL_ENTRY
+from coarse_panda import panda_on_planning_spheres
 
 DT = 0.01
 #: how far [rad] from START the reference is when a sphere is put halfway between them
@@ -26,7 +26,7 @@ AHEAD = 0.2
 
 @pytest.fixture(scope="module")
 def panda():
-    return load_robot("panda")
+    return panda_on_planning_spheres()
 
 
 def _guided(panda):

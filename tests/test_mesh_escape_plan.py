@@ -18,15 +18,15 @@ from dynfab.motion.mesh_escape import MeshEscapeSettings
 from dynfab.motion.phased_trajectory import PhasedTrajectory
 from dynfab.motion.plan_values import Plan
 from dynfab.motion.mesh_escape_plan import LEAF_SLACK, EscapeScene, escape_plan, mesh_allowances, search_margins
-from dynfab.robots import load_robot
 from test_mesh_goal_check import BESIDE_LINK2, Q   # a cube the spheres touch at Q, the meshes clear by 1.7 cm
+from coarse_panda import panda_on_planning_spheres
 
 START = Q + np.array([0.3, 0.8, 0.0, 0.2, 0.0, 0.0, 0.0])
 
 
 @pytest.fixture(scope="module")
 def panda():
-    return load_robot("panda")
+    return panda_on_planning_spheres()
 
 
 def _scene(panda, escape: MeshEscapeSettings) -> EscapeScene:

@@ -15,11 +15,11 @@ from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObst
 from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance
 from dynfab.motion.inverse_kinematics import IkSettings
 from dynfab.motion.mesh_goal_check import MeshGoalCheck
-from dynfab.robots import load_robot
 from dynfab.robots.builtin_meshes import builtin_collision_meshes
 from dynfab.robots.mesh_collision import mesh_collision_model, moving_part
 from dynfab.robots.mesh_sweep import PlacedShape, sweep_meshes
 from wall_scene import hand_pose_targets
+from coarse_panda import panda_on_planning_spheres
 
 Q = np.array([1.0, 0.0, 0.0, -1.5, 0.0, 1.8675, 0.0])
 #: a 2 cm cube that touches panda_link2's sphere at Q (2.6 mm deep) and clears its mesh by 1.7 cm
@@ -28,7 +28,7 @@ BESIDE_LINK2 = PlacedObstacle(Box((0.02, 0.02, 0.02)), Placement((-0.01947183, -
 
 @pytest.fixture(scope="module")
 def panda():
-    return load_robot("panda")
+    return panda_on_planning_spheres()
 
 
 @pytest.fixture(scope="module")

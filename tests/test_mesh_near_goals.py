@@ -14,8 +14,8 @@ import pytest
 from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance, JointTarget
 from dynfab.motion.inverse_kinematics import IkSettings
 from dynfab.motion.joint_planning import polyline_samples
-from dynfab.robots import load_robot
 from wall_scene import AWAY, MESH_WALL, START, goal_near_the_wall, hand_pose_targets
+from coarse_panda import panda_on_planning_spheres
 
 #: The goal's clearance from the wall on the robot's meshes [m]: between the floor and the margin.
 GOAL_CLEARANCE = 0.0025
@@ -25,7 +25,7 @@ ONLY_HERE = IkSettings(seeds=1)
 
 @pytest.fixture(scope="module")
 def panda():
-    return load_robot("panda")
+    return panda_on_planning_spheres()
 
 
 @pytest.fixture(scope="module")

@@ -26,6 +26,27 @@ bounding spheres and an early exit when only validity is asked), or, without a C
 compiler, as numpy distances over the CasADi forward kinematics evaluated per
 configuration (the same numbers, slower).
 
+**A second look on fine spheres.** A robot with
+:attr:`~dynfab.robots.robot.Robot.fine_spheres` (the built-in Panda's: every link within
+5 mm of its meshes, 396 spheres against guidance's 101) is checked against the primitive
+shapes ``P`` (spheres, boxes, cylinders, capsules, planes) with the larger of the two sets'
+clearances, against meshes and point clouds ``S`` with its own spheres alone:
+
+    c_obs(q) = min( max(c_P(q; spheres), c_P(q; fine spheres)),  c_S(q; spheres) )   [m]
+
+(each set leaves at most 5 mm of the meshes outside, so the larger is as safe as either),
+``c_self`` on the planning spheres' pairs alone. Not among meshes: there the fabric's leaves
+get no allowance along the plan's way (:mod:`dynfab.motion.allowance_tables`), and plans
+that the fine spheres let closer to a kitchen's walls left its larger spheres lagging until
+they stalled (MBM kitchen seed 11/0016). The fine set is evaluated only where the
+other finds a configuration blocked (:meth:`ConfigurationChecker.free`,
+:meth:`~ConfigurationChecker.first_blocked`, :meth:`~ConfigurationChecker.motion_free`: a
+motion blocked on the planning spheres is checked again at every configuration); the
+values (:meth:`~ConfigurationChecker.clearances`, :meth:`~ConfigurationChecker.batch`)
+evaluate both. Why: the planning spheres reach up to 1 cm out of the wrist and the hand and
+2 cm elsewhere, and refused goals and ways free on the meshes (``goal_in_collision``,
+``no_path``; docs/results.md, session 19).
+
 A straight motion ``q(s) = a + s (b − a)``, ``s ∈ [0, 1]``, is free when the
 configurations at most ``step`` apart along it are (:meth:`ConfigurationChecker.motion_free`:
 ``b`` first, then coarse to fine, in one compiled call).
@@ -36,7 +57,7 @@ from __future__ import annotations
 import ctypes
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import casadi as ca
 import numpy as np
@@ -102,6 +123,13 @@ class ConfigurationChecker:
         self._moving = moving_spheres(robot)       # the spheres c_obs is over
         self._obstacles: tuple[PlacedObstacle, ...] = ()
         self._rows = np.zeros(0)
+        # the second look (module docstring): a robot's that plans on its own spheres (not the
+        # fabric's spheres of a robot with planning spheres: guidance checks those among clouds)
+        fine = robot.fine_robot if robot.planning_robot is robot else None
+        self._fine = None if fine is None else ConfigurationChecker(fine)   # on the primitives
+        self._surfaces: ConfigurationChecker | None = None   # these spheres on the meshes and clouds alone
+        self._second_look = False   # fine spheres and primitives among the obstacles
+        self._mixed = False         # primitives and surfaces among the obstacles
         self.set_obstacles(obstacles)
 
     @property
@@ -118,6 +146,8 @@ class ConfigurationChecker:
         into the buffer in place: the grids (13-32 MB a mesh of MBM kitchen) are not copied
         again (a guided run sets its checkers' obstacles at every plan)."""
         obstacles = tuple(obstacles)
+        if self._fine is not None:
+            self._set_second_look(obstacles)
         if self._rows.size and _same_grids(self._obstacles, obstacles):
             head = self._rows[:len(obstacles) * _ROW].reshape(-1, _ROW)
             rows = np.array([_row(o) for o in obstacles]).reshape(-1, _ROW)
@@ -133,7 +163,83 @@ class ConfigurationChecker:
         self._count = ctypes.c_int(len(self._obstacles))
 
     def clearances(self, q: NDArray[np.float64]) -> tuple[float, float]:
-        """``(c_obs, c_self)`` at one configuration [m]."""
+        """``(c_obs, c_self)`` at one configuration [m] (with fine spheres, ``c_obs`` of the
+        second look, module docstring)."""
+        obstacle, itself = self._own_clearances(q)
+        if self._second_look:
+            q = np.ascontiguousarray(q, dtype=float).reshape(1, self._n)
+            obstacle = float(self._looked_again(np.array([obstacle]), q)[0])
+        return obstacle, itself
+
+    def batch(self, qs: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``(c_obs, c_self)`` at every row of ``qs`` (N, n), shape (N, 2)."""
+        qs = np.ascontiguousarray(qs, dtype=float).reshape(-1, self._n)
+        out = self._own_batch(qs)
+        if self._second_look:
+            out[:, 0] = self._looked_again(out[:, 0], qs)
+        return out
+
+    def free(self, q: NDArray[np.float64], margin: float, self_margin: float) -> bool:
+        """Whether ``c_obs(q) ≥ margin`` and ``c_self(q) ≥ self_margin`` (stops at the first
+        clearance below its margin; the fine spheres only where the others find ``q``
+        blocked)."""
+        if self._own_free(q, margin, self_margin):
+            return True
+        if not self._second_look or self._own_clearances(q)[1] < self_margin:
+            return False
+        assert self._fine is not None
+        surfaces_free = self._surfaces is None or not self._mixed or self._surfaces._own_free(q, margin, -math.inf)
+        return surfaces_free and self._fine._own_free(q, margin, -math.inf)
+
+    def first_blocked(self, qs: NDArray[np.float64], margin: float, self_margin: float) -> int:
+        """Index of the first row of ``qs`` (N, n) with ``c_obs < margin`` or
+        ``c_self < self_margin``, or -1 if every row is free (stops at the first)."""
+        qs = np.ascontiguousarray(qs, dtype=float).reshape(-1, self._n)
+        first = self._own_first_blocked(qs, margin, self_margin)
+        if first < 0 or not self._second_look:
+            return first
+        values = self.batch(qs[first:])
+        blocked = np.flatnonzero((values[:, 0] < margin) | (values[:, 1] < self_margin))
+        return first + int(blocked[0]) if blocked.size else -1
+
+    def motion_free(self, a: NDArray[np.float64], b: NDArray[np.float64], step: float, margin: float,
+                    self_margin: float) -> tuple[bool, int]:
+        """Whether the straight motion from ``a`` to ``b`` (n,) is free at configurations at
+        most ``step`` [rad] apart, ``b`` included and ``a`` not (module docstring), and how
+        many configurations were checked to know it (with fine spheres, where the others
+        find the motion blocked, it is checked again at every configuration)."""
+        free, checked = self._own_motion_free(a, b, step, margin, self_margin)
+        if free or not self._second_look:
+            return free, checked
+        qs = _motion_configurations(a, b, step)
+        blocked = self.first_blocked(qs, margin, self_margin)
+        return blocked < 0, checked + (len(qs) if blocked < 0 else blocked + 1)
+
+    def _set_second_look(self, obstacles: tuple[PlacedObstacle, ...]) -> None:
+        """The fine spheres' obstacles: the primitives; and, beside primitives, these spheres'
+        own checker of the meshes and clouds alone (module docstring)."""
+        assert self._fine is not None
+        primitives = tuple(o for o in obstacles if not _gridded(o))
+        surfaces = tuple(o for o in obstacles if _gridded(o))
+        self._fine.set_obstacles(primitives)
+        self._second_look = bool(primitives)
+        self._mixed = bool(primitives and surfaces)
+        if self._mixed:
+            if self._surfaces is None:
+                self._surfaces = ConfigurationChecker(replace(self.robot, fine_spheres=None))
+            self._surfaces.set_obstacles(surfaces)
+
+    def _looked_again(self, own: NDArray[np.float64], qs: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``c_obs`` of the second look at ``qs`` (N, n) given this checker's own ``own`` (N,):
+        ``min(max(own, fine on the primitives), own on the meshes and clouds)`` [m]."""
+        assert self._fine is not None
+        looked = np.maximum(own, self._fine._own_batch(qs)[:, 0])
+        if self._mixed and self._surfaces is not None:
+            np.minimum(looked, self._surfaces._own_batch(qs)[:, 0], out=looked)
+        return looked
+
+    def _own_clearances(self, q: NDArray[np.float64]) -> tuple[float, float]:
+        """:meth:`clearances` of this checker's spheres alone."""
         if self._library is None:
             obstacle, itself = self._numpy(np.asarray(q, dtype=float)[None])[0]
             return float(obstacle), float(itself)
@@ -144,11 +250,17 @@ class ConfigurationChecker:
     def exact_free(self, q: NDArray[np.float64], margin: float, self_margin: float) -> bool:
         """:meth:`free` on the exact distances (numpy: a mesh's triangles, not its grid;
         milliseconds a configuration, for a few candidates such as goals)."""
-        obstacle, itself = self._numpy(np.asarray(q, dtype=float)[None])[0]
+        qs = np.asarray(q, dtype=float).reshape(1, self._n)
+        obstacle, itself = self._numpy(qs)[0]
+        if self._second_look and obstacle < margin:
+            assert self._fine is not None
+            obstacle = max(obstacle, self._fine._numpy(qs)[0, 0])
+            if self._mixed and self._surfaces is not None:
+                obstacle = min(obstacle, self._surfaces._numpy(qs)[0, 0])
         return bool(obstacle >= margin and itself >= self_margin)
 
-    def batch(self, qs: NDArray[np.float64]) -> NDArray[np.float64]:
-        """``(c_obs, c_self)`` at every row of ``qs`` (N, n), shape (N, 2)."""
+    def _own_batch(self, qs: NDArray[np.float64]) -> NDArray[np.float64]:
+        """:meth:`batch` of this checker's spheres alone."""
         qs = np.ascontiguousarray(qs, dtype=float).reshape(-1, self._n)
         if self._library is None:
             return self._numpy(qs)
@@ -157,11 +269,10 @@ class ConfigurationChecker:
                                  as_pointer(out))
         return out
 
-    def free(self, q: NDArray[np.float64], margin: float, self_margin: float) -> bool:
-        """Whether ``c_obs(q) ≥ margin`` and ``c_self(q) ≥ self_margin`` (stops at the first
-        clearance below its margin)."""
+    def _own_free(self, q: NDArray[np.float64], margin: float, self_margin: float) -> bool:
+        """:meth:`free` of this checker's spheres alone."""
         if self._library is None:
-            obstacle, itself = self.clearances(q)
+            obstacle, itself = self._own_clearances(q)
             return obstacle >= margin and itself >= self_margin
         if (margin, self_margin) != self._margins:  # the planner asks with the same margins every time
             self._margins = (margin, self_margin)
@@ -170,10 +281,8 @@ class ConfigurationChecker:
         return self._library.first_blocked_unconverted(self._q_address, _ONE, self._rows_address, self._count,
                                                        *self._margin_values) < 0
 
-    def first_blocked(self, qs: NDArray[np.float64], margin: float, self_margin: float) -> int:
-        """Index of the first row of ``qs`` (N, n) with ``c_obs < margin`` or
-        ``c_self < self_margin``, or -1 if every row is free (stops at the first)."""
-        qs = np.ascontiguousarray(qs, dtype=float).reshape(-1, self._n)
+    def _own_first_blocked(self, qs: NDArray[np.float64], margin: float, self_margin: float) -> int:
+        """:meth:`first_blocked` of this checker's spheres alone (``qs`` contiguous (N, n))."""
         if self._library is None:
             values = self._numpy(qs)
             blocked = np.flatnonzero((values[:, 0] < margin) | (values[:, 1] < self_margin))
@@ -181,16 +290,13 @@ class ConfigurationChecker:
         return int(self._library.first_blocked(as_pointer(qs), qs.shape[0], self._rows_pointer,
                                                len(self._obstacles), margin, self_margin))
 
-    def motion_free(self, a: NDArray[np.float64], b: NDArray[np.float64], step: float, margin: float,
-                    self_margin: float) -> tuple[bool, int]:
-        """Whether the straight motion from ``a`` to ``b`` (n,) is free at configurations at
-        most ``step`` [rad] apart, ``b`` included and ``a`` not (module docstring), and how
-        many configurations were checked to know it."""
+    def _own_motion_free(self, a: NDArray[np.float64], b: NDArray[np.float64], step: float, margin: float,
+                         self_margin: float) -> tuple[bool, int]:
+        """:meth:`motion_free` of this checker's spheres alone."""
         if self._library is None:
-            count = max(1, math.ceil(float(np.linalg.norm(b - a)) / step))
-            qs = a + (np.arange(count, 0, -1) / count)[:, None] * (b - a)  # b first
-            blocked = self.first_blocked(qs, margin, self_margin)
-            return blocked < 0, count if blocked < 0 else blocked + 1
+            qs = _motion_configurations(a, b, step)
+            blocked = self._own_first_blocked(qs, margin, self_margin)
+            return blocked < 0, len(qs) if blocked < 0 else blocked + 1
         self._q[:] = a
         self._b[:] = b
         checked = self._library.motion_free(self._q_pointer, self._b_pointer, step, self._rows_pointer,
@@ -215,6 +321,13 @@ class ConfigurationChecker:
                 gaps = np.linalg.norm(centres[pairs[:, 0]] - centres[pairs[:, 1]], axis=1)
                 out[row, 1] = float((gaps - radii[pairs[:, 0]] - radii[pairs[:, 1]]).min())
         return out
+
+
+def _motion_configurations(a: NDArray[np.float64], b: NDArray[np.float64], step: float) -> NDArray[np.float64]:
+    """The configurations of the straight motion from ``a`` to ``b`` at most ``step`` [rad]
+    apart, ``b`` first, ``a`` left out: the ones the compiled ``motion_free`` checks."""
+    count = max(1, math.ceil(float(np.linalg.norm(b - a)) / step))
+    return a + (np.arange(count, 0, -1) / count)[:, None] * (b - a)
 
 
 def _gridded(obstacle: PlacedObstacle) -> bool:

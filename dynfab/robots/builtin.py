@@ -13,6 +13,7 @@ import numpy as np
 from .collision_model import auto_collision_model
 from .franka import FINGER_JOINT, FINGER_RANGE, OPEN, PANDA_JOINTS
 from .kinematics import Kinematics
+from .panda_fine_spheres import PANDA_FINE_SPHERES
 from .panda_spheres import PANDA_FITTED_PAIRS, PANDA_FITTED_SPHERES, PANDA_PLANNING_PAIRS, PANDA_PLANNING_SPHERES
 from .limits import BOXER_ACCELERATION, FRANKA_ACCELERATION, MotionLimits
 from .robot import BASE_JOINTS, CollisionSphere, DifferentialDriveBase, Robot, default_limits
@@ -239,17 +240,20 @@ def panda_robot(sphere_model: str, fingers: float = OPEN) -> Robot:
     kinematics = _builtin_kinematics("panda.urdf", PANDA_JOINTS, fingers)
     planning: tuple[CollisionSphere, ...] | None = None
     planning_pairs: tuple[tuple[int, int], ...] = ()
+    fine: tuple[CollisionSphere, ...] | None = None
     if sphere_model == "fitted":
         spheres = _spheres(PANDA_FITTED_SPHERES)
         pairs = PANDA_FITTED_PAIRS
         planning, planning_pairs = _planning_spheres(), PANDA_PLANNING_PAIRS
+        fine = _spheres(PANDA_FINE_SPHERES)
     else:
         labels = [label for label, *_ in _PANDA_SPHERES]
         spheres = tuple(CollisionSphere(link, center, radius) for _, link, center, radius in _PANDA_SPHERES)
         pairs = tuple((labels.index(a), labels.index(b)) for a, b in _PANDA_SELF_COLLISION)
     return Robot(name="panda", kinematics=kinematics, goal_link="panda_hand", collision_spheres=spheres,
                  self_collision_pairs=pairs, planar=False, default_q=np.array(PANDA_DEFAULT_Q),
-                 limits=_known_limits(kinematics, None), planning_spheres=planning, planning_pairs=planning_pairs)
+                 limits=_known_limits(kinematics, None), planning_spheres=planning, planning_pairs=planning_pairs,
+                 fine_spheres=fine)
 
 
 def _spheres(table: Sequence[tuple[str, tuple[float, float, float], float]]) -> tuple[CollisionSphere, ...]:

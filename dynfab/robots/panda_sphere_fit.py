@@ -2,6 +2,7 @@
 command that rewrites that file:
 
     python -m dynfab.robots.panda_sphere_fit > dynfab/robots/panda_spheres.py
+    python -m dynfab.robots.panda_sphere_fit --fine > dynfab/robots/panda_fine_spheres.py
 
 From Franka's collision meshes as example-robot-data ships them (``panda.urdf``, active
 joints ``panda_joint1..7``), whose frames ``panda_link0`` ... ``panda_link7``, ``panda_hand``
@@ -34,6 +35,10 @@ pairs :data:`PANDA_PAIRS`) and global guidance's (``PANDA_PLANNING_*``:
 :data:`PLANNING_TIGHT_LINKS` at :data:`HAND_BULGE`, pairs :data:`PLANNING_PAIRS`; the
 other links' spheres are the same). Why two: ``panda_spheres.py``.
 
+A third table, ``panda_fine_spheres.py`` (``--fine``): every link at :data:`FINE_BULGE`,
+no pairs, guidance's second look where its spheres say blocked
+(:attr:`~dynfab.robots.robot.Robot.fine_spheres`).
+
 The summary at the end of ``panda_spheres.py`` is measured on the final (snapped,
 rounded) spheres: coverage on the 2 mm check points plus their spacing bound, bulge as
 :func:`~dynfab.geometry.sphere_fitting.sphere_bulges` bounds it.
@@ -56,14 +61,16 @@ from .robot import CollisionSphere
 from .self_collision import PairSelection, select_pairs
 
 # PANDA_URDF lives in dynfab.robots.franka; importers of it from here keep working.
-__all__ = ["ARM_BULGE", "HAND_BULGE", "HAND_LINKS", "PANDA_FIT", "PANDA_PAIRS", "PANDA_URDF", "PLANNING_PAIRS",
-           "PLANNING_TIGHT_LINKS", "TOLERANCE", "fit_panda", "measured", "table_module"]
+__all__ = ["ARM_BULGE", "FINE_BULGE", "HAND_BULGE", "HAND_LINKS", "PANDA_FIT", "PANDA_PAIRS", "PANDA_URDF", "PLANNING_PAIRS",
+           "PLANNING_TIGHT_LINKS", "TOLERANCE", "fit_fine", "fit_panda", "measured", "table_module"]
 
 #: Largest distance of a mesh surface point outside the spheres [m]. The seeds these
 #: bounds were chosen and checked on, and held-out results: panda_spheres.py.
 TOLERANCE = 0.005
 #: Largest distance a sphere reaches out of the meshes: hand and fingers, the rest [m].
 HAND_BULGE, ARM_BULGE = 0.01, 0.02
+#: Largest distance a sphere of the fine table reaches out of the meshes, every link [m].
+FINE_BULGE = 0.005
 #: Franka's links with the tighter bulge bound.
 HAND_LINKS = ("panda_hand", "panda_leftfinger", "panda_rightfinger")
 #: ... in guidance's spheres: also the two links before the hand, which enter shelves and
@@ -123,6 +130,26 @@ def fit_panda(tight: Sequence[str] = HAND_LINKS, selection: PairSelection = PAND
     return renamed, tuple(pairs)
 
 
+def fit_fine() -> tuple[LinkFit, ...]:
+    """The fine table: every link at :data:`FINE_BULGE` (coverage :data:`TOLERANCE`), snapped
+    and rounded as the other tables (step 3; a ``panda_link1`` sphere onto joint 1's axis
+    where the bound allows), coverage and bulge measured; dynfab's link names.
+
+    Raises:
+        FileNotFoundError: example-robot-data is not installed.
+    """
+    kinematics = franka_kinematics(OPEN)
+    fine = replace(PANDA_FIT, max_bulge=FINE_BULGE - _HEADROOM)
+    fits = []
+    for fit in fit_link_spheres(kinematics, fine, {link: fine for link in DYNFAB_LINKS}):
+        meshes = link_collision_meshes(kinematics.model, fit.link)
+        spheres = tuple(_rounded(_onto_axis(s, meshes, FINE_BULGE)) for s in fit.spheres)
+        fits.append(measured(LinkFit(fit.link, spheres, fit.coverage, fit.bulge), meshes))
+    return tuple(LinkFit(DYNFAB_LINKS[fit.link], tuple(CollisionSphere(DYNFAB_LINKS[s.link], s.center, s.radius)
+                                                       for s in fit.spheres), fit.coverage, fit.bulge)
+                 for fit in fits)
+
+
 def measured(fit: LinkFit, meshes: Sequence) -> LinkFit:
     """``fit`` with its coverage and bulge measured on ``meshes`` (its link's, link frame):
     coverage on the meshes' vertices subdivided to :attr:`PANDA_FIT` ``.check_edge`` plus
@@ -155,14 +182,16 @@ def _rounded(sphere: CollisionSphere) -> CollisionSphere:
 
 #: A table of ``panda_spheres.py``: its name's prefix (``PANDA_FITTED``), what it is for,
 #: the fits per link (those written: a table may leave out the links it shares with the
-#: one before) and the pairs (into all its spheres, in the links' order).
-Table = tuple[str, str, Sequence[LinkFit], Sequence[tuple[int, int]]]
+#: one before) and the pairs (into all its spheres, in the links' order; None: a table
+#: without pairs, ``panda_fine_spheres.py``).
+Table = tuple[str, str, Sequence[LinkFit], Sequence[tuple[int, int]] | None]
 
 
 def table_module(tables: Sequence[Table], docstring: str) -> str:
     """The text of ``panda_spheres.py``: ``docstring``, then each table's spheres
     (``<prefix>_SPHERES``) and pairs (``<prefix>_PAIRS``)."""
-    names = sorted(f"{prefix}_{kind}" for prefix, *_ in tables for kind in ("PAIRS", "SPHERES"))
+    names = sorted(f"{prefix}_{kind}" for prefix, _, _, pairs in tables
+                   for kind in (("PAIRS", "SPHERES") if pairs is not None else ("SPHERES",)))
     lines = [f'"""{docstring.strip()}\n"""', "", "from __future__ import annotations", "",
              f"__all__ = [{', '.join(f'{chr(34)}{name}{chr(34)}' for name in names)}]"]
     for prefix, purpose, fits, pairs in tables:
@@ -172,7 +201,10 @@ def table_module(tables: Sequence[Table], docstring: str) -> str:
             for s in fit.spheres:
                 centre = ", ".join(f"{x:.4f}" for x in s.center)
                 lines.append(f'    ("{s.link}", ({centre}), {s.radius:.4f}),')
-        lines += [")", "", f"#: Index pairs into {prefix}_SPHERES kept apart.",
+        lines.append(")")
+        if pairs is None:
+            continue
+        lines += ["", f"#: Index pairs into {prefix}_SPHERES kept apart.",
                   f"{prefix}_PAIRS: tuple[tuple[int, int], ...] = ("]
         cells = [f"({a}, {b})," for a, b in pairs]
         for start in range(0, len(cells), 10):
@@ -187,12 +219,15 @@ def _summary(table: Table, total: int) -> str:
     prefix, _, fits, pairs = table
     rows = [f"    {fit.link:<17} {len(fit.spheres):>2} spheres, coverage {1000 * fit.coverage:.1f} mm, "
             f"bulge {1000 * fit.bulge:.1f} mm" for fit in fits]
-    return "\n".join([f"{prefix}:", ""] + rows + [f"    {total} spheres, {len(pairs)} self-collision pairs"])
+    pairs_text = "no self-collision pairs" if pairs is None else f"{len(pairs)} self-collision pairs"
+    return "\n".join([f"{prefix}:", ""] + rows + [f"    {total} spheres, {pairs_text}"])
 
 
-def main() -> int:
+def main(argv: Sequence[str] = ()) -> int:
     """Print the regenerated ``panda_spheres.py``: its current docstring up to
-    ``Fitted:``, a new summary, the new tables."""
+    ``Fitted:``, a new summary, the new tables; with ``--fine``, ``panda_fine_spheres.py``."""
+    if "--fine" in argv:
+        return _print_fine()
     from . import panda_spheres
 
     fabric, fabric_pairs = fit_panda()
@@ -212,5 +247,20 @@ def main() -> int:
     return 0
 
 
+def _print_fine() -> int:
+    """Print the regenerated ``panda_fine_spheres.py``: its current docstring up to
+    ``Fitted:``, a new summary, the table."""
+    from . import panda_fine_spheres
+
+    fits = fit_fine()
+    table: Table = ("PANDA_FINE", "Guidance's second look, every link at FINE_BULGE", fits, None)
+    head, _, _ = (panda_fine_spheres.__doc__ or "").partition("Fitted:")
+    summary = _summary(table, sum(len(f.spheres) for f in fits))
+    print(table_module([table], f"{head.rstrip()}\n\nFitted:\n\n{summary}"), end="")
+    return 0
+
+
 if __name__ == "__main__":
-    raise SystemExit(main())
+    import sys
+
+    raise SystemExit(main(sys.argv[1:]))

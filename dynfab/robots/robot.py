@@ -128,6 +128,14 @@ class Robot:
             plan reach goals close to obstacles; the fabric keeps ``collision_spheres``, whose
             obstacle leaves act one per sphere, so more spheres on a link push it harder.
         planning_pairs: Index pairs into ``planning_spheres`` that must not overlap.
+        fine_spheres: Spheres that fit the meshes more tightly (more of them), or None:
+            where guidance's spheres find a configuration closer to the obstacles than its
+            margin, its checker asks these (:attr:`fine_robot`), and the configuration is
+            free if either set finds it so
+            (:class:`~dynfab.motion.configuration_checker.ConfigurationChecker`). Kept by
+            :attr:`planning_robot`, and used by the checker of a robot that plans on its own
+            spheres (that one, or a robot without ``planning_spheres``), not on the fabric's
+            spheres of a robot that has them; self-collision stays with the planning spheres.
 
     Convention for a robot with a ``base``: its first three joints (in the order of
     ``kinematics.joint_names``) are ``base_x`` (prismatic along world x), ``base_y``
@@ -158,6 +166,7 @@ class Robot:
     limits: MotionLimits | None = None
     planning_spheres: tuple[CollisionSphere, ...] | None = None
     planning_pairs: tuple[tuple[int, int], ...] = ()
+    fine_spheres: tuple[CollisionSphere, ...] | None = None
 
     def __post_init__(self) -> None:
         kin = self.kinematics
@@ -176,6 +185,9 @@ class Robot:
                                self._checked("planning pair", self.planning_spheres, self.planning_pairs))
         elif self.planning_pairs:
             raise ValueError(f"robot '{self.name}': planning_pairs need planning_spheres")
+        if self.fine_spheres is not None:
+            object.__setattr__(self, "fine_spheres", tuple(self.fine_spheres))
+            self._checked("fine sphere", self.fine_spheres, ())
         default_q = np.array(self.default_q, dtype=float).reshape(-1)
         if default_q.size != kin.dof:
             raise ValueError(f"robot '{self.name}': default_q must have {kin.dof} "
@@ -215,6 +227,15 @@ class Robot:
             return self
         return replace(self, collision_spheres=self.planning_spheres, self_collision_pairs=self.planning_pairs,
                        planning_spheres=None, planning_pairs=())
+
+    @cached_property
+    def fine_robot(self) -> Robot | None:
+        """The robot with ``fine_spheres`` as its collision spheres and no pairs (the
+        second look of :attr:`fine_spheres`), or None without them."""
+        if self.fine_spheres is None:
+            return None
+        return replace(self, collision_spheres=self.fine_spheres, self_collision_pairs=(), planning_spheres=None,
+                       planning_pairs=(), fine_spheres=None)
 
     @property
     def velocity_names(self) -> tuple[str, ...]:
