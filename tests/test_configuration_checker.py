@@ -229,3 +229,12 @@ def test_the_second_look_leaves_meshes_and_clouds_to_the_planning_spheres() -> N
     assert [mixed.free(q, 0.01, 0.0) for q in qs] == list((values[:, 0] >= 0.01) & (values[:, 1] >= 0.0))
     only_surfaces = ConfigurationChecker(robot, surfaces)   # no second look: its own spheres' clearance
     np.testing.assert_array_equal(only_surfaces.batch(qs), ConfigurationChecker(plain, surfaces).batch(qs))
+
+
+def test_the_motion_order_is_the_compiled_kernels() -> None:
+    from dynfab.motion.configuration_checker import _motion_order
+
+    for count in range(1, 40):
+        order = _motion_order(count)
+        assert order[0] == count and sorted(order) == list(range(1, count + 1))
+    assert _motion_order(8) == [8, 4, 2, 6, 1, 3, 5, 7]

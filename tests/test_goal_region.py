@@ -121,12 +121,19 @@ def wall_goal():
     guidance = JointGuidance(panda)
     guidance.set_obstacles([MESH_WALL])
     meshes = guidance._meshes()
-    far, close = goal_near_the_wall(panda, 0.0), goal_near_the_wall(panda, 0.0)
+    return guidance, meshes, _meshes_clear_by(meshes, goal_near_the_wall(panda, 0.0), GOAL_CLEARANCE), MESH_WALL
+
+
+def _meshes_clear_by(meshes, touching: np.ndarray, clearance: float) -> np.ndarray:
+    """``touching`` (the spheres touching the wall) turned back about joint 1 until the
+    meshes clear the wall by ``clearance`` [m] (bisection)."""
+    far, close = touching.copy(), touching.copy()
+    far[0] -= 0.06
     close[0] += 0.06
     for _ in range(40):
         middle = (far + close) / 2
-        far, close = (middle, close) if meshes.clearance(middle)[0] > GOAL_CLEARANCE else (far, middle)
-    return guidance, meshes, far, MESH_WALL
+        far, close = (middle, close) if meshes.clearance(middle)[0] > clearance else (far, middle)
+    return far
 
 
 def test_a_roomier_joint_goal_lies_inside_half_its_tolerance_farther_from_the_meshes(wall_goal) -> None:
@@ -139,8 +146,31 @@ def test_a_roomier_joint_goal_lies_inside_half_its_tolerance_farther_from_the_me
     assert guidance._roomier_goal(JointTarget(tuple(near)), near, 0) is None      # no tolerance: the goal as given
 
 
+def test_a_joint_goal_nearer_the_meshes_than_their_margin_is_planned_to_a_roomier_one_at_once(wall_goal,
+                                                                                                monkeypatch) -> None:
+    # generated MBM seed 15 as posed, cage/0001: a goal 0.25 mm from the object, a finger 0.42 mm into it
+    guidance, meshes, near, wall = wall_goal
+    assert meshes.clearance(near)[0] < guidance.settings.mesh_margin
+    tried: list[np.ndarray] = []
+
+    def record(self, start, target, *args):
+        tried.append(np.array(target))
+        return Plan(None, np.array(target), 0.0, 0)
+
+    monkeypatch.setattr(JointGuidance, "_plan_to", record)
+    start = near.copy()
+    start[0] = -2.2
+    plan = guidance.plan(start, JointTarget(tuple(near), 0.05), [wall])
+    assert len(tried) == 1 and np.linalg.norm(tried[0] - near) <= guidance.settings.goal_region * 0.05 + 1e-12
+    assert meshes.clearance(tried[0])[0] > meshes.clearance(near)[0] and plan.goal_moved
+    tried.clear()
+    assert not guidance.plan(start, JointTarget(tuple(near)), [wall]).goal_moved   # no tolerance: as given
+    np.testing.assert_array_equal(tried[0], near)
+
+
 def test_a_joint_goal_with_no_way_in_is_planned_again_to_a_roomier_one(wall_goal, monkeypatch) -> None:
-    guidance, _, near, wall = wall_goal
+    guidance, meshes, _, wall = wall_goal
+    near = _meshes_clear_by(meshes, wall_goal[2], guidance.settings.mesh_margin + 0.001)   # not moved at once
     tried: list[np.ndarray] = []
 
     def no_way_into_near(self, start, target, *args):

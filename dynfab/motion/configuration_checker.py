@@ -198,22 +198,24 @@ class ConfigurationChecker:
         first = self._own_first_blocked(qs, margin, self_margin)
         if first < 0 or not self._second_look:
             return first
-        values = self.batch(qs[first:])
-        blocked = np.flatnonzero((values[:, 0] < margin) | (values[:, 1] < self_margin))
-        return first + int(blocked[0]) if blocked.size else -1
+        return next((k for k in range(first, len(qs)) if not self.free(qs[k], margin, self_margin)), -1)
 
     def motion_free(self, a: NDArray[np.float64], b: NDArray[np.float64], step: float, margin: float,
                     self_margin: float) -> tuple[bool, int]:
         """Whether the straight motion from ``a`` to ``b`` (n,) is free at configurations at
         most ``step`` [rad] apart, ``b`` included and ``a`` not (module docstring), and how
         many configurations were checked to know it (with fine spheres, where the others
-        find the motion blocked, it is checked again at every configuration)."""
+        find the motion blocked, its configurations from there on are checked again in the
+        same order, each by :meth:`free`)."""
         free, checked = self._own_motion_free(a, b, step, margin, self_margin)
         if free or not self._second_look:
             return free, checked
-        qs = _motion_configurations(a, b, step)
-        blocked = self.first_blocked(qs, margin, self_margin)
-        return blocked < 0, checked + (len(qs) if blocked < 0 else blocked + 1)
+        count = max(1, math.ceil(float(np.linalg.norm(b - a)) / step))
+        rest = _motion_order(count)[checked - 1:]   # from the one found blocked
+        for k, index in enumerate(rest, start=1):
+            if not self.free(a + (index / count) * (b - a), margin, self_margin):
+                return False, checked + k
+        return True, checked + len(rest)
 
     def _set_second_look(self, obstacles: tuple[PlacedObstacle, ...]) -> None:
         """The fine spheres' obstacles: the primitives; and, beside primitives, these spheres'
@@ -328,6 +330,19 @@ def _motion_configurations(a: NDArray[np.float64], b: NDArray[np.float64], step:
     apart, ``b`` first, ``a`` left out: the ones the compiled ``motion_free`` checks."""
     count = max(1, math.ceil(float(np.linalg.norm(b - a)) / step))
     return a + (np.arange(count, 0, -1) / count)[:, None] * (b - a)
+
+
+def _motion_order(count: int) -> list[int]:
+    """The order the compiled ``motion_free`` checks the configurations ``a + (i / count)(b −
+    a)`` of a motion in: ``i = count`` (``b``) first, then the odd multiples of each stride,
+    strides halving from the largest power of two below ``count`` to 1 (coarse to fine)."""
+    order, stride = [count], 1
+    while 2 * stride < count:
+        stride *= 2
+    while stride >= 1:
+        order += range(stride, count, 2 * stride)
+        stride //= 2
+    return order
 
 
 def _gridded(obstacle: PlacedObstacle) -> bool:
