@@ -185,11 +185,14 @@ class ConfigurationChecker:
         blocked)."""
         if self._own_free(q, margin, self_margin):
             return True
-        if not self._second_look or self._own_clearances(q)[1] < self_margin:
+        if not self._second_look:
             return False
         assert self._fine is not None
-        surfaces_free = self._surfaces is None or not self._mixed or self._surfaces._own_free(q, margin, -math.inf)
-        return surfaces_free and self._fine._own_free(q, margin, -math.inf)
+        if not self._fine._own_free(q, margin, -math.inf):   # most often blocked there too: asked first
+            return False
+        if self._mixed and self._surfaces is not None and not self._surfaces._own_free(q, margin, -math.inf):
+            return False
+        return self._own_clearances(q)[1] >= self_margin
 
     def first_blocked(self, qs: NDArray[np.float64], margin: float, self_margin: float) -> int:
         """Index of the first row of ``qs`` (N, n) with ``c_obs < margin`` or

@@ -158,10 +158,12 @@ class JointGuidance:
         0.25 mm from the object, was reached with a finger 0.42 mm into it. Not among clouds:
         their kept points read the surfaces up to ``δ`` and the noise nearer, so nearly every
         grasp would read near."""
-        meshes = self._meshes()
-        if (not isinstance(goal, JointTarget) or meshes is None
+        if (not isinstance(goal, JointTarget) or goal.tolerance <= 0.0
                 or any(isinstance(o.shape, PointCloud) for o in self.checker.obstacles)
-                or meshes.clearance(target)[0] >= self.settings.mesh_margin):
+                or self.checker.clearances(target)[0] >= self.settings.mesh_margin + self.settings.sphere_coverage):
+            return None   # (the spheres leave at most sphere_coverage of the meshes outside: they clear it)
+        meshes = self._meshes()
+        if meshes is None or meshes.clearance(target)[0] >= self.settings.mesh_margin:
             return None
         return self._roomier_goal(goal, target, seed)
 
