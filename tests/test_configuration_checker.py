@@ -238,3 +238,18 @@ def test_the_motion_order_is_the_compiled_kernels() -> None:
         order = _motion_order(count)
         assert order[0] == count and sorted(order) == list(range(1, count + 1))
     assert _motion_order(8) == [8, 4, 2, 6, 1, 3, 5, 7]
+
+
+def test_without_a_compiler_the_second_look_refines_a_motion_as_the_kernel_does(monkeypatch) -> None:
+    robot = load_robot("panda").planning_robot
+    rng = np.random.default_rng(10)
+    obstacles = _scene(rng)[:6]
+    compiled = ConfigurationChecker(robot, obstacles)
+    import dynfab.motion.configuration_checker as module
+
+    monkeypatch.setattr(module, "load_checker_library", lambda robot: None)
+    interpreted = ConfigurationChecker(robot, obstacles)
+    assert not interpreted.compiled
+    qs = rng.uniform(robot.kinematics.lower, robot.kinematics.upper, (41, robot.dof))
+    for a, b in zip(qs[:-1], qs[1:]):
+        assert interpreted.motion_free(a, b, 0.1, 0.01, 0.0) == compiled.motion_free(a, b, 0.1, 0.01, 0.0)

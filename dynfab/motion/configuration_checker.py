@@ -330,9 +330,10 @@ class ConfigurationChecker:
 
 def _motion_configurations(a: NDArray[np.float64], b: NDArray[np.float64], step: float) -> NDArray[np.float64]:
     """The configurations of the straight motion from ``a`` to ``b`` at most ``step`` [rad]
-    apart, ``b`` first, ``a`` left out: the ones the compiled ``motion_free`` checks."""
+    apart, ``a`` left out, in the order the compiled ``motion_free`` checks them
+    (:func:`_motion_order`: ``b`` first, then coarse to fine)."""
     count = max(1, math.ceil(float(np.linalg.norm(b - a)) / step))
-    return a + (np.arange(count, 0, -1) / count)[:, None] * (b - a)
+    return a + (np.array(_motion_order(count)) / count)[:, None] * (b - a)
 
 
 def _motion_order(count: int) -> list[int]:
