@@ -12,7 +12,7 @@ from scipy.spatial.transform import Rotation
 
 from dynfab.geometry.shapes import Box, Placement
 from dynfab.motion.configuration_checker import PlacedObstacle
-from dynfab.motion.goal_region import nearby_targets
+from dynfab.motion.goal_region import nearby_targets, roomier_goal
 from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance, JointTarget, Plan
 from dynfab.motion.inverse_kinematics import AxisTarget, PointTarget
 from dynfab.motion.plan_requests import PlanRequest, make_plan
@@ -138,12 +138,12 @@ def _meshes_clear_by(meshes, touching: np.ndarray, clearance: float) -> np.ndarr
 
 def test_a_roomier_joint_goal_lies_inside_half_its_tolerance_farther_from_the_meshes(wall_goal) -> None:
     guidance, meshes, near, _ = wall_goal
-    roomier = guidance._roomier_goal(JointTarget(tuple(near), 0.05), near, 0)
+    roomier = roomier_goal(JointTarget(tuple(near), 0.05), near, meshes, guidance.settings, guidance.bounds, 0)
     assert roomier is not None
     assert np.linalg.norm(roomier - near) <= guidance.settings.goal_region * 0.05 + 1e-12
     assert meshes.clearance(roomier)[0] > meshes.clearance(near)[0] + 1e-3
     assert meshes.free(roomier, guidance.settings.mesh_goal_floor)
-    assert guidance._roomier_goal(JointTarget(tuple(near)), near, 0) is None      # no tolerance: the goal as given
+    assert roomier_goal(JointTarget(tuple(near)), near, meshes, guidance.settings, guidance.bounds, 0) is None      # no tolerance: the goal as given
 
 
 def test_a_joint_goal_nearer_the_meshes_than_their_margin_is_planned_to_a_roomier_one_at_once(wall_goal,

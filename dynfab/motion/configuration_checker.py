@@ -57,7 +57,7 @@ from __future__ import annotations
 import ctypes
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import casadi as ca
 import numpy as np
@@ -65,36 +65,14 @@ from numpy.typing import NDArray
 
 from dynfab.fabric.leaves.surface_points import moving_spheres
 from dynfab.geometry.distance import placed_distance
-from dynfab.geometry.distance_grid import DistanceGrid, distance_grid
-from dynfab.geometry.cloud_grid import cloud_distance_grid
-from dynfab.geometry.focused_cloud import FocusedCloud
-from dynfab.geometry.shapes import Box, Capsule, Cylinder, Mesh, Placement, Plane, PointCloud, Shape, Sphere
 from dynfab.motion.checker_library import as_pointer, load_checker_library
-from dynfab.robots.collision_model import cache_dir
+from dynfab.motion.obstacle_buffer import ROW, gridded, obstacle_buffer, obstacle_row, same_grids
+from dynfab.motion.placed_obstacle import PlacedObstacle
 from dynfab.robots.robot import Robot
 
 __all__ = ["ConfigurationChecker", "PlacedObstacle"]
 
-_KIND: dict[type, int] = {Sphere: 0, Box: 1, Cylinder: 2, Capsule: 3, Plane: 4, Mesh: 5, PointCloud: 6,
-                          FocusedCloud: 6}
-_ROW = 17
 _ONE = ctypes.c_int(1)
-
-
-@dataclass(frozen=True)
-class PlacedObstacle:
-    """An obstacle at one instant.
-
-    Attributes:
-        shape: its shape.
-        placement: where its frame is (a plane: its point, and its normal as the frame's z).
-        velocity: its frame's velocity then [m/s] (zero for what does not move; plans see
-            a moving sphere as what it sweeps soon, :mod:`dynfab.motion.swept_obstacles`).
-    """
-
-    shape: Shape
-    placement: Placement
-    velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
 class ConfigurationChecker:
@@ -148,16 +126,16 @@ class ConfigurationChecker:
         obstacles = tuple(obstacles)
         if self._fine is not None:
             self._set_second_look(obstacles)
-        if self._rows.size and _same_grids(self._obstacles, obstacles):
-            head = self._rows[:len(obstacles) * _ROW].reshape(-1, _ROW)
-            rows = np.array([_row(o) for o in obstacles]).reshape(-1, _ROW)
-            gridded = [_gridded(o) for o in obstacles]
-            rows[gridded, 13] = head[gridded, 13]   # the grids' offsets, as they were
+        if self._rows.size and same_grids(self._obstacles, obstacles):
+            head = self._rows[:len(obstacles) * ROW].reshape(-1, ROW)
+            rows = np.array([obstacle_row(o) for o in obstacles]).reshape(-1, ROW)
+            on_grids = [gridded(o) for o in obstacles]
+            rows[on_grids, 13] = head[on_grids, 13]   # the grids' offsets, as they were
             head[:] = rows
             self._obstacles = obstacles
             return
         self._obstacles = obstacles
-        self._rows = _buffer(self._obstacles)
+        self._rows = obstacle_buffer(self._obstacles)
         self._rows_pointer = as_pointer(self._rows)
         self._rows_address = ctypes.c_void_p(self._rows.ctypes.data)
         self._count = ctypes.c_int(len(self._obstacles))
@@ -224,8 +202,8 @@ class ConfigurationChecker:
         """The fine spheres' obstacles: the primitives; and, beside primitives, these spheres'
         own checker of the meshes and clouds alone (module docstring)."""
         assert self._fine is not None
-        primitives = tuple(o for o in obstacles if not _gridded(o))
-        surfaces = tuple(o for o in obstacles if _gridded(o))
+        primitives = tuple(o for o in obstacles if not gridded(o))
+        surfaces = tuple(o for o in obstacles if gridded(o))
         self._fine.set_obstacles(primitives)
         self._second_look = bool(primitives)
         self._mixed = bool(primitives and surfaces)
@@ -347,67 +325,3 @@ def _motion_order(count: int) -> list[int]:
         order += range(stride, count, 2 * stride)
         stride //= 2
     return order
-
-
-def _gridded(obstacle: PlacedObstacle) -> bool:
-    """Whether the kernel reads ``obstacle`` from a distance grid (a mesh or a point cloud)."""
-    return isinstance(obstacle.shape, Mesh | PointCloud)
-
-
-def _same_grids(old: Sequence[PlacedObstacle], new: Sequence[PlacedObstacle]) -> bool:
-    """Whether ``new`` has as many obstacles as ``old`` and the same gridded shapes (the same
-    objects) at the same places: then the buffer's grids serve it as they are."""
-    return len(old) == len(new) and all(
-        _gridded(a) == _gridded(b) and (not _gridded(a) or a.shape is b.shape) for a, b in zip(old, new))
-
-
-def _buffer(obstacles: Sequence[PlacedObstacle]) -> NDArray[np.float64]:
-    """The kernel's obstacle buffer: one row per obstacle, then the meshes' grids, each
-    mesh row's dimensions[0] the offset of its grid from the row's start [doubles]."""
-    rows = np.array([_row(o) for o in obstacles]).reshape(-1, _ROW)
-    grids = []
-    end = rows.size
-    for k, obstacle in enumerate(obstacles):
-        if _gridded(obstacle):
-            shape = obstacle.shape
-            grid = (distance_grid(shape, cache=cache_dir() / "distance-grids") if isinstance(shape, Mesh)
-                    else _cloud_grid(shape)).packed()
-            rows[k, 13] = end - _ROW * k
-            grids.append(grid)
-            end += grid.size
-    return np.ascontiguousarray(np.concatenate([rows.reshape(-1), *grids]))
-
-
-def _cloud_grid(cloud: PointCloud) -> DistanceGrid:
-    """A cloud's grid: a focused cloud's at its pitch (:mod:`dynfab.geometry.focused_cloud`)."""
-    if isinstance(cloud, FocusedCloud):
-        return cloud_distance_grid(cloud, pitch=cloud.pitch)
-    return cloud_distance_grid(cloud)
-
-
-def _row(obstacle: PlacedObstacle) -> NDArray[np.float64]:
-    """The kernel's 17 numbers: kind, centre, rotation (row-major), dimensions, bounding radius
-    (a mesh: kind 5, its grid's offset set by :func:`_buffer`)."""
-    row = np.zeros(_ROW)
-    row[0] = _KIND[type(obstacle.shape)]
-    row[1:4] = obstacle.placement.position
-    row[4:13] = obstacle.placement.rotation.reshape(-1)
-    dimensions = obstacle.shape.dimensions
-    row[13:13 + len(dimensions)] = dimensions
-    row[16] = _bounding_radius(obstacle.shape)
-    return row
-
-
-def _bounding_radius(shape: Shape) -> float:
-    """Radius [m] of a ball about the shape's origin that holds it (a plane: 0, unused)."""
-    if isinstance(shape, Sphere):
-        return shape.radius
-    if isinstance(shape, Box):
-        return 0.5 * float(np.linalg.norm(shape.size))
-    if isinstance(shape, Cylinder):
-        return math.hypot(shape.radius, 0.5 * shape.length)
-    if isinstance(shape, Capsule):
-        return shape.radius + 0.5 * shape.length
-    if isinstance(shape, Mesh | PointCloud):
-        return shape.bounding_radius
-    return 0.0

@@ -33,7 +33,7 @@ from dynfab.motion.allowance_tables import AllowanceTables
 from dynfab.motion.cloud_focus import focused_obstacles
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.goal_configuration import GoalSearch
-from dynfab.motion.goal_region import roomier_configuration
+from dynfab.motion.goal_region import room_at_the_goal, roomier_goal
 from dynfab.motion.mesh_escape_plan import EscapeScene, escape_plan
 from dynfab.motion.mesh_goal_check import MeshGoalCheck, endpoint_tests, robot_mesh_model
 from dynfab.motion.joint_planning import (ApproachTest, JointPath, JointPlannerSettings, NoPathError, approach_clear,
@@ -42,6 +42,7 @@ from dynfab.motion.joint_trajectory import JointTrajectory, TimingError, time_pa
 from dynfab.motion.guidance_settings import GuidanceSettings
 from dynfab.motion.phased_trajectory import PhasedTrajectory
 from dynfab.motion.plan_values import GoalTargets, GuidanceError, JointTarget, Plan
+from dynfab.motion.way_speed import WaySpeed
 from dynfab.robots.joint_bounds import finite_joint_bounds
 from dynfab.robots.robot import Robot
 
@@ -77,7 +78,7 @@ class JointGuidance:
         self.checker = self._planning
         self._tables = AllowanceTables(robot, settings)   # what the fabric's leaves may enter (on its spheres)
         self._ahead = ConfigurationChecker(robot.planning_robot)   # what moves (blocked_ahead)
-        self._slowing = ConfigurationChecker(robot.planning_robot)   # the meshes among other shapes (speed_scale)
+        self._way_speed = WaySpeed(robot, settings)
         self._mesh_check: MeshGoalCheck | None | bool = False  # made on first use; None: no meshes
         # the last focus made: the obstacles, the goal's bytes and the focused obstacles
         self._focus: tuple[tuple[PlacedObstacle, ...], bytes, tuple[PlacedObstacle, ...]] | None = None
@@ -137,51 +138,18 @@ class JointGuidance:
         self.set_obstacles(obstacles)
         start = np.clip(np.asarray(q, dtype=float), self._lower, self._upper)
         target, moved = self.goal_solution(goal, start, seed)
-        room = self._room_at_the_goal(goal, target, seed)
+        room = room_at_the_goal(goal, target, self.checker, self._meshes, self.settings, self.bounds, seed)
         if room is not None:
             target, moved = room, True
         try:
             return replace(self._plan_to(start, target, obstacles, seed, wide, began), goal_moved=moved)
         except GuidanceError as failure:
-            roomier = self._roomier_goal(goal, target, seed) if failure.reason == "goal_in_collision" else None
+            roomier = (roomier_goal(goal, target, self._meshes(), self.settings, self.bounds, seed)
+                       if failure.reason == "goal_in_collision" else None)
             if roomier is None:
                 raise
         self.set_obstacles(obstacles)   # the first attempts may have left a cloud's focus
         return replace(self._plan_to(start, roomier, obstacles, seed, wide, began), goal_moved=True)
-
-    def _room_at_the_goal(self, goal: GoalTargets, target: NDArray[np.float64], seed: int) -> NDArray[np.float64] | None:
-        """For a joint goal nearer the scene on the robot's meshes than ``mesh_margin`` (as a
-        task goal's solutions may not be, :class:`GuidanceSettings`), without point clouds:
-        the roomier configuration inside its tolerance (:meth:`_roomier_goal`), if there is
-        one; else None. The fabric settles within about a milliradian of its goal, a
-        millimetre at the fingertips: generated MBM seed 15 as posed, cage/0001, a goal
-        0.25 mm from the object, was reached with a finger 0.42 mm into it. Not among clouds:
-        their kept points read the surfaces up to ``δ`` and the noise nearer, so nearly every
-        grasp would read near."""
-        if (not isinstance(goal, JointTarget) or goal.tolerance <= 0.0
-                or any(isinstance(o.shape, PointCloud) for o in self.checker.obstacles)
-                or self.checker.clearances(target)[0] >= self.settings.mesh_margin + self.settings.sphere_coverage):
-            return None   # (the spheres leave at most sphere_coverage of the meshes outside: they clear it)
-        meshes = self._meshes()
-        if meshes is None or meshes.clearance(target)[0] >= self.settings.mesh_margin:
-            return None
-        return self._roomier_goal(goal, target, seed)
-
-    def _roomier_goal(self, goal: GoalTargets, target: NDArray[np.float64], seed: int) -> NDArray[np.float64] | None:
-        """For a joint goal with a tolerance whose plan found no way into ``target`` (or
-        that is near the meshes, :meth:`_room_at_the_goal`): of
-        ``goal_region_samples`` configurations uniform in the ball of radius ``goal_region``
-        times the tolerance about it (within the limits), the one free on the robot's meshes
-        by ``mesh_goal_floor`` that is farthest from them, if farther than ``target`` is;
-        else None (no tolerance, no meshes, none roomier). The goal is reached within its
-        tolerance there (:mod:`dynfab.motion.goal_region` does the same for task goals,
-        before planning)."""
-        meshes = self._meshes()
-        if not isinstance(goal, JointTarget) or goal.tolerance <= 0.0 or meshes is None:
-            return None
-        return roomier_configuration(target, self.settings.goal_region * goal.tolerance, meshes,
-                                     self.settings.mesh_goal_floor, self.settings.goal_region_samples, self.bounds,
-                                     np.random.default_rng(seed))
 
     def _plan_to(self, start: NDArray[np.float64], target: NDArray[np.float64], obstacles: Sequence[PlacedObstacle],
                  seed: int, wide: bool, began: float) -> Plan:
@@ -357,31 +325,9 @@ class JointGuidance:
         return PhasedTrajectory((way, self._approach_timed(path.waypoints[-2:])))
 
     def speed_scale(self, qs: NDArray[np.float64]) -> NDArray[np.float64]:
-        """``σ(q) = clip(c(q) / slow_clearance, slow_speed, 1)`` [-] at each of ``qs`` (m, n),
-        ``c`` the planning spheres' clearance from the checker's mesh obstacles [m] (1 without
-        meshes): the factor of the way's velocity limits (:class:`GuidanceSettings`). A robot
-        lagging ``e`` behind a reference that turns a corner is pulled across it by about ``e``
-        times its lever; slower, it lags less (MBM kitchen seed 11/0004 with a 10 cm mesh band:
-        0.07 rad behind at 0.5 of the limits, a finger 11 mm into a cupboard). Only meshes slow
-        it:
-
-        - primitives have their own guard, the reference waits where it is out of sight of the
-          robot (:func:`~dynfab.motion.plan_joining.in_sight`), and slowed among them the way
-          cost cage runs their 20 s (MBM object removed, cage 81-96: 14/16 slowed, 16/16 not);
-        - point clouds' grids read the larger spheres far lower than they are (a 3 cm exact
-          band, the noise), and the way crawled (MBM points ``--seed 7``, cage 81-96: 10/16
-          slowed, 14/16 not)."""
-        settings = self.settings
-        obstacles = self.checker.obstacles
-        meshes = [o for o in obstacles if isinstance(o.shape, Mesh)]
-        if not meshes:
-            return np.ones(len(qs))
-        checker = self.checker   # only meshes: the planning spheres' checker, these obstacles set
-        if len(meshes) < len(obstacles):   # among others: the planning spheres against the meshes alone
-            self._slowing.set_obstacles(meshes)
-            checker = self._slowing
-        clearance = checker.batch(qs)[:, 0]
-        return np.clip(clearance / settings.slow_clearance, settings.slow_speed, 1.0)
+        """The factor of the way's velocity limits at each of ``qs`` (m, n) among the last
+        plan's obstacles [-] (:mod:`dynfab.motion.way_speed`)."""
+        return self._way_speed.scale(self.checker, qs)
 
     def _approach_timed(self, segment: NDArray[np.float64]) -> JointTrajectory:
         """A grasp's approach segment (2, n) timed at ``approach_speed`` of the limits."""

@@ -57,7 +57,7 @@ class GuidanceSettings:
         goal_region_targets: nearby targets tried, each with ``ik``'s seeds [-].
         goal_region_samples: configurations inside half of a joint goal's tolerance whose
             clearance on the meshes is compared when no way into the goal is found
-            (:meth:`JointGuidance._roomier_goal`) [-].
+            (:func:`~dynfab.motion.goal_region.roomier_goal`) [-].
         goal_overshoot: how far [rad] past a goal among meshes or shapes (not clouds) nearer them
             than ``mesh_margin`` its approach must be clear too (:func:`~dynfab.motion.mesh_goal_check.endpoint_tests`):
             the fabric settling at such a goal passed it by 5.8 mrad along its approach

@@ -1,0 +1,25 @@
+"""An obstacle at one instant, as guidance and its checkers see it."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from dynfab.geometry.shapes import Placement, Shape
+
+__all__ = ["PlacedObstacle"]
+
+
+@dataclass(frozen=True)
+class PlacedObstacle:
+    """An obstacle at one instant.
+
+    Attributes:
+        shape: its shape.
+        placement: where its frame is (a plane: its point, and its normal as the frame's z).
+        velocity: its frame's velocity then [m/s] (zero for what does not move; plans see
+            a moving sphere as what it sweeps soon, :mod:`dynfab.motion.swept_obstacles`).
+    """
+
+    shape: Shape
+    placement: Placement
+    velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
