@@ -214,7 +214,8 @@ def test_a_goal_free_on_the_meshes_is_approached_clear_of_them(panda, touching) 
 def test_the_meshes_decide_the_approach_of_a_goal_they_find_free(panda, touching, monkeypatch) -> None:
     monkeypatch.setattr(MeshGoalCheck, "segment_free", lambda self, a, b, step, floor=None: False)
     with pytest.raises(GuidanceError) as refused:
-        JointGuidance(panda).plan(START, JointTarget(tuple(touching)), [WALL])
+        JointGuidance(panda, GuidanceSettings(mesh_escape=None)).plan(START, JointTarget(tuple(touching)),
+                                                                      [WALL])   # (no last resort past the tests)
     assert refused.value.reason == "goal_in_collision"
 
 
@@ -328,3 +329,15 @@ def test_obstacles_replaced_on_the_approach_get_no_allowance_and_do_not_crash(pa
     assert guided.approaching and guided.allowances()[0] > 0.0
     guided.set_obstacles(guided._static)
     assert guided.allowances().tolist() == [0.0] * len(guided._static)
+
+
+def test_among_primitives_a_goal_no_escape_reaches_is_planned_on_the_meshes(panda, touching, monkeypatch) -> None:
+    # the last resort (mesh_escape_plan) among primitives since session 20; among meshes only if asked
+    monkeypatch.setattr(MeshGoalCheck, "segment_free", lambda self, a, b, step, floor=None: False)
+    guidance = JointGuidance(panda)
+    plan = guidance.plan(START, JointTarget(tuple(touching)), [WALL])
+    assert isinstance(plan.trajectory, PhasedTrajectory) and plan.approach > 0.0
+    np.testing.assert_allclose(plan.trajectory.phases[-1].waypoints[-1], touching)
+    meshes = guidance._meshes()
+    qs = plan.trajectory.sample(np.linspace(0.0, plan.trajectory.duration, 400))[0]
+    assert meshes.clearance(qs)[0] > 0.0   # the whole way clear of the wall on the meshes

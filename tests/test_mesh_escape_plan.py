@@ -1,5 +1,6 @@
-"""Guidance's last resort among meshes (issue 20): the margins it searches, wider first, the
-budget of wall time it keeps, and the plan it makes keeping the wider margin on the meshes."""
+"""Guidance's last resort among primitives (and meshes, if asked; issues 19 and 20): where it
+searches, the margins it searches, wider first, the budget of wall time it keeps, and the plan
+it makes keeping the wider margin on the meshes."""
 
 from __future__ import annotations
 
@@ -8,11 +9,13 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+import trimesh
 
 import dynfab.motion.mesh_escape_plan as escape_module
+from dynfab.geometry.point_cloud import PointCloud
+from dynfab.geometry.shapes import Box, Mesh, Placement
 from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance
 from dynfab.motion.guidance_settings import counted_checks
-from dynfab.geometry.shapes import Box
 from dynfab.motion.configuration_checker import PlacedObstacle
 from dynfab.motion.mesh_escape import MeshEscapeSettings
 from dynfab.motion.phased_trajectory import PhasedTrajectory
@@ -22,6 +25,9 @@ from test_mesh_goal_check import BESIDE_LINK2, Q   # a cube the spheres touch at
 from coarse_panda import panda_on_planning_spheres
 
 START = Q + np.array([0.3, 0.8, 0.0, 0.2, 0.0, 0.0, 0.0])
+#: a few points beside the cube
+_CLOUD = PlacedObstacle(PointCloud.from_points(np.array([[0.0, 0.0, 0.0], [0.01, 0.0, 0.0]]), voxel=0.01),
+                        Placement((0.6, 0.6, 0.6)))
 
 
 @pytest.fixture(scope="module")
@@ -60,6 +66,27 @@ def test_the_wider_margin_is_searched_first_then_mesh_margin_with_every_seed(pan
     scene = _scene(panda, MeshEscapeSettings(wide_searches=2))
     assert escape_plan(scene, START, Q, (4, 5, 6), time.perf_counter()) is None
     assert margins == [(0.006, 4), (0.006, 5), (0.003, 4), (0.003, 5), (0.003, 6)]
+
+
+def test_among_meshes_it_searches_only_if_asked_and_never_among_point_clouds(panda, monkeypatch) -> None:
+    searched = []
+
+    def finding_none(validity, start, goal, lower, upper, settings, seed, seconds):
+        searched.append(seed)
+        return None
+
+    monkeypatch.setattr(escape_module, "mesh_path", finding_none)
+    cube_mesh = trimesh.creation.box(extents=BESIDE_LINK2.shape.size)
+    mesh = PlacedObstacle(Mesh(cube_mesh.vertices, cube_mesh.faces, "cube"), BESIDE_LINK2.placement)
+    for escape, obstacles, searches in ((MeshEscapeSettings(), (mesh,), 0),
+                                        (MeshEscapeSettings(), (BESIDE_LINK2, mesh), 0),
+                                        (MeshEscapeSettings(among_meshes=True), (mesh,), 2),
+                                        (MeshEscapeSettings(among_meshes=True), (BESIDE_LINK2, _CLOUD), 0)):
+        scene = _scene(panda, escape)
+        scene.checker.set_obstacles(obstacles)
+        searched.clear()
+        assert escape_plan(scene, START, Q, (7,), time.perf_counter()) is None
+        assert len(searched) == searches   # asked: the wider margin, then mesh_margin
 
 
 def test_a_spent_budget_of_time_fails_by_name(panda, monkeypatch) -> None:

@@ -53,7 +53,8 @@ def test_a_start_free_on_the_meshes_is_left_clear_of_them(panda, touching) -> No
 def test_the_meshes_decide_the_way_out_of_a_start_they_find_free(panda, touching, monkeypatch) -> None:
     monkeypatch.setattr(MeshGoalCheck, "segment_free", lambda self, a, b, step, floor=None: False)
     with pytest.raises(GuidanceError) as refused:
-        JointGuidance(panda).plan(touching, JointTarget(tuple(AWAY)), [WALL])
+        last_resorts_off = GuidanceSettings(mesh_escape=None, tight_margin=GuidanceSettings().path.margin)
+        JointGuidance(panda, last_resorts_off).plan(touching, JointTarget(tuple(AWAY)), [WALL])
     assert refused.value.reason == "start_in_collision"
 
 

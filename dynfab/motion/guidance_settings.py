@@ -62,8 +62,8 @@ class GuidanceSettings:
             than ``mesh_margin`` its approach must be clear too (:func:`~dynfab.motion.mesh_goal_check.endpoint_tests`):
             the fabric settling at such a goal passed it by 5.8 mrad along its approach
             (development kitchen/0013, seed 2); 0.01 chosen on that run.
-        tight_margin: ``path.margin`` of a last round of attempts among meshes (or on a point
-            cloud's focus, after it: :meth:`JointGuidance._tight_applies`) when no attempt
+        tight_margin: ``path.margin`` of a last round of attempts without point clouds (or on a
+            point cloud's focus, after it: :meth:`JointGuidance._tight_applies`) when no attempt
             found an escape of a blocked endpoint; each path of that
             round is kept only if it keeps ``mesh_margin`` on the robot's meshes between its
             escapes (:meth:`JointGuidance._attempts`). 0 (the spheres merely clear of the grid):
@@ -75,17 +75,15 @@ class GuidanceSettings:
             free on them (or a start's way out) keeps where the endpoint is farther (the
             endpoint's own where it is nearer;
             :meth:`JointGuidance._endpoint_tests`).
-        mesh_escape: the search, among meshes (no point clouds), where no attempt found an
-            escape of the goal or a path: judged on the robot's meshes wherever the spheres
-            refuse (:mod:`dynfab.motion.mesh_escape`), at 6 mm first, then ``mesh_margin``,
-            within a budget, its part the spheres refuse followed as an approach
-            (:mod:`dynfab.motion.mesh_escape_plan`). None (the default): none. Opt-in
-            (``MeshEscapeSettings()``): on held-out kitchen seed 6 (session 13) a run it
-            rescued touched the kitchen 0.1 mm deep with ``panda_link6``; with the 6 mm search
-            (session 14) two of the six runs it rescues on development seeds 0-4 still
-            come within 0.56-0.73 mm of the kitchen away from their starts (leaving a start
-            in a pocket beside the path, or 8 mrad beside a 3 mm path's approach:
-            docs/results.md).
+        mesh_escape: the search, among primitives (and meshes with its ``among_meshes``; never
+            among point clouds), where no attempt found an escape of the goal or a path:
+            judged on the robot's meshes wherever the spheres refuse
+            (:mod:`dynfab.motion.mesh_escape`), at 6 mm first, then ``mesh_margin``, within a
+            budget, its part the spheres refuse followed as an approach
+            (:mod:`dynfab.motion.mesh_escape_plan`); None: none. Among meshes with the 6 mm
+            search (session 14) two of the six runs it rescued on development kitchen seeds
+            0-4 still came within 0.56-0.73 mm of the kitchen away from their starts, and one
+            of seed 12 went 52 mm in (session 20): see ``among_meshes``.
         mesh_escape_samples: ``path.escape_samples`` for a goal whose approach the meshes
             judge (:meth:`JointGuidance._endpoint_tests`) [-]: 400 found no escape for as-posed
             table_pick/0032 (problems 29-32, which chose it), its hand between a table and a cube
@@ -229,7 +227,7 @@ class GuidanceSettings:
     tight_margin: float = 0.0
     approach_clearance: float = 0.005
     mesh_escape_samples: int = 1000
-    mesh_escape: MeshEscapeSettings | None = None
+    mesh_escape: MeshEscapeSettings | None = MeshEscapeSettings()
     cloud_focus: CloudFocus | None = CloudFocus()
     timing: TimingSettings = field(default_factory=TimingSettings)
     speed: float = 0.5

@@ -1,4 +1,5 @@
-"""Guidance's last resort among meshes (no point clouds): where no attempt found an escape of
+"""Guidance's last resort among primitives (and, with ``among_meshes``, meshes; never among
+point clouds): where no attempt found an escape of
 a blocked goal (``goal_in_collision``, also at ``tight_margin``) or a path (``no_path``), a
 path judged on the robot's meshes wherever its spheres refuse
 (:func:`~dynfab.motion.mesh_escape.mesh_path`), from the start to the goal.
@@ -33,7 +34,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from dynfab.geometry.shapes import PointCloud
+from dynfab.geometry.shapes import Mesh, PointCloud
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.guidance_settings import GuidanceSettings
 from dynfab.motion.joint_planning import WALL_FACTOR
@@ -92,9 +93,9 @@ def escape_plan(scene: EscapeScene, start: NDArray[np.float64], target: NDArray[
     """The plan of the module docstring from ``start`` to ``target`` among ``scene``'s
     obstacles, searched at each margin of :func:`search_margins` with the first
     ``wide_searches`` of ``seeds`` (at ``mesh_margin`` with each) (the first path found that
-    passes the exact check kept); None among point clouds, without
-    ``mesh_escape`` settings, or if every search ended within its checks without such a
-    path.
+    passes the exact check kept); None among point clouds, among meshes unless
+    ``among_meshes``, without ``mesh_escape`` settings, or if every search ended within its
+    checks without such a path.
 
     Args:
         scene: what it needs of guidance.
@@ -109,7 +110,9 @@ def escape_plan(scene: EscapeScene, start: NDArray[np.float64], target: NDArray[
             where ``path.check_rate`` is set).
     """
     settings, path = scene.settings.mesh_escape, scene.settings.path
-    if settings is None or any(isinstance(o.shape, PointCloud) for o in scene.checker.obstacles):
+    shapes = [o.shape for o in scene.checker.obstacles]
+    if (settings is None or any(isinstance(s, PointCloud) for s in shapes)
+            or (not settings.among_meshes and any(isinstance(s, Mesh) for s in shapes))):
         return None
     wall = settings.budget * (1.0 if path.check_rate is None else WALL_FACTOR)
     spent, searched = 0, 0
