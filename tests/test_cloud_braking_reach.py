@@ -79,8 +79,11 @@ def test_the_cloud_reach_grows_by_each_spheres_stopping_distance(arm: dynfab.Rob
     feed = SurfaceFeed(arm, leaf, views)
     q, qdot = np.array([0.9, 0.0, 0.0]), np.array([1.0, 0.0, 0.0])   # the whole arm turning at 1 rad/s
     speeds = np.array([0.5, 0.9, 1.2])   # the spheres' distances from the first joint's axis [m/s]
-    np.testing.assert_allclose(feed.cloud_reach(q, qdot), feed.reach + speeds**2 / 8.0, rtol=1e-9)
-    np.testing.assert_allclose(feed.cloud_reach(q, None), feed.reach)
+    velocities = feed.sphere_velocities(q, qdot)
+    np.testing.assert_allclose(np.linalg.norm(velocities, axis=1), speeds, rtol=1e-9)
+    np.testing.assert_allclose(feed.cloud_reach(velocities), feed.reach + speeds**2 / 8.0, rtol=1e-9)
+    assert feed.sphere_velocities(q, None) is None
+    np.testing.assert_allclose(feed.cloud_reach(None), feed.reach)
     # the tool 0.26 m from the wall (a clearance of 0.2 m, twice the range): seen only moving
     tool = np.asarray(arm.sphere_centers(q))[2]
     wall = PointCloud.from_points(np.array([[tool[0] + 0.26, tool[1], tool[2]]]), 0.01)

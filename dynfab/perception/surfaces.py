@@ -98,16 +98,23 @@ class SurfaceFeed:
         self._centres = ca.Function("sphere_centres", [q], [centres])
         velocities = ca.reshape(ca.jtimes(ca.vec(centres), q, qdot), centres.shape)
         self._velocities = ca.Function("sphere_velocities", [q, qdot], [velocities])
-        self._speeds = ca.Function("sphere_speeds", [q, qdot], [ca.sqrt(ca.sum2(velocities**2))])
 
-    def cloud_reach(self, q: NDArray[np.float64], qdot: NDArray[np.float64] | None) -> NDArray[np.float64]:
-        """Per sphere, how far from its centre a cloud's points are looked for [m]:
-        ``reach_i + ‖ṗ_i‖²/(2 a_b)`` with a braking leaf and ``q̇`` given, else ``reach_i``
-        (module docstring)."""
+    def sphere_velocities(self, q: NDArray[np.float64], qdot: NDArray[np.float64] | None
+                          ) -> NDArray[np.float64] | None:
+        """The leaf's sphere centres' velocities ``ṗ_i = J_i(q) q̇`` (k, 3) [m/s] where they
+        matter (a braking leaf, ``q̇`` given), else None."""
         if qdot is None or self._braking is None or not self.leaf.spheres:
+            return None
+        return np.asarray(self._velocities(q, qdot), dtype=float).reshape(-1, 3)
+
+    def cloud_reach(self, velocities: NDArray[np.float64] | None) -> NDArray[np.float64]:
+        """Per sphere, how far from its centre a cloud's points are looked for [m]:
+        ``reach_i + ‖ṗ_i‖²/(2 a_b)`` given the spheres' ``velocities``
+        (:meth:`sphere_velocities`), else ``reach_i`` (module docstring)."""
+        if velocities is None:
             return self.reach
-        speeds = np.asarray(self._speeds(q, qdot), dtype=float).reshape(-1)
-        return self.reach + speeds**2 / (2.0 * self._braking)
+        assert self._braking is not None
+        return self.reach + np.sum(velocities**2, axis=1) / (2.0 * self._braking)
 
     def write(self, q: NDArray[np.float64], meshes: Sequence[PlacedMesh], clouds: Sequence[PointCloud] = (),
               cloud_allowances: Sequence[float] = (), qdot: NDArray[np.float64] | None = None) -> None:
@@ -137,15 +144,16 @@ class SurfaceFeed:
                               - allowance * normals[closer])
             velocities[closer] = placed.velocity
         allowances = list(cloud_allowances) or [0.0] * len(clouds)
-        reach = self.cloud_reach(q, qdot) if clouds else self.reach
+        sphere_velocities = self.sphere_velocities(q, qdot) if clouds or self.leaf.far_side else None
+        reach = self.cloud_reach(sphere_velocities) if clouds else self.reach
         for cloud, allowance in zip(clouds, allowances, strict=True):
             found = cloud.nearest(centres, max_distance=float(reach.max()) - allowance)
             velocities[_keep_nearer(found, allowance, reach, best, points, normals)] = 0.0
         active = np.isfinite(best)
         normals[~active] = (0.0, 0.0, 1.0)
         if self.leaf.far_side:
-            motion = None if qdot is None or self._braking is None else SphereMotion(
-                np.asarray(self._velocities(q, qdot), dtype=float).reshape(-1, 3), self._radii, self._braking)
+            motion = (None if sphere_velocities is None
+                      else SphereMotion(sphere_velocities, self._radii, self._braking))
             far_points, far_normals, far_active = self._far_side(centres, points, normals, active, clouds,
                                                                  allowances, reach, motion)
             points, normals = np.concatenate([points, far_points]), np.concatenate([normals, far_normals])
