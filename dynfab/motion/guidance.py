@@ -213,7 +213,10 @@ class JointGuidance:
                     error = GuidanceError("no_path", f"the path planned at margin {settings.margin} m comes closer "
                                                      f"than mesh_margin to the meshes")
                     break
-                return self._plan_of(path, target, began, checks)
+                plan = self._plan_of(path, target, began, checks)
+                if tight or path.winding <= self.settings.detour_ratio:
+                    return plan
+                return self._quickest(plan, start, target, mode_settings, attempt_seed, (approach, leave), began)
         assert error is not None
         if tight or error.reason not in _ENDPOINT_FAILURES | {"no_path"} or not self._tight_applies():
             raise error
@@ -249,9 +252,29 @@ class JointGuidance:
         own clearance where they are nearer); the escapes' segments were judged already."""
         meshes = self._meshes()
         assert meshes is not None
-        inner = path.waypoints[int(path.escaped_start):len(path.waypoints) - int(path.escaped_goal)]
+        inner = path.inner
         floor = min(meshes.margin, meshes.clearance(inner[0])[0], meshes.clearance(inner[-1])[0])
         return meshes.polyline_free(inner, self.settings.path.resolution / 2, floor)
+
+    def _quickest(self, plan: Plan, start: NDArray[np.float64], target: NDArray[np.float64],
+                  settings: JointPlannerSettings, seed: int, tests: tuple[ApproachTest | None, ApproachTest | None],
+                  began: float) -> Plan:
+        """Of ``plan``, whose way is a detour (longer than ``detour_ratio`` times the distance
+        between its ends: :attr:`~dynfab.motion.joint_planning.JointPath.winding`), and the
+        plans of the next ``detour_tries`` seeds with the same ``settings`` and endpoint
+        ``tests`` (goal, start), the quickest (the whole reference's duration)."""
+        best, checks = plan, plan.checks
+        for k in range(1, self.settings.detour_tries + 1):
+            try:
+                path = plan_joint_path(self.checker, start, target, self._lower, self._upper, settings, seed + k,
+                                       *tests)
+                checks += path.checks
+                candidate = self._plan_of(path, target, began, checks)
+            except (NoPathError, GuidanceError):
+                continue
+            if candidate.trajectory.duration < best.trajectory.duration:
+                best = candidate
+        return replace(best, time_s=time.perf_counter() - began, checks=checks)
 
     def _plan_of(self, path: JointPath, target: NDArray[np.float64], began: float, checks: int) -> Plan:
         try:   # timed (:meth:`_timed`) as a plan to target

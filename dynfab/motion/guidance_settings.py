@@ -113,6 +113,14 @@ class GuidanceSettings:
         attempts: plans tried per request, each with the next seed and twice the previous
             one's time limit (1, 2, 4 s by default) [-]; a blocked start or goal with no escape
             is tried again too (the next seed draws other escape samples).
+        detour_ratio: a planned way (between its escapes) longer than this times the
+            straight distance between its ends is a detour [-]: RRT-Connect's random trees
+            sometimes wind, and the shortcuts do not unwind them (development generated seed
+            17 as posed, table_under_pick/0004: a way of 8.3 rad, 16.5 s, for 1.5 rad
+            apart, the robot at the approach at 17.5 s of 20). Of 56 plans of that set 3
+            were longer than 3 times, none of the others more than 1.5 times.
+        detour_tries: plans of such a way made with the next seeds, the quickest (the whole
+            reference's duration) kept [-] (table_under_pick/0004: 9.4 s and 8.1 s).
         replans: plans at most in one run after the first [-]. 10: with 4 (the value
             before), all 8 failures of training moving-sphere problems 10-16 had used them
             all. A robot at a refuge (:mod:`dynfab.motion.making_way`) replans beyond them
@@ -235,6 +243,8 @@ class GuidanceSettings:
     slow_speed: float = 0.25
     acceleration: float = 0.25
     attempts: int = 3
+    detour_ratio: float = 3.0
+    detour_tries: int = 2
     replans: int = 10
     blocked_interval: float = 0.5
     lag_slow: float = 0.1

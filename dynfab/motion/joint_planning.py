@@ -137,6 +137,20 @@ class JointPath:
     escaped_start: bool
     escaped_goal: bool
 
+    @property
+    def inner(self) -> NDArray[np.float64]:
+        """The planned way between the escapes (the free start to the free goal) (m, n) [rad]."""
+        return self.waypoints[int(self.escaped_start):len(self.waypoints) - int(self.escaped_goal)]
+
+    @property
+    def winding(self) -> float:
+        """How many times longer :attr:`inner` is than the straight distance between its
+        ends [-] (1 for a straight way; 1 where its ends coincide)."""
+        inner = self.inner
+        length = float(np.sum(np.linalg.norm(np.diff(inner, axis=0), axis=1)))
+        distance = float(np.linalg.norm(inner[-1] - inner[0]))
+        return length / distance if distance > 0.0 else 1.0
+
 
 @dataclass(frozen=True)
 class ApproachTest:
