@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 from pathlib import Path
@@ -380,3 +381,20 @@ def test_builtin_panda_fine_spheres_cover_frankas_meshes_within_5_mm_and_reach_a
     for sphere in spheres:
         reach = _stick_out(meshes[sphere.link], np.array(sphere.center), sphere.radius)
         assert reach <= 0.005 + 1e-4, (sphere.link, reach)   # 0.1 mm: the sample's spacing on the sphere
+
+
+def test_the_fine_table_file_is_what_its_writer_writes_and_its_summary_counts_its_spheres() -> None:
+    """data/panda_fine_spheres.json: rewritten from the spheres it holds, it is the same text;
+    the per-link counts of its ``fitted`` summary are the spheres it holds."""
+    from collections import Counter
+    from importlib import resources
+
+    from dynfab.robots.panda_sphere_fit import fine_table_json
+
+    text = resources.files("dynfab.robots").joinpath("data/panda_fine_spheres.json").read_text()
+    fitted = json.loads(text)["fitted"]
+    spheres = [CollisionSphere(link, center, radius) for link, center, radius in PANDA_FINE_SPHERES]
+    assert fine_table_json("PANDA_FINE:\n\n" + "\n".join(fitted), spheres) == text
+    counts = Counter(sphere.link for sphere in spheres)
+    assert {row.split()[0]: int(row.split()[1]) for row in fitted[:-1]} == counts
+    assert fitted[-1].startswith(f"{len(spheres)} spheres")

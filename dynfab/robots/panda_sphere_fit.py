@@ -2,7 +2,7 @@
 command that rewrites that file:
 
     python -m dynfab.robots.panda_sphere_fit > dynfab/robots/panda_spheres.py
-    python -m dynfab.robots.panda_sphere_fit --fine > dynfab/robots/panda_fine_spheres.py
+    python -m dynfab.robots.panda_sphere_fit --fine > dynfab/robots/data/panda_fine_spheres.json
 
 From Franka's collision meshes as example-robot-data ships them (``panda.urdf``, active
 joints ``panda_joint1..7``), whose frames ``panda_link0`` ... ``panda_link7``, ``panda_hand``
@@ -35,9 +35,9 @@ pairs :data:`PANDA_PAIRS`) and global guidance's (``PANDA_PLANNING_*``:
 :data:`PLANNING_TIGHT_LINKS` at :data:`HAND_BULGE`, pairs :data:`PLANNING_PAIRS`; the
 other links' spheres are the same). Why two: ``panda_spheres.py``.
 
-A third table, ``panda_fine_spheres.py`` (``--fine``): every link at :data:`FINE_BULGE`,
-no pairs, guidance's second look where its spheres say blocked
-(:attr:`~dynfab.robots.robot.Robot.fine_spheres`).
+A third table, ``data/panda_fine_spheres.json`` (``--fine``; read by
+``panda_fine_spheres.py``): every link at :data:`FINE_BULGE`, no pairs, guidance's second
+look where its spheres say blocked (:attr:`~dynfab.robots.robot.Robot.fine_spheres`).
 
 The summary at the end of ``panda_spheres.py`` is measured on the final (snapped,
 rounded) spheres: coverage on the 2 mm check points plus their spacing bound, bulge as
@@ -46,6 +46,7 @@ rounded) spheres: coverage on the 2 mm check points plus their spacing bound, bu
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Sequence
 from dataclasses import replace
@@ -183,7 +184,7 @@ def _rounded(sphere: CollisionSphere) -> CollisionSphere:
 #: A table of ``panda_spheres.py``: its name's prefix (``PANDA_FITTED``), what it is for,
 #: the fits per link (those written: a table may leave out the links it shares with the
 #: one before) and the pairs (into all its spheres, in the links' order; None: a table
-#: without pairs, ``panda_fine_spheres.py``).
+#: without pairs, the fine one).
 Table = tuple[str, str, Sequence[LinkFit], Sequence[tuple[int, int]] | None]
 
 
@@ -225,7 +226,7 @@ def _summary(table: Table, total: int) -> str:
 
 def main(argv: Sequence[str] = ()) -> int:
     """Print the regenerated ``panda_spheres.py``: its current docstring up to
-    ``Fitted:``, a new summary, the new tables; with ``--fine``, ``panda_fine_spheres.py``."""
+    ``Fitted:``, a new summary, the new tables; with ``--fine``, ``data/panda_fine_spheres.json``."""
     if "--fine" in argv:
         return _print_fine()
     from . import panda_spheres
@@ -248,16 +249,23 @@ def main(argv: Sequence[str] = ()) -> int:
 
 
 def _print_fine() -> int:
-    """Print the regenerated ``panda_fine_spheres.py``: its current docstring up to
-    ``Fitted:``, a new summary, the table."""
-    from . import panda_fine_spheres
-
+    """Print the regenerated ``data/panda_fine_spheres.json`` (:func:`fine_table_json`)."""
     fits = fit_fine()
     table: Table = ("PANDA_FINE", "Guidance's second look, every link at FINE_BULGE", fits, None)
-    head, _, _ = (panda_fine_spheres.__doc__ or "").partition("Fitted:")
     summary = _summary(table, sum(len(f.spheres) for f in fits))
-    print(table_module([table], f"{head.rstrip()}\n\nFitted:\n\n{summary}"), end="")
+    print(fine_table_json(summary, [s for f in fits for s in f.spheres]), end="")
     return 0
+
+
+def fine_table_json(summary: str, spheres: Sequence[CollisionSphere]) -> str:
+    """The text of ``data/panda_fine_spheres.json``: how it was made, the fit's summary per
+    link (``fitted``) and one sphere per line, ``[link, [x, y, z], radius]`` (centre in the
+    link frame [m], radius [m], rounded to 0.1 mm as :func:`_rounded` leaves them)."""
+    rows = [f'    ["{s.link}", [{", ".join(f"{x:.4f}" for x in s.center)}], {s.radius:.4f}]' for s in spheres]
+    fitted = [line.strip() for line in summary.splitlines()[2:]]
+    head = {"made_by": "python -m dynfab.robots.panda_sphere_fit --fine", "fitted": fitted}
+    text = json.dumps(head, indent=2)[:-2]
+    return text + ',\n  "spheres": [\n' + ",\n".join(rows) + "\n  ]\n}\n"
 
 
 if __name__ == "__main__":
