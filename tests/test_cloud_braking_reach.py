@@ -1,5 +1,5 @@
 """A braking nearest-point leaf against a point cloud: the feed reaches as far as each sphere's
-stopping distance (:meth:`SurfaceFeed.cloud_reach`), and every sphere gets a far-side point
+stopping distance (:meth:`SurfaceFeed.braking_reach`), and every sphere gets a far-side point
 (:mod:`dynfab.geometry.cloud_far_side`)."""
 
 from __future__ import annotations
@@ -71,7 +71,7 @@ def test_a_braking_leaf_fed_the_spheres_speeds_keeps_a_fast_arm_off_the_true_wal
     assert _swing_into_the_wall(arm, with_speeds=True) > 0.005
 
 
-def test_the_cloud_reach_grows_by_each_spheres_stopping_distance(arm: dynfab.Robot) -> None:
+def test_the_braking_reach_grows_by_each_spheres_stopping_distance(arm: dynfab.Robot) -> None:
     leaf = NearestSurfaceAvoidance(spheres=(0, 1, 2), barrier=BRAKING)
     planner = dynfab.FabricPlanner(arm, dynfab.PlannerConfig(goals=(dynfab.GoalConfig(link="tool"),), leaves=(leaf,),
                                                              backend="vm"))
@@ -81,9 +81,9 @@ def test_the_cloud_reach_grows_by_each_spheres_stopping_distance(arm: dynfab.Rob
     speeds = np.array([0.5, 0.9, 1.2])   # the spheres' distances from the first joint's axis [m/s]
     velocities = feed.sphere_velocities(q, qdot)
     np.testing.assert_allclose(np.linalg.norm(velocities, axis=1), speeds, rtol=1e-9)
-    np.testing.assert_allclose(feed.cloud_reach(velocities), feed.reach + speeds**2 / 8.0, rtol=1e-9)
+    np.testing.assert_allclose(feed.braking_reach(velocities), feed.reach + speeds**2 / 8.0, rtol=1e-9)
     assert feed.sphere_velocities(q, None) is None
-    np.testing.assert_allclose(feed.cloud_reach(None), feed.reach)
+    np.testing.assert_allclose(feed.braking_reach(None), feed.reach)
     # the tool 0.26 m from the wall (a clearance of 0.2 m, twice the range): seen only moving
     tool = np.asarray(arm.sphere_centers(q))[2]
     wall = PointCloud.from_points(np.array([[tool[0] + 0.26, tool[1], tool[2]]]), 0.01)

@@ -9,7 +9,7 @@ lowering ``δ = h√3/2``, :class:`~dynfab.geometry.point_cloud.PointCloud`), a 
    ``(q, q̇)`` evaluated on fixed buffers (no argument conversion). The reach is the leaf's
    barrier's ``horizon + offset + r_i``, and with a braking barrier (``a_b``) and ``q̇``
    given, grown by the sphere's stopping distance as the scenario's feed grows it
-   (:meth:`SurfaceFeed.cloud_reach <dynfab.perception.surfaces.SurfaceFeed.cloud_reach>`):
+   (:meth:`SurfaceFeed.braking_reach <dynfab.perception.surfaces.SurfaceFeed.braking_reach>`):
 
        reach_i = horizon + offset + r_i + ‖J_{x_i}(q) q̇‖² / (2 a_b)          [m];
 

@@ -6,9 +6,14 @@ half-diagonal so that it never exceeds the distance to a measured point).
 
 For the configuration ``q`` the robot's sphere centres ``p_i`` are computed (forward
 kinematics), brought into each mesh's frame, and the nearest points within
-``reach = range + r_i`` of it are found (:func:`~dynfab.geometry.mesh_distance.nearest_on_mesh`,
-whose bounding-box test skips the meshes out of reach). The nearest over all meshes wins;
-its point, outward normal and velocity (the mesh's translation velocity: meshes move
+``reach`` of it are found (``range + r_i`` at rest, more when it moves: below) (:func:`~dynfab.geometry.mesh_distance.nearest_on_mesh`,
+whose bounding-box test skips the meshes out of reach). One surface per sphere is written,
+the one the leaf acts on most: the least clearance left after a stop,
+``b = d − min(n · (ṗ_i − v_s), 0)² / (2 a_b)`` (:func:`~dynfab.geometry.cloud_far_side.braking_clearance`,
+``v_s`` the surface's velocity; the nearest without braking or ``q̇``). Ranked by ``d`` alone,
+a hand at 1.5 m/s toward a cupboard door 15 cm off kept a surface 10 cm beside it and met
+the door at 10 cm, too fast to stop (MBM kitchen seed 12/0010 on the meshes' plan, session 21). Its point,
+outward normal and velocity (the mesh's translation velocity: meshes move
 without turning, as shapes do) are written into the leaf
 (:class:`~dynfab.fabric.leaves.surface_points.NearestSurfaceAvoidance`), and ``active`` is 1
 where a point was found. A sphere with nothing in reach is left inactive: beyond its range the
@@ -24,9 +29,10 @@ surfaces out to
 
 or the leaf meets a surface only once it is within ``r`` and too fast to stop (a link 10 mm
 into a table at 1 m/s, MotionBenchMaker table_under_pick/0036 as a cloud: the stop from 1 m/s
-at 4 m/s² takes 12.5 cm, the range is 10 cm). A shape leaf reads its distance at any range;
-so, given ``q̇``, a cloud's nearest points are looked for within ``reach_i(q̇)``. Meshes keep
-the static ``reach_i(0)`` (the same cutoff, not changed here).
+at 4 m/s² takes 12.5 cm, the range is 10 cm; MBM kitchen seed 12/0010 on the meshes' plan
+(session 21): the hand at 1.2 m/s saw a cupboard door 11 cm off and went 52 mm into it). A
+shape leaf reads its distance at any range; so, given ``q̇``, the meshes' and the clouds'
+nearest points are looked for within ``reach_i(q̇)``.
 
 A surface may carry an *allowance* ``a ≥ 0`` [m] (guidance gives one near a grasp goal the
 robot's spheres overlap, :mod:`dynfab.motion.guided_fabric`): its nearest point is written
@@ -107,8 +113,8 @@ class SurfaceFeed:
             return None
         return np.asarray(self._velocities(q, qdot), dtype=float).reshape(-1, 3)
 
-    def cloud_reach(self, velocities: NDArray[np.float64] | None) -> NDArray[np.float64]:
-        """Per sphere, how far from its centre a cloud's points are looked for [m]:
+    def braking_reach(self, velocities: NDArray[np.float64] | None) -> NDArray[np.float64]:
+        """Per sphere, how far from its centre surfaces are looked for [m]:
         ``reach_i + ‖ṗ_i‖²/(2 a_b)`` given the spheres' ``velocities``
         (:meth:`sphere_velocities`), else ``reach_i`` (module docstring)."""
         if velocities is None:
@@ -120,40 +126,41 @@ class SurfaceFeed:
               cloud_allowances: Sequence[float] = (), qdot: NDArray[np.float64] | None = None) -> None:
         """Find and write the nearest surface point of every sphere at configuration ``q``
         among ``meshes`` and ``clouds`` (``cloud_allowances``: one per cloud [m], zeros if
-        empty; ``qdot`` [rad/s]: the clouds' reach grows by each sphere's stopping distance,
-        :meth:`cloud_reach`; module docstring)."""
+        empty; ``qdot`` [rad/s]: the reach grows by each sphere's stopping distance,
+        :meth:`braking_reach`; module docstring)."""
         if not self.leaf.spheres:
             return
         centres = np.asarray(self._centres(q), dtype=float).reshape(-1, 3)
         count = len(centres)
-        best = np.full(count, np.inf)   # d + a of the surface written so far [m]
+        sphere_velocities = self.sphere_velocities(q, qdot) if meshes or clouds or self.leaf.far_side else None
+        reach = self.braking_reach(sphere_velocities)
+        motion = None if sphere_velocities is None else SphereMotion(sphere_velocities, self._radii, self._braking)
+        best = np.full(count, np.inf)   # the rank (module docstring) of the surface written so far [m]
         points, normals, velocities = np.zeros((count, 3)), np.zeros((count, 3)), np.zeros((count, 3))
         for placed in meshes:
             rotation = placed.placement.rotation
             local = placed.placement.to_local(centres)
             allowance = placed.allowance
-            found = nearest_on_mesh(placed.mesh, local, max_distance=float(self.reach.max()) - allowance,
+            found = nearest_on_mesh(placed.mesh, local, max_distance=float(reach.max()) - allowance,
                                     signed_within=float(self._radii.max()))
+            world = found.normals @ rotation.T
             seen = found.distances + allowance
-            closer = found.found & (seen < best) & (seen <= self.reach)
+            rank = braking_clearance(seen, world, _relative(motion, placed.velocity))
+            closer = found.found & (rank < best) & (seen <= reach)
             if not closer.any():
                 continue
-            best[closer] = seen[closer]
-            normals[closer] = found.normals[closer] @ rotation.T
+            best[closer] = rank[closer]
+            normals[closer] = world[closer]
             points[closer] = (found.points[closer] @ rotation.T + np.asarray(placed.placement.position)
                               - allowance * normals[closer])
             velocities[closer] = placed.velocity
         allowances = list(cloud_allowances) or [0.0] * len(clouds)
-        sphere_velocities = self.sphere_velocities(q, qdot) if clouds or self.leaf.far_side else None
-        reach = self.cloud_reach(sphere_velocities) if clouds else self.reach
         for cloud, allowance in zip(clouds, allowances, strict=True):
             found = cloud.nearest(centres, max_distance=float(reach.max()) - allowance)
-            velocities[_keep_nearer(found, allowance, reach, best, points, normals)] = 0.0
+            velocities[_keep_nearer(found, allowance, reach, best, points, normals, motion)] = 0.0
         active = np.isfinite(best)
         normals[~active] = (0.0, 0.0, 1.0)
         if self.leaf.far_side:
-            motion = (None if sphere_velocities is None
-                      else SphereMotion(sphere_velocities, self._radii, self._braking))
             far_points, far_normals, far_active = self._far_side(centres, points, normals, active, clouds,
                                                                  allowances, reach, motion)
             points, normals = np.concatenate([points, far_points]), np.concatenate([normals, far_normals])
@@ -186,14 +193,24 @@ class SurfaceFeed:
         return far_points, far_normals, np.isfinite(best)
 
 
+def _relative(motion: SphereMotion | None, velocity: tuple[float, float, float]) -> SphereMotion | None:
+    """The spheres' ``motion`` relative to a surface moving at ``velocity`` (3,) [m/s]."""
+    if motion is None or not any(velocity):
+        return motion
+    return SphereMotion(motion.velocities - np.asarray(velocity, dtype=float), motion.radii, motion.braking)
+
+
 def _keep_nearer(found: NearestPoints, allowance: float, reach: NDArray[np.float64] | float,
-                 best: NDArray[np.float64], points: NDArray[np.float64], normals: NDArray[np.float64]) -> NDArray[np.bool_]:
-    """Write a cloud's points ``found`` where they are seen nearer than ``best`` and within
-    ``reach`` [m], seen ``allowance`` [m] farther (``c' = c − a n``, module docstring): into
-    ``best``, ``points`` and ``normals``; the rows written."""
+                 best: NDArray[np.float64], points: NDArray[np.float64], normals: NDArray[np.float64],
+                 motion: SphereMotion | None) -> NDArray[np.bool_]:
+    """Write a cloud's points ``found`` where they rank before ``best`` (module docstring: with
+    the spheres' ``motion``, by the clearance left after a stop) and lie within ``reach`` [m],
+    seen ``allowance`` [m] farther (``c' = c − a n``): into ``best``, ``points`` and
+    ``normals``; the rows written."""
     seen = found.distances + allowance
-    closer = found.found & (seen < best) & (seen <= reach)
-    best[closer] = seen[closer]
+    rank = braking_clearance(seen, found.normals, motion)
+    closer = found.found & (rank < best) & (seen <= reach)
+    best[closer] = rank[closer]
     points[closer] = found.points[closer] - allowance * found.normals[closer]
     normals[closer] = found.normals[closer]
     return closer

@@ -53,7 +53,7 @@ class MeshObstacles:
 
     def write(self, t: float, q: np.ndarray, references: References, qdot: np.ndarray | None = None) -> None:
         """Write the nearest surface point of each robot sphere at time ``t`` [s] (``qdot``
-        [rad/s]: a braking leaf reaches farther into the clouds, :meth:`SurfaceFeed.cloud_reach`)."""
+        [rad/s]: a braking leaf reaches farther into the meshes and clouds, :meth:`SurfaceFeed.braking_reach`)."""
         placed = []
         for k, obstacle in zip(self.indices, self.obstacles):
             point = references.obstacles[k].evaluate(t)
