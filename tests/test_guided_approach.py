@@ -332,7 +332,7 @@ def test_obstacles_replaced_on_the_approach_get_no_allowance_and_do_not_crash(pa
 
 
 def test_among_primitives_a_goal_no_escape_reaches_is_planned_on_the_meshes(panda, touching, monkeypatch) -> None:
-    # the last resort (mesh_escape_plan) among primitives since session 20; among meshes only if asked
+    # the last resort (mesh_escape_plan) among primitives since session 20 (among meshes since session 21)
     monkeypatch.setattr(MeshGoalCheck, "segment_free", lambda self, a, b, step, floor=None: False)
     guidance = JointGuidance(panda)
     plan = guidance.plan(START, JointTarget(tuple(touching)), [WALL])

@@ -68,7 +68,7 @@ def test_the_wider_margin_is_searched_first_then_mesh_margin_with_every_seed(pan
     assert margins == [(0.006, 4), (0.006, 5), (0.003, 4), (0.003, 5), (0.003, 6)]
 
 
-def test_among_meshes_it_searches_only_if_asked_and_never_among_point_clouds(panda, monkeypatch) -> None:
+def test_among_meshes_it_searches_unless_told_not_to_and_never_among_point_clouds(panda, monkeypatch) -> None:
     searched = []
 
     def finding_none(validity, start, goal, lower, upper, settings, seed, seconds):
@@ -78,15 +78,16 @@ def test_among_meshes_it_searches_only_if_asked_and_never_among_point_clouds(pan
     monkeypatch.setattr(escape_module, "mesh_path", finding_none)
     cube_mesh = trimesh.creation.box(extents=BESIDE_LINK2.shape.size)
     mesh = PlacedObstacle(Mesh(cube_mesh.vertices, cube_mesh.faces, "cube"), BESIDE_LINK2.placement)
-    for escape, obstacles, searches in ((MeshEscapeSettings(), (mesh,), 0),
-                                        (MeshEscapeSettings(), (BESIDE_LINK2, mesh), 0),
-                                        (MeshEscapeSettings(among_meshes=True), (mesh,), 2),
-                                        (MeshEscapeSettings(among_meshes=True), (BESIDE_LINK2, _CLOUD), 0)):
+    for escape, obstacles, searches in ((MeshEscapeSettings(among_meshes=False), (mesh,), 0),
+                                        (MeshEscapeSettings(among_meshes=False), (BESIDE_LINK2, mesh), 0),
+                                        (MeshEscapeSettings(), (mesh,), 2),
+                                        (MeshEscapeSettings(), (BESIDE_LINK2, mesh), 2),
+                                        (MeshEscapeSettings(), (BESIDE_LINK2, _CLOUD), 0)):
         scene = _scene(panda, escape)
         scene.checker.set_obstacles(obstacles)
         searched.clear()
         assert escape_plan(scene, START, Q, (7,), time.perf_counter()) is None
-        assert len(searched) == searches   # asked: the wider margin, then mesh_margin
+        assert len(searched) == searches   # the wider margin, then mesh_margin
 
 
 def test_a_spent_budget_of_time_fails_by_name(panda, monkeypatch) -> None:

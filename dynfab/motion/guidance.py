@@ -189,8 +189,8 @@ class JointGuidance:
         found an escape without point clouds (or on a cloud's focus: :meth:`_tight_applies`),
         the same attempts at ``tight_margin`` (``tight``), each path kept only if clear on the
         meshes between its escapes (:meth:`_clear_on_meshes`); then, without clouds, as where
-        no attempt found a path, the meshes' plan (:mod:`.mesh_escape_plan`: among primitives,
-        among meshes if it is asked to)."""
+        no attempt found a path, the meshes' plan (:mod:`.mesh_escape_plan`: among primitives
+        and meshes, unless ``mesh_escape.among_meshes`` is off)."""
         goal_tests, start_tests = self._endpoint_tests(target, goal=True), self._endpoint_tests(start)
         modes = list(dict.fromkeys([(goal_tests[0], start_tests[0]), (goal_tests[-1], start_tests[-1])]))
         error: GuidanceError | None = None

@@ -75,7 +75,7 @@ class GuidanceSettings:
             free on them (or a start's way out) keeps where the endpoint is farther (the
             endpoint's own where it is nearer;
             :meth:`JointGuidance._endpoint_tests`).
-        mesh_escape: the search, among primitives (and meshes with its ``among_meshes``; never
+        mesh_escape: the search, among primitives and meshes (``among_meshes``; never
             among point clouds), where no attempt found an escape of the goal or a path:
             judged on the robot's meshes wherever the spheres refuse
             (:mod:`dynfab.motion.mesh_escape`), at 6 mm first, then ``mesh_margin``, within a
@@ -83,7 +83,8 @@ class GuidanceSettings:
             (:mod:`dynfab.motion.mesh_escape_plan`); None: none. Among meshes with the 6 mm
             search (session 14) two of the six runs it rescued on development kitchen seeds
             0-4 still came within 0.56-0.73 mm of the kitchen away from their starts, and one
-            of seed 12 went 52 mm in (session 20): see ``among_meshes``.
+            of seed 12 went 52 mm in (session 20, a blind spot of the leaves' feed, mended in
+            session 21): see ``among_meshes``.
         mesh_escape_samples: ``path.escape_samples`` for a goal whose approach the meshes
             judge (:meth:`JointGuidance._endpoint_tests`) [-]: 400 found no escape for as-posed
             table_pick/0032 (problems 29-32, which chose it), its hand between a table and a cube

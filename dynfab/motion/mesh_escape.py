@@ -68,13 +68,18 @@ class MeshEscapeSettings:
         end_radius: how far from an end nearer the meshes than ``m`` its own smaller margin
             holds [rad] (``m`` elsewhere).
         among_meshes: whether guidance searches among mesh obstacles too, not only among
-            primitives (:func:`~dynfab.motion.mesh_escape_plan.escape_plan`). Off: on
-            development kitchen seed 12/0010 (session 20) a run it rescued put the robot
-            52 mm into the kitchen; on held-out kitchen seed 6 (session 13) one touched it
-            0.1 mm deep with ``panda_link6``. Among primitives, where the fabric's leaves read
-            the exact distances, it rescued development generated seed 14 as posed
-            table_pick/0003 and 0008 and seed 16 table_under_pick/0003, with no collision and
-            no run lost on seed 16 (56 problems).
+            primitives (:func:`~dynfab.motion.mesh_escape_plan.escape_plan`). On since
+            session 21: off, on development kitchen seed 12/0010 (session 20) a run it rescued
+            put the robot's hand 52 mm into a cupboard door, which the nearest-point leaf's
+            feed saw too late (a nearer surface beside the hand was written instead of the
+            door it moved toward at 1.5 m/s; :mod:`dynfab.perception.surfaces` now writes the
+            surface with the least clearance after a stop, within each sphere's stopping
+            distance). With that, on the 19 failures of development kitchen seeds 1, 4, 10-15
+            it rescued 8, with no collision (the least clearance 0.65 mm, seed 1/0005's start's
+            own); the other 11 stay failures (6 of them a plain RRT-Connect on the meshes at 0
+            mm does not solve in 60 000 mesh checks). Among primitives, where the fabric's
+            leaves read the exact distances, it rescued development generated seed 14 as
+            posed table_pick/0003 and 0008 and seed 16 table_under_pick/0003 (session 20).
     """
 
     coverage: float = 0.005
@@ -87,7 +92,7 @@ class MeshEscapeSettings:
     resolution: float = 0.01
     step: float = 0.5
     end_radius: float = 0.3
-    among_meshes: bool = False
+    among_meshes: bool = True
 
     def __post_init__(self) -> None:
         for name in ("checks", "simplify_checks", "total_checks", "wide_searches", "budget", "resolution", "step", "end_radius"):

@@ -1,4 +1,4 @@
-"""Guidance's last resort among primitives (and, with ``among_meshes``, meshes; never among
+"""Guidance's last resort among primitives and meshes (``among_meshes``; never among
 point clouds): where no attempt found an escape of
 a blocked goal (``goal_in_collision``, also at ``tight_margin``) or a path (``no_path``), a
 path judged on the robot's meshes wherever its spheres refuse
