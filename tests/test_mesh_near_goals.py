@@ -101,7 +101,14 @@ def test_where_no_escape_clears_the_margin_a_tight_round_plans_and_keeps_the_mes
 
 
 def test_a_tight_round_path_the_meshes_find_too_close_is_refused(panda, near, monkeypatch) -> None:
+    """The tight round's path refused on the meshes fails as ``no_path`` (the meshes' plan,
+    the next resort, turned off here; with it, the same goal is planned on the meshes)."""
     monkeypatch.setattr(JointGuidance, "_clear_on_meshes", lambda self, path: False)
+    settings = _narrow(_settings())
     with pytest.raises(GuidanceError) as refused:
-        JointGuidance(panda, _narrow(_settings())).plan(AWAY, JointTarget(tuple(near)), [MESH_WALL])
+        JointGuidance(panda, replace(settings, mesh_escape=None)).plan(AWAY, JointTarget(tuple(near)), [MESH_WALL])
     assert refused.value.reason == "no_path"
+    guidance = JointGuidance(panda, settings)
+    plan = guidance.plan(AWAY, JointTarget(tuple(near)), [MESH_WALL])
+    qs = plan.trajectory.sample(np.linspace(0.0, plan.trajectory.duration, 400))[0]
+    assert guidance._meshes().clearance(qs)[0] > 0.0
