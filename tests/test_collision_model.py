@@ -394,7 +394,7 @@ def test_the_fine_table_file_is_what_its_writer_writes_and_its_summary_counts_it
     text = resources.files("dynfab.robots").joinpath("data/panda_fine_spheres.json").read_text()
     fitted = json.loads(text)["fitted"]
     spheres = [CollisionSphere(link, center, radius) for link, center, radius in PANDA_FINE_SPHERES]
-    assert fine_table_json("PANDA_FINE:\n\n" + "\n".join(fitted), spheres) == text
+    assert fine_table_json(fitted, spheres) == text
     counts = Counter(sphere.link for sphere in spheres)
     assert {row.split()[0]: int(row.split()[1]) for row in fitted[:-1]} == counts
     assert fitted[-1].startswith(f"{len(spheres)} spheres")

@@ -139,21 +139,14 @@ class SurfaceFeed:
         points, normals, velocities = np.zeros((count, 3)), np.zeros((count, 3)), np.zeros((count, 3))
         for placed in meshes:
             rotation = placed.placement.rotation
-            local = placed.placement.to_local(centres)
-            allowance = placed.allowance
-            found = nearest_on_mesh(placed.mesh, local, max_distance=float(reach.max()) - allowance,
+            local = nearest_on_mesh(placed.mesh, placed.placement.to_local(centres),
+                                    max_distance=float(reach.max()) - placed.allowance,
                                     signed_within=float(self._radii.max()))
-            world = found.normals @ rotation.T
-            seen = found.distances + allowance
-            rank = braking_clearance(seen, world, _relative(motion, placed.velocity))
-            closer = found.found & (rank < best) & (seen <= reach)
-            if not closer.any():
-                continue
-            best[closer] = rank[closer]
-            normals[closer] = world[closer]
-            points[closer] = (found.points[closer] @ rotation.T + np.asarray(placed.placement.position)
-                              - allowance * normals[closer])
-            velocities[closer] = placed.velocity
+            found = NearestPoints(local.points @ rotation.T + np.asarray(placed.placement.position),
+                                  local.normals @ rotation.T, local.distances, local.found)   # world frame
+            written = _keep_nearer(found, placed.allowance, reach, best, points, normals,
+                                   _relative(motion, placed.velocity))
+            velocities[written] = placed.velocity
         allowances = list(cloud_allowances) or [0.0] * len(clouds)
         for cloud, allowance in zip(clouds, allowances, strict=True):
             found = cloud.nearest(centres, max_distance=float(reach.max()) - allowance)
@@ -203,10 +196,10 @@ def _relative(motion: SphereMotion | None, velocity: tuple[float, float, float])
 def _keep_nearer(found: NearestPoints, allowance: float, reach: NDArray[np.float64] | float,
                  best: NDArray[np.float64], points: NDArray[np.float64], normals: NDArray[np.float64],
                  motion: SphereMotion | None) -> NDArray[np.bool_]:
-    """Write a cloud's points ``found`` where they rank before ``best`` (module docstring: with
-    the spheres' ``motion``, by the clearance left after a stop) and lie within ``reach`` [m],
-    seen ``allowance`` [m] farther (``c' = c − a n``): into ``best``, ``points`` and
-    ``normals``; the rows written."""
+    """Write a surface's points ``found`` (world frame) where they rank before ``best``
+    (module docstring: with the spheres' ``motion``, by the clearance left after a stop) and
+    lie within ``reach`` [m], seen ``allowance`` [m] farther (``c' = c − a n``): into
+    ``best``, ``points`` and ``normals``; the rows written."""
     seen = found.distances + allowance
     rank = braking_clearance(seen, found.normals, motion)
     closer = found.found & (rank < best) & (seen <= reach)

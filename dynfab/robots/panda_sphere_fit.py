@@ -215,13 +215,18 @@ def table_module(tables: Sequence[Table], docstring: str) -> str:
 
 
 def _summary(table: Table, total: int) -> str:
+    """The table's name, then :func:`_summary_rows`."""
+    return "\n".join([f"{table[0]}:", ""] + ["    " + row for row in _summary_rows(table, total)])
+
+
+def _summary_rows(table: Table, total: int) -> list[str]:
     """Per link written: sphere count, coverage and bulge, measured on the final spheres;
     then the table's ``total`` spheres and its pairs."""
-    prefix, _, fits, pairs = table
-    rows = [f"    {fit.link:<17} {len(fit.spheres):>2} spheres, coverage {1000 * fit.coverage:.1f} mm, "
+    _, _, fits, pairs = table
+    rows = [f"{fit.link:<17} {len(fit.spheres):>2} spheres, coverage {1000 * fit.coverage:.1f} mm, "
             f"bulge {1000 * fit.bulge:.1f} mm" for fit in fits]
     pairs_text = "no self-collision pairs" if pairs is None else f"{len(pairs)} self-collision pairs"
-    return "\n".join([f"{prefix}:", ""] + rows + [f"    {total} spheres, {pairs_text}"])
+    return rows + [f"{total} spheres, {pairs_text}"]
 
 
 def main(argv: Sequence[str] = ()) -> int:
@@ -252,18 +257,18 @@ def _print_fine() -> int:
     """Print the regenerated ``data/panda_fine_spheres.json`` (:func:`fine_table_json`)."""
     fits = fit_fine()
     table: Table = ("PANDA_FINE", "Guidance's second look, every link at FINE_BULGE", fits, None)
-    summary = _summary(table, sum(len(f.spheres) for f in fits))
-    print(fine_table_json(summary, [s for f in fits for s in f.spheres]), end="")
+    fitted = _summary_rows(table, sum(len(f.spheres) for f in fits))
+    print(fine_table_json(fitted, [s for f in fits for s in f.spheres]), end="")
     return 0
 
 
-def fine_table_json(summary: str, spheres: Sequence[CollisionSphere]) -> str:
-    """The text of ``data/panda_fine_spheres.json``: how it was made, the fit's summary per
-    link (``fitted``) and one sphere per line, ``[link, [x, y, z], radius]`` (centre in the
-    link frame [m], radius [m], rounded to 0.1 mm as :func:`_rounded` leaves them)."""
+def fine_table_json(fitted: Sequence[str], spheres: Sequence[CollisionSphere]) -> str:
+    """The text of ``data/panda_fine_spheres.json``: how it was made, the fit's summary rows
+    (``fitted``, :func:`_summary_rows`) and one sphere per line, ``[link, [x, y, z], radius]``
+    (centre in the link frame [m], radius [m], rounded to 0.1 mm as :func:`_rounded` leaves
+    them)."""
     rows = [f'    ["{s.link}", [{", ".join(f"{x:.4f}" for x in s.center)}], {s.radius:.4f}]' for s in spheres]
-    fitted = [line.strip() for line in summary.splitlines()[2:]]
-    head = {"made_by": "python -m dynfab.robots.panda_sphere_fit --fine", "fitted": fitted}
+    head = {"made_by": "python -m dynfab.robots.panda_sphere_fit --fine", "fitted": list(fitted)}
     text = json.dumps(head, indent=2)[:-2]
     return text + ',\n  "spheres": [\n' + ",\n".join(rows) + "\n  ]\n}\n"
 
