@@ -132,3 +132,52 @@ def test_a_guided_fabric_gives_its_plans_way_allowances_where_the_robot_is(panda
         np.testing.assert_allclose(now, allowances_near(way, guided._way_table, q, guided._reference), atol=0.0)
         given.append(now[0])
     assert max(given) == pytest.approx(0.007) and given[-1] == 0.0 and given[0] == 0.0
+
+
+def _cube_at_link2():
+    """A 4 cm cube the planning spheres enter at ``Q`` and the meshes clear by about 6.5 mm."""
+    from test_mesh_goal_check import BESIDE_LINK2
+    return PlacedObstacle(Box((0.04, 0.04, 0.04)), BESIDE_LINK2.placement)
+
+
+def test_a_blocked_starts_way_out_lets_the_leaves_see_the_meshes_clearance(panda) -> None:
+    from dynfab.motion.joint_planning import polyline_samples
+    from dynfab.motion.mesh_escape_plan import LEAF_SLACK, mesh_allowances
+    from test_mesh_goal_check import Q
+
+    cube = _cube_at_link2()
+    guidance = JointGuidance(panda)
+    guidance.checker.set_obstacles([cube])
+    away = Q + np.array([0.0, 0.0, 0.0, 0.2, 0.0, 0.0, 0.0])
+    waypoints = np.vstack([Q, away, END])
+    plain = _plan(panda, waypoints)
+    leaving = replace(plain, departure=float(np.linalg.norm(away - Q)))
+    way, before = guidance.way_allowances(plain, [cube], [BUFFER])
+    same_way, table = guidance.way_allowances(leaving, [cube], [BUFFER])
+    np.testing.assert_array_equal(way, same_way)
+    rows = len(polyline_samples(waypoints[:2], guidance.settings.path.resolution))
+    fabric = ConfigurationChecker(panda, [cube]).batch(way)[:, :1]
+    meshes = guidance._meshes()
+    expected = mesh_allowances(meshes.model, way[:rows], (cube,), (BUFFER,), fabric[:rows],
+                               guidance.settings.goal_clearance)
+    np.testing.assert_allclose(table[:rows], np.maximum(before[:rows], expected))
+    np.testing.assert_array_equal(table[rows:], before[rows:])   # beyond the way out as without it
+    seen = fabric[0, 0] + table[0, 0] - BUFFER   # what the leaf keeps positive at the start
+    on_meshes = meshes.clearance(Q)[0]
+    assert fabric[0, 0] < 0.0 < on_meshes
+    assert seen == pytest.approx(min(guidance.settings.goal_clearance, on_meshes + LEAF_SLACK), abs=1e-6)
+
+
+def test_a_plan_from_a_blocked_start_says_how_long_its_way_out_is(panda) -> None:
+    from dynfab.motion.guidance import JointTarget
+    from test_mesh_goal_check import Q
+
+    cube = _cube_at_link2()
+    guidance = JointGuidance(panda)
+    guidance.checker.set_obstacles([cube])
+    margin = guidance.settings.path
+    assert not guidance.checker.free(Q, margin.margin, margin.self_margin)
+    goal = Q + np.array([0.0, 0.0, 0.0, 0.4, 0.0, 0.0, 0.0])
+    assert guidance.plan(Q, JointTarget(tuple(goal)), [cube]).departure > 0.0
+    assert guidance.checker.free(START, margin.margin, margin.self_margin)
+    assert guidance.plan(START, JointTarget(tuple(END)), [cube]).departure == 0.0

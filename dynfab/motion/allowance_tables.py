@@ -79,8 +79,9 @@ class AllowanceTables:
             clearances[:, k] = self._clearances(self._single, segment, obstacle)
         return segment, np.maximum(0.0, np.asarray(buffers, dtype=float) + goal_clearance - clearances)
 
-    def way(self, plan: Plan, obstacles: Sequence[PlacedObstacle],
-            buffers: Sequence[float]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def way(self, plan: Plan, obstacles: Sequence[PlacedObstacle], buffers: Sequence[float],
+            meshes: Callable[[], MeshGoalCheck | None] = lambda: None
+            ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """The configurations of ``plan``'s way (its polyline before an approach) every
         ``path.resolution`` (k, n) [rad] and the allowance of each of ``obstacles`` at each
         (k, m) [m]: what the fabric's leaves, on the robot's own spheres, need to see at
@@ -92,15 +93,39 @@ class AllowanceTables:
         with ``p_k`` the planning spheres' clearance from obstacle ``k`` alone [m]. Zero
         where both are the same spheres (then ``c_k = p_k`` and ``buffer_k ≤
         sphere_coverage``: the default 5 mm each), and for meshes and point clouds (what the
-        plan read of them is a grid's bound)."""
+        plan read of them is a grid's bound). Along a blocked start's way out
+        (:attr:`~dynfab.motion.plan_values.Plan.departure`, judged on the robot's meshes;
+        ``meshes()`` the mesh check, None without meshes; not among point clouds) the
+        leaves see the meshes' clearance from every obstacle instead, as along the meshes'
+        plan's approach (:func:`~dynfab.motion.mesh_escape_plan.mesh_allowances`): on the
+        spheres, which leave up to ``sphere_coverage`` of the meshes outside, such a start
+        is inside the obstacle, the leaves' barrier stops every motion deeper at its clamp,
+        and the robot slid along the way out off it (fresh kitchen seed 20, kitchen/0007: a
+        start 0.16 mm from the cupboard, 6.6 mm into it on the fabric's spheres;
+        ``panda_link5`` touched the cupboard while leaving)."""
         waypoints = plan.trajectory.waypoints
         if plan.approach > 0.0:   # the approach's phase is the last: its first configuration ends the way
             waypoints = waypoints[:len(waypoints) - len(plan.trajectory.phases[-1].waypoints) + 1]
         settings = self._settings
         samples = polyline_samples(waypoints, settings.path.resolution)
         table = np.zeros((len(samples), len(obstacles)))
-        if self._robot.planning_robot is self._robot:
-            return samples, table
+        if self._robot.planning_robot is not self._robot:
+            self._planned_way(samples, obstacles, buffers, table)
+        if plan.departure > 0.0 and not any(isinstance(o.shape, PointCloud) for o in obstacles):
+            check = meshes()
+            if check is not None:
+                leaving = len(polyline_samples(waypoints[:2], settings.path.resolution))
+                spheres = np.array([[self.obstacle_clearance(q, o) for o in obstacles] for q in samples[:leaving]])
+                table[:leaving] = np.maximum(table[:leaving], mesh_allowances(
+                    check.model, samples[:leaving], obstacles, buffers, spheres.reshape(leaving, len(obstacles)),
+                    settings.goal_clearance))
+        return samples, table
+
+    def _planned_way(self, samples: NDArray[np.float64], obstacles: Sequence[PlacedObstacle],
+                     buffers: Sequence[float], table: NDArray[np.float64]) -> None:
+        """Write into ``table`` (k, m) the allowances of :meth:`way` that the planning
+        spheres give at ``samples`` (k, n) [m] (primitives only)."""
+        settings = self._settings
         for k, obstacle in enumerate(obstacles):
             if isinstance(obstacle.shape, Mesh | PointCloud):
                 continue
@@ -111,7 +136,6 @@ class AllowanceTables:
             planned = self._clearances(self._single_planning, samples[near], obstacle)
             seen = np.minimum(settings.way_clearance, planned - settings.sphere_coverage)
             table[near, k] = np.maximum(0.0, buffers[k] + seen - fabric[near])
-        return samples, table
 
     def obstacle_clearance(self, q: NDArray[np.float64], obstacle: PlacedObstacle) -> float:
         """``c_k(q)`` [m] (module docstring): the checker's, or for a mesh or a point cloud

@@ -281,10 +281,13 @@ class JointGuidance:
             trajectory = self._timed(path)
         except TimingError as failure:
             raise GuidanceError("timing", str(failure)) from None
+        departure = float(np.linalg.norm(path.waypoints[1] - path.waypoints[0])) if path.escaped_start else 0.0
         if isinstance(trajectory, PhasedTrajectory):
             length = float(np.linalg.norm(path.waypoints[-1] - path.waypoints[-2]))
-            return Plan(trajectory, target, time.perf_counter() - began, checks, length, float(trajectory.starts[-1]))
-        return Plan(trajectory, target, time.perf_counter() - began, checks, 0.0, trajectory.duration)
+            return Plan(trajectory, target, time.perf_counter() - began, checks, length, float(trajectory.starts[-1]),
+                        departure=departure)
+        return Plan(trajectory, target, time.perf_counter() - began, checks, 0.0, trajectory.duration,
+                    departure=departure)
 
     def approach_from(self, q: NDArray[np.float64], goal: NDArray[np.float64]) -> Plan | None:
         """A plan that is only an approach: the straight segment from ``q`` (the robot, held
@@ -314,7 +317,7 @@ class JointGuidance:
                        buffers: Sequence[float]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """The allowances along ``plan``'s way, before its approach: its configurations (k, n)
         [rad] and each obstacle's at each (k, m) [m] (:meth:`AllowanceTables.way`)."""
-        return self._tables.way(plan, obstacles, buffers)
+        return self._tables.way(plan, obstacles, buffers, self._meshes)
 
     def allowances(self, q: NDArray[np.float64], obstacles: Sequence[PlacedObstacle],
                    buffers: Sequence[float]) -> NDArray[np.float64]:

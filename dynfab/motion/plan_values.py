@@ -56,6 +56,10 @@ class Plan:
             duration without one).
         goal_moved: ``goal`` reaches a target moved inside the goal's tolerance, not the
             goal itself (:mod:`dynfab.motion.goal_region`).
+        departure: joint-space length of the first segment, a blocked start's way out, which
+            the planner checked on the robot's meshes only against going deeper than the
+            start (:func:`~dynfab.motion.mesh_goal_check.endpoint_tests`); 0 if the start
+            was free [rad].
     """
 
     trajectory: JointTrajectory | PhasedTrajectory
@@ -65,3 +69,4 @@ class Plan:
     approach: float = 0.0
     approach_start: float = 0.0
     goal_moved: bool = False
+    departure: float = 0.0
