@@ -192,3 +192,28 @@ def test_a_joint_goal_with_no_way_in_is_planned_again_to_a_roomier_one(wall_goal
     assert not guidance.plan(start, JointTarget(tuple(far), 0.05), [wall]).goal_moved
     with pytest.raises(GuidanceError):
         guidance.plan(start, JointTarget(tuple(near)), [wall])
+
+
+def test_a_nearby_target_keeps_the_meshes_floor_where_the_exact_pose_is_nearer(blocked) -> None:
+    """A block 1.5 mm under the hand's meshes at ABOVE: every exact solution is nearer than
+    ``mesh_goal_floor`` (2 mm), so searches 1-3 find none; a nearby target inside half of a
+    3 mm tolerance lifts the hand past the floor (search 4 accepts the floor, as search 3
+    does), where none can reach ``mesh_margin`` (3 mm)."""
+    panda, block, exact = blocked
+    guidance = JointGuidance(panda)
+    meshes = None
+    low, high = block.placement.position[2] - 0.05, block.placement.position[2]
+    for _ in range(40):   # the block's height for 1 mm under the hand's meshes
+        middle = 0.5 * (low + high)
+        placed = PlacedObstacle(block.shape, Placement((*block.placement.position[:2], middle)))
+        guidance.set_obstacles([placed])
+        meshes = guidance._meshes()
+        low, high = (middle, high) if meshes.clearance(ABOVE)[0] > 0.0015 else (low, middle)
+    goal = [replace(t, tolerance=0.003) if isinstance(t, PointTarget) else t for t in exact]
+    solution, moved = guidance.goal_solution(goal, START)
+    assert moved and meshes.clearance(solution)[0] >= guidance.settings.mesh_goal_floor
+    strict = JointGuidance(panda, replace(GuidanceSettings(), mesh_goal_floor=guidance.settings.mesh_margin))
+    strict.set_obstacles([placed])
+    with pytest.raises(GuidanceError) as refused:
+        strict.goal_solution(goal, START)
+    assert refused.value.reason == "no_ik_solution"
