@@ -54,7 +54,7 @@ def main() -> None:
         scenario = load_scenario(path)
     robot = robot_for(scenario)
     scenario = validate_for_robot(scenario, robot)
-    obstacles = guided_controller._placed(scenario, scenario_references(scenario, robot), 0.0, static=True)
+    obstacles = guided_controller.placed_obstacles(scenario, scenario_references(scenario, robot), 0.0, static=True)
     model = robot_mesh_model(robot)
     assert model is not None
     exact, contact = MeshGoalCheck(model, MARGIN), MeshContactCheck(model, MARGIN)

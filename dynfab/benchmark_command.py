@@ -58,9 +58,14 @@ def add_benchmark_parser(commands: Any) -> None:
                         help="the scenarios' planner (default dynamic-fabric)")
     parser.add_argument("--guidance", action=argparse.BooleanOptionalAction,
                         help="set the scenarios' guidance key (default: the schema's default)")
-    parser.add_argument("--seed", type=_seed, default=0,
+    parser.add_argument("--seed", type=_non_negative, default=0,
                         help="seed of the moving spheres and of the generated problems (mesh scenes, --source "
                              "generated), a non-negative integer (default 0)")
+    parser.add_argument("--reference-checks", type=_non_negative, default=0, metavar="N",
+                        help="also run MotionBenchMaker's filter on every Panda problem: RRT-Connect on Franka's "
+                             "meshes to its goal configuration within N mesh checks (120000: about MBM's 60 s "
+                             "here); the tables then give the success among the problems it solves (default 0: "
+                             "not run)")
     parser.add_argument("--out", type=Path, help="output directory (default dynfab-benchmarks/mbm-VARIANT, "
                                                  "dynfab-benchmarks/mbm-generated-VARIANT for --source generated)")
     parser.add_argument("--jobs", type=at_least_one, help="worker processes (default: the number of CPUs)")
@@ -86,7 +91,7 @@ def benchmark_command(args: argparse.Namespace) -> int:
               file=sys.stderr)
         return 2
     settings = BenchmarkSettings(variant, args.types, args.problems, args.planner, args.guidance, args.seed,
-                                 args.first - 1, args.robot, args.archive, args.source)
+                                 args.first - 1, args.robot, args.archive, args.source, args.reference_checks)
     generated = "generated-" if args.source == "generated" else ""
     out = args.out or Path("dynfab-benchmarks") / f"mbm-{generated}{settings.label}"
     records = reported(lambda: run_benchmark(settings, out, args.jobs, requested_cluster(args.workers, args.scheduler),
@@ -101,14 +106,15 @@ def benchmark_command(args: argparse.Namespace) -> int:
     return 0
 
 
-def _seed(text: str) -> int:
-    """``--seed``: a non-negative integer (numpy's seed sequences take no negative one)."""
+def _non_negative(text: str) -> int:
+    """``--seed``, ``--reference-checks``: a non-negative integer (numpy's seed sequences take
+    no negative one)."""
     try:
         value = int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}") from None
     if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {value}")
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}")
     return value
 
 

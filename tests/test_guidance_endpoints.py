@@ -14,7 +14,7 @@ from dynfab.benchmarks.mbm.variants import prepare_case
 from dynfab.motion.configuration_checker import ConfigurationChecker
 from dynfab.motion.joint_planning import JointPlannerSettings, NoPathError, plan_joint_path, polyline_samples
 from dynfab.robots import load_robot
-from dynfab.scenario.guided_controller import _placed
+from dynfab.scenario.guided_controller import placed_obstacles
 from dynfab.scenario.references import scenario_references
 from dynfab.scenario.schema import scenario_from_dict, validate_for_robot
 
@@ -31,7 +31,7 @@ def grasp(panda):
     checker with its scene."""
     case = prepare_case(load_problems(["bookshelf_small"], per_type=1)[0], "as-posed", franka())
     scenario = validate_for_robot(scenario_from_dict(case.mapping), panda)
-    obstacles = _placed(scenario, scenario_references(scenario, panda), 0.0, static=True)
+    obstacles = placed_obstacles(scenario, scenario_references(scenario, panda), 0.0, static=True)
     goal = np.array(case.mapping["goal"][0]["position"])
     return np.array(scenario.initial_state.q), goal, ConfigurationChecker(panda, obstacles)
 

@@ -78,3 +78,64 @@ def test_runs_recorded_by_other_code_are_not_resumed(monkeypatch: pytest.MonkeyP
     assert benchmark._digest(case.mapping) != record["digest"]
     with pytest.raises(benchmark.BenchmarkError, match="recorded from another scenario"):
         benchmark._fresh(case, {case.problem.name: record})
+
+
+def test_tables_give_the_success_among_the_problems_the_reference_planner_solves(tmp_path: Path) -> None:
+    from dynfab.benchmarks.mbm.tables import write_tables
+
+    records = [
+        {**_record("box/0001", {"goal_reached": True, "success": True}, _CLEAN), "reference": {"solved": True}},
+        {**_record("box/0002", {"goal_reached": False, "success": False}, _CLEAN), "reference": {"solved": False}},
+        {**_record("box/0003", {"goal_reached": False, "success": False}, _CLEAN), "reference": {"solved": True}},
+        _record("box/0004", None, None, invalid="goal: outside"),
+    ]
+    outcomes = [case_outcome(r) for r in records]
+    assert [o.reference_solved for o in outcomes] == [True, False, True, None]
+    box, _ = type_rows(outcomes, ["box"])
+    assert (box.referenced, box.reference_solved, box.reference_success) == (3, 2, 1)
+    write_tables(tmp_path, "as-posed", ["box"], records)
+    table = (tmp_path / "summary.md").read_text()
+    assert "| box | 3 | 2 | 1/2 (50 %) |" in table
+    without = [{k: v for k, v in r.items() if k != "reference"} for r in records]
+    write_tables(tmp_path, "as-posed", ["box"], without)
+    assert "solved by the reference" not in (tmp_path / "summary.md").read_text()
+
+
+def test_the_reference_planner_solves_a_free_problem_and_not_one_whose_goal_touches(tmp_path: Path) -> None:
+    """MotionBenchMaker's filter (dynfab.benchmarks.mbm.reference_plan) on archive box/0009
+    object removed: solved, its path no shorter than the straight distance; with a block
+    around the hand at the goal it is not (its end touches the scene on the meshes)."""
+    import numpy as np
+
+    from dynfab.benchmarks.mbm.franka import franka
+    from dynfab.benchmarks.mbm.problems import load_problems
+    from dynfab.benchmarks.mbm.reference_plan import reference_plan
+    from dynfab.benchmarks.mbm.variants import prepare_case
+
+    problem = load_problems(["box"], per_type=1)[0]
+    case = prepare_case(problem, "object-removed", franka())
+    solved = reference_plan(case.mapping, problem.goal, checks=20_000)
+    straight = float(np.linalg.norm(np.subtract(problem.goal, problem.start)))
+    assert solved["solved"] and solved["length"] >= straight - 1e-9 and solved["mesh_checks"] <= 20_000 + 2_000
+    from dynfab.robots import load_robot
+    hand = np.asarray(load_robot("panda").link_position(np.array(problem.goal), "panda_hand"), dtype=float).ravel()
+    block = {"type": "box", "size": [0.1, 0.1, 0.1], "position": hand.tolist()}   # around the hand at the goal
+    touching = reference_plan({**case.mapping, "obstacles": [*case.mapping["obstacles"], block]}, problem.goal,
+                              checks=2_000)
+    assert not touching["solved"] and touching["length"] is None
+    with pytest.raises(ValueError, match="checks"):
+        reference_plan(case.mapping, problem.goal, checks=0)
+
+
+def test_the_command_runs_the_reference_filter_when_asked(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    arguments = ["benchmark", "mbm", "--types", "box", "--problems", "1", "--variant", "object-removed", "--jobs", "1",
+                 "--reference-checks", "20000", "--out", str(tmp_path)]
+    assert main(arguments) == 0
+    assert "| box | 1 | 1 |" in capsys.readouterr().out
+    record = json.loads((tmp_path / "runs.jsonl").read_text())
+    assert record["reference"]["solved"] is True
+    assert main([*arguments[:-4], "--out", str(tmp_path)]) == 2   # recorded with the filter: not resumed without
+    assert "recorded from another scenario" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main([*arguments[:-4], "--reference-checks", "-1", "--out", str(tmp_path)])
+    assert "--reference-checks: expected a non-negative integer, got '-1'" in capsys.readouterr().err

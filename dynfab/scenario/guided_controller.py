@@ -55,8 +55,7 @@ from dynfab.scenario.path_end import PathEndController, path_end_refusal, path_e
 from dynfab.scenario.schema import GoalSpec, Scenario, ScenarioError
 
 __all__ = ["AllowanceSlot", "GuidedController", "SurfaceAllowance", "check_guided_ends", "guidance_refusal",
-           "guided_planner_config",
-           "make_scenario_controller"]
+           "guided_planner_config", "make_scenario_controller", "placed_obstacles"]
 
 #: The guided fabric's constants below were chosen on MBM problems 10-11 (gain, range) and 13-16
 #: (energy, buffer) of the shared set, object removed; results are reported on problems 17 on.
@@ -306,7 +305,7 @@ def _guided_controller(scenario: Scenario, robot: Robot, references: References,
     inner = FabricController(fabric, References((StaticPoint(tuple(scenario.initial_state.q)),), references.obstacles),
                              (), moving_indices, slots, surfaces)
     guided = GuidedFabric(fabric, settings, plan_latency)   # a plan latency: counted checks
-    guided.set_obstacles(_placed(scenario, references, 0.0, static=True))
+    guided.set_obstacles(placed_obstacles(scenario, references, 0.0, static=True))
     # one per obstacle: a slot's, or a mesh's or a point cloud's entry of the nearest-point feed
     allowance_slots = [SurfaceAllowance(surfaces, surfaces.surface_of(k)) if slot is None and surfaces is not None
                        else None if slot is None else
@@ -318,7 +317,7 @@ def _guided_controller(scenario: Scenario, robot: Robot, references: References,
     static_slots = tuple(slot for obstacle, slot in zip(scenario.obstacles, allowance_slots)
                          if obstacle.trajectory is None)
     return GuidedController(inner, guided, goal_targets(scenario, robot, references),
-                            lambda t: _placed(scenario, references, t, static=False), fallback, static_slots)
+                            lambda t: placed_obstacles(scenario, references, t, static=False), fallback, static_slots)
 
 
 def guided_planner_config(robot: Robot, scenario: Scenario) -> PlannerConfig:
@@ -381,7 +380,7 @@ def _task_targets(goal: GoalSpec, robot: Robot, position: tuple[float, ...] | No
     return targets
 
 
-def _placed(scenario: Scenario, references: References, t: float, static: bool) -> tuple[PlacedObstacle, ...]:
+def placed_obstacles(scenario: Scenario, references: References, t: float, static: bool) -> tuple[PlacedObstacle, ...]:
     """The scenario's static (or moving) obstacles where they are at time ``t`` [s], with
     their velocities then [m/s]."""
     indices = [k for k, obstacle in enumerate(scenario.obstacles) if (obstacle.trajectory is None) == static]

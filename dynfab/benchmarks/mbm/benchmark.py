@@ -7,7 +7,8 @@ or Dask, :mod:`dynfab.experiments.cluster`), resumable, with per-type tables.
   replays it);
 - ``runs.jsonl``: one JSON line per case, appended as it finishes (invalid cases at
   once): ``{"benchmark", "variant", "problem", "type", "number", "digest", "removed",
-  "invalid", "metrics", "check", "refused", "wall_time_s"}`` (``digest``: of the
+  "invalid", "metrics", "check", "refused", "wall_time_s"}`` and, with
+  ``reference_checks``, ``"reference"`` (:mod:`dynfab.benchmarks.mbm.reference_plan`) (``digest``: of the
   scenario mapping and of dynfab's source, :func:`~dynfab.fabric.fingerprint.package_digest`).
   On start, the cases already in it with the same digest are skipped, so an interrupted
   benchmark resumes; a case recorded from another scenario, or by other code, is an error
@@ -80,6 +81,8 @@ class BenchmarkSettings:
             (:func:`~dynfab.benchmarks.mbm.problems.load_problems`); None: the bundled one.
         source: One of :data:`SOURCES`: the seven primitive types read from the archive, or
             new problems of theirs generated from ``seed`` (numbered 1, 2, ...).
+        reference_checks: Mesh checks of MotionBenchMaker's filter run on every Panda case
+            (:mod:`dynfab.benchmarks.mbm.reference_plan`); 0: not run.
     """
 
     variant: str = "as-posed"
@@ -92,6 +95,7 @@ class BenchmarkSettings:
     robot: str = "panda"
     archive: Path | None = None
     source: str = "archive"
+    reference_checks: int = 0
 
     @property
     def label(self) -> str:
@@ -120,17 +124,18 @@ def run_benchmark(settings: BenchmarkSettings, out_dir: str | Path, jobs: int | 
     try:
         with exclusive(out):
             done = _load_records(log, settings.label)
-            records = {case.problem.name: _fresh(case, done) for case in cases}
+            reference = settings.reference_checks if settings.robot == "panda" else 0
+            records = {case.problem.name: _fresh(case, done, reference) for case in cases}
             pending = [case for case in cases if records[case.problem.name] is None and case.invalid is None]
             _write_scenarios(out / "scenarios", pending)
             with log.open("a", encoding="utf-8") as file:
                 for case in cases:
                     if case.invalid is not None and records[case.problem.name] is None:
-                        records[case.problem.name] = _append(file, _record(case, None))
+                        records[case.problem.name] = _append(file, _record(case, None, reference))
                 bar = None if progress is None else Progress(progress, f"mbm {settings.label}", len(cases),
                                                              len(cases) - len(pending))
-                for case, outcome in _execute(pending, min(jobs, max(len(pending), 1)), cluster, bar):
-                    records[case.problem.name] = _append(file, _record(case, outcome))
+                for case, outcome in _execute(pending, min(jobs, max(len(pending), 1)), cluster, bar, reference):
+                    records[case.problem.name] = _append(file, _record(case, outcome, reference))
             ordered = [records[case.problem.name] for case in cases]
             write_tables(out, settings.label, settings.types, ordered)
     except SeriesError as error:
@@ -176,28 +181,29 @@ def _cases(settings: BenchmarkSettings, jobs: int = 1) -> list[Case]:
     return [prepare_ur5_case(problem, franka(), ur5(), settings.planner) for problem in problems]
 
 
-def _digest(mapping: dict[str, Any]) -> str:
-    """Of the scenario ``mapping`` and of the code that runs it (module docstring)."""
-    text = json.dumps(mapping, sort_keys=True) + package_digest()
+def _digest(mapping: dict[str, Any], reference: int = 0) -> str:
+    """Of the scenario ``mapping``, of the code that runs it (module docstring) and of the
+    ``reference`` filter's checks (0: none)."""
+    text = json.dumps(mapping, sort_keys=True) + package_digest() + (f"reference {reference}" if reference else "")
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def _record(case: Case, outcome: dict[str, Any] | None) -> dict[str, Any]:
+def _record(case: Case, outcome: dict[str, Any] | None, reference: int = 0) -> dict[str, Any]:
     problem = case.problem
     ran = outcome or {"metrics": None, "check": None, "refused": None, "wall_time_s": None}
     return {"benchmark": "mbm", "variant": case.variant, "problem": problem.name, "type": problem.type,
-            "number": problem.number, "digest": _digest(case.mapping), "removed": case.removed,
+            "number": problem.number, "digest": _digest(case.mapping, reference), "removed": case.removed,
             "invalid": case.invalid, **ran}
 
 
-def _fresh(case: Case, done: dict[str, dict[str, Any]]) -> dict[str, Any] | None:
+def _fresh(case: Case, done: dict[str, dict[str, Any]], reference: int = 0) -> dict[str, Any] | None:
     """The recorded run of ``case``, or None if it has none.
 
     Raises:
         BenchmarkError: It was recorded from another scenario.
     """
     record = done.get(case.problem.name)
-    if record is not None and record["digest"] != _digest(case.mapping):
+    if record is not None and record["digest"] != _digest(case.mapping, reference):
         raise BenchmarkError(f"{case.problem.name} was recorded from another scenario (other options, or another "
                              f"dynfab version): use another output directory")
     return record
@@ -236,16 +242,18 @@ def _write_scenarios(folder: Path, cases: Sequence[Case]) -> None:
                         encoding="utf-8")
 
 
-def _execute(cases: Sequence[Case], jobs: int, cluster: Cluster | None,
-             bar: Progress | None) -> Iterator[tuple[Case, dict[str, Any]]]:
-    """Run ``cases`` over ``jobs`` processes or the cluster; yield ``(case, outcome)`` as each finishes."""
+def _execute(cases: Sequence[Case], jobs: int, cluster: Cluster | None, bar: Progress | None,
+             reference: int = 0) -> Iterator[tuple[Case, dict[str, Any]]]:
+    """Run ``cases`` over ``jobs`` processes or the cluster, with the ``reference`` filter's
+    checks (0: none); yield ``(case, outcome)`` as each finishes."""
     if bar is not None:
         bar.start()
     if not cases:
         return
     with series_executor(jobs, cluster) as executor:
-        futures: dict[Future[dict[str, Any]], Case] = {executor.submit(run_case, case.mapping, case.check_obstacles): case
-                                                       for case in cases}
+        futures: dict[Future[dict[str, Any]], Case] = {
+            executor.submit(run_case, case.mapping, case.check_obstacles,
+                            case.problem.goal if reference else None, reference): case for case in cases}
         remaining = set(futures)
         while remaining:
             finished, remaining = wait(remaining, return_when=FIRST_COMPLETED)

@@ -8,6 +8,10 @@ counted and listed. Invalid cases count neither as success nor as failure.
 
 Run metrics that global guidance adds (``guided``, ``plans``, ``plan_time_ms``,
 ``goal_moved``, ``failure``) are read where present: the tables work with and without them.
+Where the records hold MotionBenchMaker's filter (``reference``:
+:mod:`dynfab.benchmarks.mbm.reference_plan`), a second table gives per type the valid
+problems the reference planner solves and the successes among them: the success rate on the
+problems MotionBenchMaker would have kept.
 
 Writes ``summary.md``, ``summary.json`` (the rows and the flagged cases) and ``runs.csv``
 (one row per case).
@@ -45,6 +49,8 @@ class CaseOutcome:
         time_to_goal, path_length, plan_time_ms, plans, guided, goal_moved: From the metrics
             (None where absent).
         wall_time_s: Wall time of the run [s]; None if it did not run.
+        reference_solved: Whether MotionBenchMaker's filter solved the problem; None if
+            it was not run.
     """
 
     problem: str
@@ -64,6 +70,7 @@ class CaseOutcome:
     guided: bool | None
     goal_moved: bool | None
     wall_time_s: float | None
+    reference_solved: bool | None = None
 
     @property
     def contradicted(self) -> bool:
@@ -88,7 +95,8 @@ def case_outcome(record: dict[str, Any]) -> CaseOutcome:
                        metrics.get("time_to_goal") if success else None,
                        metrics.get("path_length") if success else None,
                        metrics.get("plan_time_ms"), metrics.get("plans"), metrics.get("guided"),
-                       metrics.get("goal_moved"), record.get("wall_time_s"))
+                       metrics.get("goal_moved"), record.get("wall_time_s"),
+                       None if record.get("reference") is None else bool(record["reference"]["solved"]))
 
 
 @dataclass(frozen=True)
@@ -108,6 +116,9 @@ class TypeRow:
         goal_moved: Successes whose goal guidance moved inside its tolerance (reached
             within the tolerance, not exactly).
         failures: Failure reasons and their counts.
+        referenced: Valid cases MotionBenchMaker's filter was run on.
+        reference_solved: Of those, the ones it solved.
+        reference_success: Successes among ``reference_solved``.
     """
 
     type: str
@@ -126,6 +137,9 @@ class TypeRow:
     guided: int
     goal_moved: int
     failures: dict[str, int]
+    referenced: int = 0
+    reference_solved: int = 0
+    reference_success: int = 0
 
     @property
     def valid(self) -> int:
@@ -148,7 +162,10 @@ def _row(name: str, cases: Sequence[CaseOutcome]) -> TypeRow:
         _median([c.time_to_goal for c in successes]), _median([c.path_length for c in successes]),
         _median([c.plan_time_ms for c in ran]), _mean([c.plans for c in ran]),
         sum(bool(c.guided) for c in ran), sum(bool(c.goal_moved) for c in successes),
-        dict(sorted(Counter(c.failure for c in cases if c.failure).items())))
+        dict(sorted(Counter(c.failure for c in cases if c.failure).items())),
+        sum(c.invalid is None and c.reference_solved is not None for c in cases),
+        sum(c.invalid is None and bool(c.reference_solved) for c in cases),
+        sum(c.success and bool(c.reference_solved) for c in cases))
 
 
 def _median(values: Sequence[float | None]) -> float | None:
@@ -200,6 +217,14 @@ def _markdown(variant: str, rows: Sequence[TypeRow], outcomes: Sequence[CaseOutc
     lines += ["", "Times, plan times and path lengths are medians (time to goal and path length over the "
               "successes), plans a mean; contradicted: dynfab's metrics claim a success the meshes contradict; goal "
               "moved: successes reached within the goal's tolerance at a target guidance moved there."]
+    if any(r.referenced for r in rows):
+        lines += ["", "MotionBenchMaker keeps a generated problem only if its planner solves it; here RRT-Connect on "
+                  "the meshes (reference_plan) on the valid problems:", "",
+                  "| type | filtered | solved by the reference | success among them |", "|---|---|---|---|"]
+        for r in rows:
+            rate = (f"{r.reference_success}/{r.reference_solved} ({100 * r.reference_success / r.reference_solved:.0f} %)"
+                    if r.reference_solved else "-")
+            lines.append(f"| {r.type} | {r.referenced} | {r.reference_solved} | {rate} |")
     flagged = [o for o in outcomes if o.contradicted]
     if flagged:
         lines += ["", "Contradicted by the meshes: " + ", ".join(o.problem for o in flagged) + "."]
