@@ -181,3 +181,30 @@ def test_a_plan_from_a_blocked_start_says_how_long_its_way_out_is(panda) -> None
     assert guidance.plan(Q, JointTarget(tuple(goal)), [cube]).departure > 0.0
     assert guidance.checker.free(START, margin.margin, margin.self_margin)
     assert guidance.plan(START, JointTarget(tuple(END)), [cube]).departure == 0.0
+
+
+def test_along_the_way_a_mesh_gets_what_the_planning_spheres_grid_kept_never_more_than_the_meshes(panda) -> None:
+    """A mesh cube beside ``panda_link5`` halfway: its allowance is the formula's with ``p_k``
+    the planning spheres' grid bound and ``c_k`` the fabric's exact clearance, and what the
+    leaf then sees (``c_k + a_k − buffer``) never exceeds the robot's meshes' clearance."""
+    import trimesh
+
+    from dynfab.geometry.shapes import Mesh
+
+    middle = 0.5 * (START + END)
+    box = _box_near_link5(panda, middle, 0.014)
+    cube = trimesh.creation.box(extents=box.shape.size)
+    mesh = PlacedObstacle(Mesh(cube.vertices, cube.faces, "cube"), box.placement)
+    guidance = JointGuidance(panda)
+    guidance.checker.set_obstacles([mesh])
+    way, table = guidance.way_allowances(_plan(panda, np.vstack([START, middle, END])), [mesh], [BUFFER])
+    settings = guidance.settings
+    fabric = np.array([guidance.obstacle_clearance(q, mesh) for q in way])
+    planned = ConfigurationChecker(panda.planning_robot, [mesh]).batch(way)[:, 0]
+    expected = np.maximum(0.0, BUFFER + np.minimum(settings.way_clearance, planned - settings.sphere_coverage) - fabric)
+    np.testing.assert_allclose(table[:, 0], expected, atol=1e-9)   # where it is not asked, it is 0 too
+    given = table[:, 0] > 0.0
+    assert given.any() and not given[0]
+    meshes = guidance._meshes()
+    on_meshes = np.array([meshes.clearance(q)[0] for q in way[given]])
+    assert (fabric[given] + table[given, 0] - BUFFER <= on_meshes + 1e-6).all()

@@ -92,8 +92,12 @@ class AllowanceTables:
 
         with ``p_k`` the planning spheres' clearance from obstacle ``k`` alone [m]. Zero
         where both are the same spheres (then ``c_k = p_k`` and ``buffer_k ≤
-        sphere_coverage``: the default 5 mm each), and for meshes and point clouds (what the
-        plan read of them is a grid's bound). Along a blocked start's way out
+        sphere_coverage``: the default 5 mm each), and for point clouds (their grids read
+        ``δ`` below noisy points). A mesh's ``p_k`` is its grid's bound, which reads low,
+        so the leaves see no more than the meshes' clearance (since session 22: fresh
+        kitchen seed 21's kitchen/0003 was held four times where the planning spheres'
+        grid kept 14-16 mm from a cabinet and the fabric's spheres read 6-7 mm, against
+        their 5 mm buffer). Along a blocked start's way out
         (:attr:`~dynfab.motion.plan_values.Plan.departure`, judged on the robot's meshes;
         ``meshes()`` the mesh check, None without meshes; not among point clouds) the
         leaves see the meshes' clearance from every obstacle instead, as along the meshes'
@@ -124,15 +128,21 @@ class AllowanceTables:
     def _planned_way(self, samples: NDArray[np.float64], obstacles: Sequence[PlacedObstacle],
                      buffers: Sequence[float], table: NDArray[np.float64]) -> None:
         """Write into ``table`` (k, m) the allowances of :meth:`way` that the planning
-        spheres give at ``samples`` (k, n) [m] (primitives only)."""
+        spheres give at ``samples`` (k, n) [m] (primitives and meshes, not point clouds).
+        A mesh's ``p_k`` is the planning spheres' grid bound, at most their exact clearance
+        (what the plan kept), and its ``c_k`` the fabric's exact one
+        (:meth:`obstacle_clearance`), asked only where the fabric spheres' grid bound, at
+        most ``c_k``, is within ``buffer_k + way_clearance`` (elsewhere ``a_k = 0``)."""
         settings = self._settings
         for k, obstacle in enumerate(obstacles):
-            if isinstance(obstacle.shape, Mesh | PointCloud):
+            if isinstance(obstacle.shape, PointCloud):
                 continue
             fabric = self._clearances(self._single, samples, obstacle)
             near = np.flatnonzero(fabric < buffers[k] + settings.way_clearance)   # elsewhere a_k = 0
             if near.size == 0:
                 continue
+            if isinstance(obstacle.shape, Mesh):
+                fabric[near] = [self.obstacle_clearance(q, obstacle) for q in samples[near]]
             planned = self._clearances(self._single_planning, samples[near], obstacle)
             seen = np.minimum(settings.way_clearance, planned - settings.sphere_coverage)
             table[near, k] = np.maximum(0.0, buffers[k] + seen - fabric[near])
