@@ -138,4 +138,4 @@ def test_the_command_runs_the_reference_filter_when_asked(tmp_path: Path, capsys
     assert "recorded from another scenario" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         main([*arguments[:-4], "--reference-checks", "-1", "--out", str(tmp_path)])
-    assert "--reference-checks: expected a non-negative integer, got '-1'" in capsys.readouterr().err
+    assert "--reference-checks: expected a non-negative integer, got -1" in capsys.readouterr().err
