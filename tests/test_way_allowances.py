@@ -134,18 +134,25 @@ def test_a_guided_fabric_gives_its_plans_way_allowances_where_the_robot_is(panda
     assert max(given) == pytest.approx(0.007) and given[-1] == 0.0 and given[0] == 0.0
 
 
-def _cube_at_link2():
-    """A 4 cm cube the planning spheres enter at ``Q`` and the meshes clear by about 6.5 mm."""
+def _cube_at_link2(mesh: bool = False):
+    """A 4 cm cube (a box, or a triangle ``mesh``) the planning spheres enter at ``Q`` and
+    the meshes clear by about 6.5 mm."""
+    import trimesh
+
+    from dynfab.geometry.shapes import Mesh
     from test_mesh_goal_check import BESIDE_LINK2
-    return PlacedObstacle(Box((0.04, 0.04, 0.04)), BESIDE_LINK2.placement)
+    if not mesh:
+        return PlacedObstacle(Box((0.04, 0.04, 0.04)), BESIDE_LINK2.placement)
+    cube = trimesh.creation.box(extents=(0.04, 0.04, 0.04))
+    return PlacedObstacle(Mesh(cube.vertices, cube.faces, "cube"), BESIDE_LINK2.placement)
 
 
-def test_a_blocked_starts_way_out_lets_the_leaves_see_the_meshes_clearance(panda) -> None:
+def test_a_blocked_starts_way_out_lets_the_leaves_see_the_meshes_clearance_from_a_mesh(panda) -> None:
     from dynfab.motion.joint_planning import polyline_samples
     from dynfab.motion.mesh_escape_plan import LEAF_SLACK, mesh_allowances
     from test_mesh_goal_check import Q
 
-    cube = _cube_at_link2()
+    cube = _cube_at_link2(mesh=True)
     guidance = JointGuidance(panda)
     guidance.checker.set_obstacles([cube])
     away = Q + np.array([0.0, 0.0, 0.0, 0.2, 0.0, 0.0, 0.0])
@@ -156,7 +163,7 @@ def test_a_blocked_starts_way_out_lets_the_leaves_see_the_meshes_clearance(panda
     same_way, table = guidance.way_allowances(leaving, [cube], [BUFFER])
     np.testing.assert_array_equal(way, same_way)
     rows = len(polyline_samples(waypoints[:2], guidance.settings.path.resolution))
-    fabric = ConfigurationChecker(panda, [cube]).batch(way)[:, :1]
+    fabric = np.array([[guidance.obstacle_clearance(q, cube)] for q in way])
     meshes = guidance._meshes()
     expected = mesh_allowances(meshes.model, way[:rows], (cube,), (BUFFER,), fabric[:rows],
                                guidance.settings.goal_clearance)
@@ -166,6 +173,9 @@ def test_a_blocked_starts_way_out_lets_the_leaves_see_the_meshes_clearance(panda
     on_meshes = meshes.clearance(Q)[0]
     assert fabric[0, 0] < 0.0 < on_meshes
     assert seen == pytest.approx(min(guidance.settings.goal_clearance, on_meshes + LEAF_SLACK), abs=1e-6)
+    box = _cube_at_link2()   # a box: its way out is left as any way (no slack past the meshes)
+    np.testing.assert_array_equal(guidance.way_allowances(leaving, [box], [BUFFER])[1],
+                                  guidance.way_allowances(plain, [box], [BUFFER])[1])
 
 
 def test_a_plan_from_a_blocked_start_says_how_long_its_way_out_is(panda) -> None:
