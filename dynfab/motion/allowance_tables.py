@@ -71,9 +71,7 @@ class AllowanceTables:
         goal_clearance = self._settings.goal_clearance
         if (len(waypoints) > 2 and not any(isinstance(o.shape, PointCloud) for o in obstacles)
                 and (check := meshes()) is not None):   # the meshes' plan's polyline (mesh_escape_plan)
-            spheres = np.array([[self.obstacle_clearance(q, o) for o in obstacles] for q in segment])
-            return segment, mesh_allowances(check.model, segment, obstacles, buffers,
-                                            spheres.reshape(len(segment), len(obstacles)), goal_clearance)
+            return segment, self._seeing_meshes(check, segment, obstacles, buffers)
         clearances = np.empty((len(segment), len(obstacles)))
         for k, obstacle in enumerate(obstacles):
             clearances[:, k] = self._clearances(self._single, segment, obstacle)
@@ -123,12 +121,19 @@ class AllowanceTables:
             check = meshes()
             if check is not None:
                 leaving = len(polyline_samples(waypoints[:2], settings.path.resolution))
-                near = [obstacles[k] for k in columns]
-                spheres = np.array([[self.obstacle_clearance(q, o) for o in near] for q in samples[:leaving]])
-                table[:leaving, columns] = np.maximum(table[:leaving, columns], mesh_allowances(
-                    check.model, samples[:leaving], near, [buffers[k] for k in columns],
-                    spheres.reshape(leaving, len(near)), settings.goal_clearance))
+                table[:leaving, columns] = np.maximum(table[:leaving, columns], self._seeing_meshes(
+                    check, samples[:leaving], [obstacles[k] for k in columns], [buffers[k] for k in columns]))
         return samples, table
+
+    def _seeing_meshes(self, check: MeshGoalCheck, segment: NDArray[np.float64],
+                       obstacles: Sequence[PlacedObstacle], buffers: Sequence[float]) -> NDArray[np.float64]:
+        """The allowances (k, m) [m] at ``segment`` (k, n) that let the leaves see the
+        robot's meshes' clearance from each of ``obstacles``
+        (:func:`~dynfab.motion.mesh_escape_plan.mesh_allowances`, on the fabric's clearances
+        :meth:`obstacle_clearance`)."""
+        spheres = np.array([[self.obstacle_clearance(q, o) for o in obstacles] for q in segment])
+        return mesh_allowances(check.model, segment, obstacles, buffers, spheres.reshape(len(segment), len(obstacles)),
+                               self._settings.goal_clearance)
 
     def _planned_way(self, samples: NDArray[np.float64], obstacles: Sequence[PlacedObstacle],
                      buffers: Sequence[float], table: NDArray[np.float64]) -> None:

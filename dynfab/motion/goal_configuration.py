@@ -95,9 +95,8 @@ class GoalSearch:
                 result = solve_ik(self.robot, list(goal), q, lambda x: meshes.free(x, floor),
                                   replace(settings.ik_retry, seed=seed), lower, upper)
             if result.q is None:
-                floor = settings.mesh_goal_floor if meshes is not None else None
-                nearby = nearby_solution(self.robot, goal, q, self.merely_free(floor), settings.goal_region,
-                                         settings.goal_region_targets, ik, self.bounds)
+                nearby = nearby_solution(self.robot, goal, q, self.merely_free(settings.mesh_goal_floor),
+                                         settings.goal_region, settings.goal_region_targets, ik, self.bounds)
                 if nearby is not None and nearby.q is not None:
                     return nearby.q, True
         if result.q is None:
