@@ -98,6 +98,16 @@ def test_way_allowances_hold_from_before_the_robot_to_just_beyond_its_reference(
     np.testing.assert_allclose(allowances_near(way, table, way[11], way[14]), [0.01, 0.0])  # the one before counts
 
 
+def test_way_allowances_fade_as_the_robot_leaves_its_way() -> None:
+    way = np.linspace(0.0, 1.0, 21)[:, None] * np.array([[1.0, 0.0, 0.0]])
+    table = np.zeros((21, 1))
+    table[10, 0] = 0.01
+    off = np.array([0.0, 0.0, 1.0])   # across the way
+    for distance, kept in ((0.0, 1.0), (0.1, 1.0), (0.15, 0.5), (0.2, 0.0), (0.5, 0.0)):
+        q = way[10] + distance * off
+        np.testing.assert_allclose(allowances_near(way, table, q, way[10], reach=0.1), [0.01 * kept], atol=1e-12)
+
+
 
 def test_a_guided_fabric_gives_its_plans_way_allowances_where_the_robot_is(panda, monkeypatch) -> None:
     from dynfab.motion.guidance import JointTarget

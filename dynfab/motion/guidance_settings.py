@@ -178,6 +178,12 @@ class GuidanceSettings:
             more at ``panda_link5`` and ``panda_link6``), stalled the robot there against its
             5 mm barrier (generated as-posed cage/0001, seed 7; chosen there, with the
             defaults of the approach's ``goal_clearance`` and the fit's coverage).
+        way_reach: how far from its way's configurations [rad] the robot keeps their
+            allowances in full; they fade to none at twice that
+            (:func:`~dynfab.motion.way_window.allowances_near`). 0.1 (``lag_slow``), chosen
+            on generated seed 21 (as posed: the robots lay within 0.1 rad of their ways
+            at 99 % of the ticks with an allowance, up to 0.2 rad on bookshelf_small/0005;
+            table_under_pick/0005 touched a box 0.25 rad off its way).
         sphere_coverage: how far [m] the robot's meshes may lie outside its planning spheres
             (5 mm for the built-in Panda: :mod:`dynfab.robots.panda_spheres`).
         approach_speed: fraction of the velocity and acceleration limits the approach
@@ -267,6 +273,7 @@ class GuidanceSettings:
     stall_margin_time: float = 0.5
     goal_clearance: float = 0.015
     way_clearance: float = 0.015
+    way_reach: float = 0.1
     sphere_coverage: float = 0.005
     approach_speed: float = 0.1
     approach_lag_slow: float = 0.01

@@ -191,7 +191,7 @@ class GuidedFabric:
             return allowances_ahead(self._segment, self._table, self._q)
         if self._plan is None or not self._way_table.any():
             return np.zeros(len(self._static))
-        return allowances_near(self._way, self._way_table, self._q, self._reference)
+        return allowances_near(self._way, self._way_table, self._q, self._reference, self._settings.way_reach)
 
     def set_goal(self, goal: GoalTargets, t: float, q: NDArray[np.float64],
                  moving: Sequence[PlacedObstacle] = ()) -> None:

@@ -7,7 +7,13 @@ the plan's tighter spheres kept there. They hold near where the robot and its re
 are: per obstacle, the largest allowance of the way's configurations from the one before
 the nearer of the two (of the robot's nearest and the reference's nearest) to
 :data:`WAY_AHEAD` beyond the farther, so that an allowance is in place before the robot
-reaches the configuration that needs it and gone once it is past.
+reaches the configuration that needs it and gone once it is past. An allowance was read at
+the way's configurations, so it holds only near the way: in full while the robot is within
+``reach`` [rad] of the way's configuration nearest it, fading linearly to none at twice
+that (a robot pushed off its way kept an allowance meant for another sphere: fresh
+generated seed 21, as posed table_under_pick/0005, lay 0.25 rad off its way with the 14 mm
+allowance of a box that its hand's spheres needed on the way, and ``panda_link7``, whose
+spheres fit its meshes tightly, touched that box).
 """
 
 from __future__ import annotations
@@ -23,11 +29,14 @@ WAY_AHEAD = 3
 
 
 def allowances_near(way: NDArray[np.float64], table: NDArray[np.float64], q: NDArray[np.float64],
-                    reference: NDArray[np.float64]) -> NDArray[np.float64]:
+                    reference: NDArray[np.float64], reach: float = np.inf) -> NDArray[np.float64]:
     """Per obstacle, the largest allowance [m] of ``table`` (k, m) at the configurations of
-    ``way`` (k, n) [rad] near the robot at ``q`` and its reference at ``reference`` (module
-    docstring)."""
-    robot = int(np.argmin(np.linalg.norm(way - q, axis=1)))
+    ``way`` (k, n) [rad] near the robot at ``q`` and its reference at ``reference``, times
+    ``clip(2 − d / reach, 0, 1)``, ``d`` the robot's distance from the nearest of them [rad]
+    (module docstring)."""
+    distances = np.linalg.norm(way - q, axis=1)
+    robot = int(np.argmin(distances))
     followed = int(np.argmin(np.linalg.norm(way - reference, axis=1)))
     first = max(0, min(robot, followed) - 1)
-    return table[first:max(robot, followed) + WAY_AHEAD + 1].max(axis=0)
+    held = float(np.clip(2.0 - distances[robot] / reach, 0.0, 1.0))
+    return held * table[first:max(robot, followed) + WAY_AHEAD + 1].max(axis=0)
