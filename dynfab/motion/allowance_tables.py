@@ -107,7 +107,9 @@ class AllowanceTables:
         ``panda_link5`` touched the cupboard while leaving). Not from boxes, cylinders and
         spheres: there the allowance's 3 mm of slack let a robot held beside a grasp's
         approach (fresh generated seed 21, as posed table_under_pick/0005) put
-        ``panda_link7`` 1.1 mm into a box on leaving, where it had touched 0.16 mm deep."""
+        ``panda_link7`` 1.1 mm into a box on leaving, where it had touched 0.16 mm deep (a
+        box's way allowance kept 0.25 rad off the way; they fade off it since:
+        :mod:`~dynfab.motion.way_window`)."""
         waypoints = plan.trajectory.waypoints
         if plan.approach > 0.0:   # the approach's phase is the last: its first configuration ends the way
             waypoints = waypoints[:len(waypoints) - len(plan.trajectory.phases[-1].waypoints) + 1]
