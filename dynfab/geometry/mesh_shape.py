@@ -94,7 +94,10 @@ class Mesh:
         """Radius [m] of the ball about the frame origin that holds every vertex."""
         return float(np.max(np.linalg.norm(self.vertices, axis=1)))
 
-    @property
+    @cached_property
     def bounds(self) -> NDArray[np.float64]:
-        """(2, 3): the lowest and highest vertex coordinates per axis [m]."""
-        return np.array([self.vertices.min(axis=0), self.vertices.max(axis=0)])
+        """(2, 3): the lowest and highest vertex coordinates per axis [m] (read-only, kept:
+        the mesh queries ask it every call, 1 ms on a 12 k-vertex mesh)."""
+        bounds = np.array([self.vertices.min(axis=0), self.vertices.max(axis=0)])
+        bounds.setflags(write=False)
+        return bounds
