@@ -24,9 +24,11 @@ The reference runs on its own clock ``τ``, which slows while the robot lags beh
 in a grasp's approach, drifts beside the checked segment
 (:mod:`dynfab.motion.reference_clock`); once the robot follows the approach its goal is
 shifted across the checked segment toward it (:mod:`dynfab.motion.approach_pull`). Off the
-approach the clock stands still while the reference is out of the robot's sight among the
-static primitives (:func:`~dynfab.motion.plan_joining.in_sight`: a corner; not meshes nor
-clouds). Along the plan's way the static primitives get the allowances that let the fabric's
+approach, a reference out of the robot's sight among the static primitives
+(:func:`~dynfab.motion.plan_joining.in_sight`: a corner; not meshes nor clouds) steps back
+on its clock to the latest point within a second that the robot sees
+(:func:`~dynfab.motion.plan_joining.sight_time`), or, if there is none, its clock stands
+still. Along the plan's way the static primitives get the allowances that let the fabric's
 leaves see what the plan's tighter spheres kept
 (:meth:`~dynfab.motion.guidance.JointGuidance.way_allowances`).
 
@@ -86,7 +88,7 @@ from dynfab.motion.approach_segment import allowances_ahead, leaf_buffers, segme
 from dynfab.motion.guidance import GoalTargets, GuidanceSettings, JointGuidance, Plan
 from dynfab.motion.guidance_settings import counted_checks
 from dynfab.motion.guidance_status import GuidanceStatus
-from dynfab.motion.plan_joining import in_sight, join_time
+from dynfab.motion.plan_joining import in_sight, join_time, sight_time
 from dynfab.motion.reference_clock import approach_rate, in_approach, way_rate
 from dynfab.motion.plan_requests import PendingPlan, PlanRequest, plan_maker
 from dynfab.motion.replan_reasons import ReplanWatch, counted
@@ -236,6 +238,8 @@ class GuidedFabric:
         approach = in_approach(self._plan, self._tau)
         self._approaching = self._approaching or (approach and lag <= settings.approach_lag_stop)
         sight = approach or in_sight(self._sight, q, self._reference, settings.path)
+        if not sight and (seen := sight_time(self._plan, self._tau, q, self._sight, settings.path)) is not None:
+            self._tau, sight = seen, True   # back to where the robot sees its reference
         waiting = self._pending is not None and not approach or not sight
         if waiting:
             rate = 0.0

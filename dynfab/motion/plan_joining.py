@@ -11,12 +11,15 @@ from dynfab.motion.configuration_checker import ConfigurationChecker
 from dynfab.motion.guidance import Plan
 from dynfab.motion.joint_planning import JointPlannerSettings
 
-__all__ = ["JOIN_CANDIDATES", "JOIN_SAMPLE_PERIOD", "in_sight", "join_time"]
+__all__ = ["JOIN_CANDIDATES", "JOIN_SAMPLE_PERIOD", "SIGHT_LOOK_BACK", "in_sight", "join_time", "sight_time"]
 
 #: how finely a plan arriving late is searched for the point where the robot joins it [s]
 JOIN_SAMPLE_PERIOD = 0.02
 #: nearest points of a plan whose straight segment from the robot is checked when it joins [-]
 JOIN_CANDIDATES = 8
+#: how far back on its clock [s] a reference out of the robot's sight is searched for a
+#: point in sight (:func:`sight_time`; set before measuring)
+SIGHT_LOOK_BACK = 1.0
 
 
 def join_time(plan: Plan, q: NDArray[np.float64], checker: ConfigurationChecker, resolution: float) -> float:
@@ -42,19 +45,38 @@ def in_sight(checker: ConfigurationChecker, q: NDArray[np.float64], point: NDArr
     escape_slack`` [m] from ``checker``'s obstacles: no closer than its ends (or the planner's
     margin) by more than the slack of an escaped endpoint's segment.
 
-    A guided fabric's reference clock waits while its reference is not in sight of the
-    robot among the static obstacles (:mod:`dynfab.motion.guided_fabric`): its attractor
-    pulls along that segment, and a reference that ran on around a corner the robot was
-    held behind left it there, where the obstacle leaves hold it (moving-sphere MBM
-    bookshelf_thin/0019 stalled 0.19 rad short after 8 plans, 19 mm from a table leg the
-    straight way to the goal goes 9 mm into; as posed bookshelf_small/0036, fingers 21 mm
-    from a shelf side the way to the reference touches). The plan's path and timing are
-    kept; a robot that cannot see its reference waits for a stall replan rather than being
-    pulled on. The guided fabric tests the static primitives only: the checker's distance to
-    a mesh is a grid's lower bound, up to 1.7 cm below the true one, too coarse for a corner
-    at the planner's 1 cm margin (tested against meshes, with the floor at 0, MBM kitchen/0007,
-    0008, 0010 and 0011 stalled after 10 plans; with this floor table_bars/0008 was held
-    every 3 s), and a camera's cloud is renewed every 0.5 s (its grid would be built on the
-    control thread)."""
+    A guided fabric's reference clock steps back to where the robot sees its reference
+    (:func:`sight_time`), or waits, while it is not in sight of the robot among the static
+    obstacles (:mod:`dynfab.motion.guided_fabric`): its attractor pulls along that segment,
+    and a reference that ran on around a corner the robot was held behind left it there,
+    where the obstacle leaves hold it (moving-sphere MBM bookshelf_thin/0019 stalled 0.19
+    rad short after 8 plans, 19 mm from a table leg the straight way to the goal goes 9 mm
+    into; as posed bookshelf_small/0036, fingers 21 mm from a shelf side the way to the
+    reference touches). The plan's path and timing are kept. The guided fabric tests the
+    static primitives only: the checker's distance to a mesh is a grid's lower bound, up to
+    1.7 cm below the true one, too coarse for a corner at the planner's 1 cm margin (tested
+    against meshes, with the floor at 0, MBM kitchen/0007, 0008, 0010 and 0011 stalled
+    after 10 plans; with this floor table_bars/0008 was held every 3 s), and a camera's
+    cloud is renewed every 0.5 s (its grid would be built on the control thread)."""
     floor = min(settings.margin, checker.clearances(q)[0], checker.clearances(point)[0]) - settings.escape_slack
     return checker.motion_free(q, point, settings.resolution, floor, -np.inf)[0]
+
+
+def sight_time(plan: Plan, tau: float, q: NDArray[np.float64], checker: ConfigurationChecker,
+               settings: JointPlannerSettings) -> float | None:
+    """The latest time on ``plan``'s clock [s], stepping back from ``tau`` every
+    :data:`JOIN_SAMPLE_PERIOD` for at most :data:`SIGHT_LOOK_BACK` (not before 0), whose
+    reference the robot at ``q`` sees (:func:`in_sight`); None if none.
+
+    A reference that ran on round a corner the robot is held behind pulls it across the
+    corner, into what the obstacle leaves hold it from; stepped back into sight it pulls the
+    robot along the plan's way toward the corner, and runs on from there (generated seed
+    22, as posed cage/0007: held behind a cage bar by four plans in turn while the clock
+    waited, reached with the clock stepped back)."""
+    for step in range(1, int(round(SIGHT_LOOK_BACK / JOIN_SAMPLE_PERIOD))):
+        earlier = tau - step * JOIN_SAMPLE_PERIOD
+        if earlier <= 0.0:
+            return None
+        if in_sight(checker, q, plan.trajectory.evaluate(earlier).position, settings):
+            return earlier
+    return None
