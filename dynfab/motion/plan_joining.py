@@ -58,7 +58,13 @@ def in_sight(checker: ConfigurationChecker, q: NDArray[np.float64], point: NDArr
     against meshes, with the floor at 0, MBM kitchen/0007, 0008, 0010 and 0011 stalled
     after 10 plans; with this floor table_bars/0008 was held every 3 s), and a camera's
     cloud is renewed every 0.5 s (its grid would be built on the control thread)."""
-    floor = min(settings.margin, checker.clearances(q)[0], checker.clearances(point)[0]) - settings.escape_slack
+    return _sees(checker, q, checker.clearances(q)[0], point, settings)
+
+
+def _sees(checker: ConfigurationChecker, q: NDArray[np.float64], clearance: float, point: NDArray[np.float64],
+          settings: JointPlannerSettings) -> bool:
+    """:func:`in_sight`, the robot's own clearance ``clearance`` = ``c(q)`` [m] given."""
+    floor = min(settings.margin, clearance, checker.clearances(point)[0]) - settings.escape_slack
     return checker.motion_free(q, point, settings.resolution, floor, -np.inf)[0]
 
 
@@ -73,10 +79,10 @@ def sight_time(plan: Plan, tau: float, q: NDArray[np.float64], checker: Configur
     robot along the plan's way toward the corner, and runs on from there (generated seed
     22, as posed cage/0007: held behind a cage bar by four plans in turn while the clock
     waited, reached with the clock stepped back)."""
-    for step in range(1, int(round(SIGHT_LOOK_BACK / JOIN_SAMPLE_PERIOD))):
-        earlier = tau - step * JOIN_SAMPLE_PERIOD
-        if earlier <= 0.0:
-            return None
-        if in_sight(checker, q, plan.trajectory.evaluate(earlier).position, settings):
-            return earlier
+    times = tau - JOIN_SAMPLE_PERIOD * np.arange(1, int(round(SIGHT_LOOK_BACK / JOIN_SAMPLE_PERIOD)))
+    times = times[times > 0.0]
+    clearance = checker.clearances(q)[0]   # the robot's, the same for every point
+    for earlier, point in zip(times, plan.trajectory.sample(times)[0]):
+        if _sees(checker, q, clearance, point, settings):
+            return float(earlier)
     return None
