@@ -3,6 +3,7 @@ times its reference and how the guided fabric follows it (:mod:`dynfab.motion.gu
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 
 from dynfab.motion.cloud_focus import CloudFocus
@@ -287,6 +288,53 @@ class GuidanceSettings:
     close_lag_slow: float = 0.03
     close_lag_stop: float = 0.1
     close_time: float = 1.0
+
+    def __post_init__(self) -> None:
+        for name in _FRACTIONS:
+            value = getattr(self, name)
+            if not 0.0 < value <= 1.0:
+                raise ValueError(f"GuidanceSettings.{name} must be in (0, 1], got {value}")
+        for name in _POSITIVE:
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"GuidanceSettings.{name} must be a finite number > 0, got {value}")
+        for name in _NON_NEGATIVE:
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise ValueError(f"GuidanceSettings.{name} must be a finite number >= 0, got {value}")
+        for name in _COUNTS:
+            value = getattr(self, name)
+            least = 1 if name in ("attempts", "mesh_escape_samples") else 0
+            if not (isinstance(value, int) and value >= least):
+                raise ValueError(f"GuidanceSettings.{name} must be an integer >= {least}, got {value!r}")
+        if not math.isfinite(self.tight_margin):
+            raise ValueError(f"GuidanceSettings.tight_margin must be finite, got {self.tight_margin}")
+        for name in ("detour_ratio", "sweep_detour"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) >= 1.0):
+                raise ValueError(f"GuidanceSettings.{name} must be a finite number >= 1, got {getattr(self, name)}")
+        for slow, stop in _RAMPS:
+            if not getattr(self, slow) < getattr(self, stop):
+                raise ValueError(f"GuidanceSettings.{slow} must be below {stop}, got {getattr(self, slow)} and "
+                                 f"{getattr(self, stop)}")
+
+
+#: settings that are fractions of a limit or of a tolerance, in (0, 1]
+_FRACTIONS = ("goal_region", "speed", "slow_speed", "acceleration", "approach_speed")
+#: settings that divide or set a rate: finite and > 0
+_POSITIVE = ("lag_slow", "lag_stop", "check_period", "stall_window", "stall_floor", "stall_lag_time",
+             "stall_margin_time", "way_reach", "approach_lag_slow", "approach_lag_stop", "approach_offset_slow",
+             "approach_offset_stop", "close_lag_slow", "close_lag_stop")
+#: clearances, times and gains that may be 0 (off), never negative
+_NON_NEGATIVE = ("mesh_margin", "mesh_goal_floor", "goal_overshoot", "approach_clearance", "slow_clearance",
+                 "blocked_interval", "check_horizon", "sweep_horizon", "stall_rate", "stall_progress",
+                 "stall_margin", "goal_clearance", "way_clearance", "sphere_coverage", "approach_pull",
+                 "approach_pull_rate", "approach_pull_limit", "approach_hold_time", "close_time")
+#: counts of tries and samples
+_COUNTS = ("goal_region_targets", "goal_region_samples", "mesh_escape_samples", "attempts", "detour_tries",
+           "replans")
+#: the (slow, stop) thresholds of each clock ramp: the clock slows from the first and stops at the second
+_RAMPS = (("lag_slow", "lag_stop"), ("approach_lag_slow", "approach_lag_stop"),
+          ("approach_offset_slow", "approach_offset_stop"), ("close_lag_slow", "close_lag_stop"))
 
 
 def counted_checks(settings: GuidanceSettings, rate: float = SIMULATION_CHECK_RATE) -> GuidanceSettings:
