@@ -93,6 +93,20 @@ def test_a_sphere_sweeping_an_arm_at_its_goal_in_a_shelf_is_let_pass_from_a_refu
     assert metrics["recovered"] >= 1
 
 
+def test_a_sphere_coming_at_the_goal_is_seen_soon_enough_to_make_way() -> None:
+    """Moving-sphere MBM table_pick/0099 (seed 13): a 6 cm sphere at 0.47 m/s comes down on
+    the arm near its goal by a table. Seen sweeping the goal 0.25 s before it reached the arm
+    (a 1 s horizon), the refuge came too late: the sphere's leaf pushed the hand 92 mm into a
+    box. Seen within 1.5 s, the arm makes way in time and then reaches the goal."""
+    problem = next(p for p in load_problems(["table_pick"], per_type=1, skip=99 - 9) if p.number == 99)
+    case = prepare_case(problem, "moving-sphere", franka(), seed=13)
+    assert case.invalid is None
+    outcome = run_case(case.mapping)
+    metrics, check = outcome["metrics"], outcome["check"]
+    assert metrics["goal_reached"] and not metrics["collision"], (metrics["failure"], metrics["clearance"])
+    assert check["collisions"] == [] and check["self_collisions"] == [] and check["joint_limit_violations"] == []
+
+
 def test_a_sphere_at_rest_sweeps_nothing(guidance) -> None:
     resting = _sphere_toward(guidance, READY, 0.05, 0.0)
     assert sweeps(guidance, READY, [resting]) == ()

@@ -37,7 +37,9 @@ def panda():
 #: (``slow_clearance``) would be elsewhere at that time
 #: the way not slowed, and the plan the spheres below were placed on (session 22's detour
 #: rule at 1.5 plans this way again and keeps a quicker one, ahead of them at NOW)
-STEADY = replace(GuidanceSettings(), slow_clearance=0.0, detour_ratio=3.0)
+#: ... and a sweep of 1 s: the spheres are placed :data:`LEAD` before the reference, so that
+#: what they sweep then misses the robot where it is and meets the reference ahead
+STEADY = replace(GuidanceSettings(), slow_clearance=0.0, detour_ratio=3.0, sweep_horizon=1.0)
 
 
 @pytest.fixture(scope="module")
@@ -122,7 +124,7 @@ def test_a_guided_fabric_replans_for_a_sphere_about_to_cross_its_reference(panda
 def test_a_replan_around_a_moving_sphere_leaves_its_swept_line(panda, wall_plan) -> None:
     waypoints = polyline_samples(wall_plan.trajectory.waypoints, 0.01)
     sphere = _coming(panda, waypoints[len(waypoints) // 2])
-    guidance = JointGuidance(panda)
+    guidance = JointGuidance(panda, replace(GuidanceSettings(), sweep_horizon=STEADY.sweep_horizon))
     swept = ConfigurationChecker(panda, [swept_obstacle(sphere, guidance.settings.sweep_horizon)])
 
     def closest(moving: PlacedObstacle) -> float:
