@@ -10,7 +10,8 @@ import pytest
 
 from dynfab.benchmarks.mbm.franka import franka
 from dynfab.benchmarks.mbm.moveit import SceneObject
-from dynfab.benchmarks.mbm.moving_sphere import CROSSING_TIMES, FIXED_LINKS, RADII, SPEEDS, START_MARGIN
+from dynfab.benchmarks.mbm.moving_sphere import (CROSSING_TIMES, FIXED_LINKS, RADII, REACTION_TIME, SPEEDS,
+                                                START_MARGIN)
 from dynfab.benchmarks.mbm.problems import Problem, load_problems
 from dynfab.benchmarks.mbm.variants import GRASPABLE_PREFIXES, prepare_case
 from dynfab.geometry.shapes import Placement, Sphere
@@ -87,3 +88,24 @@ def test_the_moving_sphere_keeps_off_the_links_nothing_can_move_away() -> None:
     q = np.repeat(np.array([case.mapping["initial_state"]["q"]]), len(times), axis=0)
     touched = {contact.first for contact in sweep_meshes(robot.meshes, q, [grown]).obstacle_contacts}
     assert not touched & set(FIXED_LINKS)
+
+
+def test_the_moving_sphere_leaves_the_arm_time_to_react() -> None:
+    """Seed 14's table_under_pick/0100 drew a sphere 5 cm from the arm's shoulder coming at
+    it at 0.46 m/s: it met panda_link2 at 0.25 s. The sphere kept keeps START_MARGIN from the
+    arm at its start configuration over the first REACTION_TIME."""
+    robot = franka()
+    problem = load_problems(["table_under_pick"], per_type=1, skip=100 - 9)[0]
+    assert problem.number == 100
+    sphere = prepare_case(problem, "moving-sphere", robot, seed=14).mapping["obstacles"][-1]
+    start, velocity = np.array(sphere["trajectory"]["start"]), np.array(sphere["trajectory"]["velocity"])
+
+    def touches(radius: float, within: float) -> bool:
+        times = np.arange(0.0, within + 1e-9, 0.05)
+        grown = PlacedShape("sphere", Sphere(radius), tuple(Placement(tuple(start + t * velocity)) for t in times))
+        q = np.repeat(np.array([problem.start]), len(times), axis=0)
+        return bool(sweep_meshes(robot.meshes, q, [grown]).obstacle_contacts)
+
+    assert not touches(sphere["radius"], 0.5)                                   # the old draw did at 0.25 s
+    assert not touches(sphere["radius"] + START_MARGIN - 2e-3, REACTION_TIME)   # sampled every 0.1 s when drawn
+    assert 0.0 < REACTION_TIME < CROSSING_TIMES[0]

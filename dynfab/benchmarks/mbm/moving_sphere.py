@@ -6,7 +6,8 @@ Drawn per problem from a seeded generator: radius in :data:`RADII`, speed in
 ``crossing_time`` in :data:`CROSSING_TIMES` at which its centre passes through the point
 at fraction ``s`` in :data:`FRACTIONS` of the line; it moves on a straight line at
 constant velocity (a ``linear`` trajectory), before and after. A draw is kept only if the
-sphere keeps :data:`START_MARGIN` from the arm at its start configuration at ``t = 0``,
+sphere keeps :data:`START_MARGIN` from the arm at its start configuration over the first
+:data:`REACTION_TIME` of the run,
 keeps :data:`START_MARGIN` from the links no avoidance can move out of its way
 (:data:`FIXED_LINKS`) for the whole run, and never touches the arm at its goal
 configuration from ``crossing_time +`` :data:`SETTLE_TIME` on (the goal stays reachable
@@ -25,7 +26,7 @@ from dynfab.benchmarks.mbm.franka import Franka
 from dynfab.geometry.shapes import Placement, Sphere
 from dynfab.robots.mesh_sweep import PlacedShape, sweep_meshes
 
-__all__ = ["CROSSING_TIMES", "FRACTIONS", "RADII", "SPEEDS", "CrossingSphere", "crossing_sphere"]
+__all__ = ["CROSSING_TIMES", "FRACTIONS", "RADII", "REACTION_TIME", "SPEEDS", "CrossingSphere", "crossing_sphere"]
 
 #: Sphere radius range [m].
 RADII = (0.05, 0.08)
@@ -38,6 +39,13 @@ CROSSING_TIMES = (1.5, 3.0)
 FRACTIONS = (0.35, 0.65)
 #: Smallest distance from the arm at the start, at t = 0 [m].
 START_MARGIN = 0.05
+#: How long the arm, still at its start configuration, must keep :data:`START_MARGIN` from
+#: the sphere [s]: a sphere already on its way into the arm leaves no time to react (fresh
+#: ``--seed 14`` table_under_pick/0100: 5 cm from the arm's shoulder at 0.46 m/s, it met
+#: ``panda_link2`` at 0.25 s, beside the joint-2 axis, where no joint moves the link
+#: out of its way in time). 0.5 s, ten control ticks of the plan's latency, set from that
+#: draw before measuring.
+REACTION_TIME = 0.5
 #: After the crossing, from when on the goal configuration must stay free [s].
 SETTLE_TIME = 1.5
 #: Links a sphere must keep :data:`START_MARGIN` from at all times: no joint moves
@@ -114,11 +122,14 @@ def _draw(hand_start: np.ndarray, hand_goal: np.ndarray, rng: np.random.Generato
 
 def _clear(sphere: CrossingSphere, start: Sequence[float], goal: Sequence[float], robot: Franka,
            duration: float) -> bool:
-    """The sphere (grown by :data:`START_MARGIN`) is off the arm at the start at t = 0 and off
-    :data:`FIXED_LINKS` throughout, and off the arm at the goal from the crossing on (sampled
-    every 0.1 s)."""
-    at_start = PlacedShape("sphere", Sphere(sphere.radius + START_MARGIN), (Placement(_triple(sphere.centre(0.0))),))
-    if sweep_meshes(robot.meshes, np.array([start], dtype=float), [at_start]).obstacle_contacts:
+    """The sphere (grown by :data:`START_MARGIN`) is off the arm at the start over the first
+    :data:`REACTION_TIME` and off :data:`FIXED_LINKS` throughout, and off the arm at the goal
+    from the crossing on (sampled every 0.1 s)."""
+    early = np.arange(0.0, REACTION_TIME + 0.05, 0.1)
+    at_start = PlacedShape("sphere", Sphere(sphere.radius + START_MARGIN),
+                           tuple(Placement(_triple(sphere.centre(t))) for t in early))
+    if sweep_meshes(robot.meshes, np.repeat(np.array([start], dtype=float), len(early), axis=0),
+                    [at_start]).obstacle_contacts:
         return False
     run = np.arange(0.0, duration + 0.1, 0.1)
     grown = PlacedShape("sphere", Sphere(sphere.radius + START_MARGIN),
