@@ -148,7 +148,7 @@ class GuidanceSettings:
             for a refuge (the arm, held off its way by the leaves, was pushed into a box). 1.5
             chosen over 1 and 2 on seeds 12 and 13 (89-100: 166/166 with 1.5 and 2, median
             time to goal 6.9 s against 7.0 s with 2; 165/166 with 1), reported on seeds 14
-            and 15 (docs/results.md).
+            to 17 (docs/results.md).
         sweep_detour: a replan around those capsules is taken unless it lasts more than
             this many times the replan around the spheres where they are [-]: the capsule
             foresees ``sweep_horizon`` only, and a detour around it can outlast the sphere's

@@ -43,8 +43,8 @@ START_MARGIN = 0.05
 #: the sphere [s]: a sphere already on its way into the arm leaves no time to react (fresh
 #: ``--seed 14`` table_under_pick/0100: 5 cm from the arm's shoulder at 0.46 m/s, it met
 #: ``panda_link2`` at 0.25 s, beside the joint-2 axis, where no joint moves the link
-#: out of its way in time). 0.5 s, ten control ticks of the plan's latency, set from that
-#: draw before measuring.
+#: out of its way in time). 0.5 s, ten times guidance's simulated plan latency, set from
+#: that draw before measuring.
 REACTION_TIME = 0.5
 #: After the crossing, from when on the goal configuration must stay free [s].
 SETTLE_TIME = 1.5
