@@ -124,18 +124,14 @@ def _clear(sphere: CrossingSphere, start: Sequence[float], goal: Sequence[float]
            duration: float) -> bool:
     """The sphere (grown by :data:`START_MARGIN`) is off the arm at the start over the first
     :data:`REACTION_TIME` and off :data:`FIXED_LINKS` throughout, and off the arm at the goal
-    from the crossing on (sampled every 0.1 s)."""
-    early = np.arange(0.0, REACTION_TIME + 0.05, 0.1)
-    at_start = PlacedShape("sphere", Sphere(sphere.radius + START_MARGIN),
-                           tuple(Placement(_triple(sphere.centre(t))) for t in early))
-    if sweep_meshes(robot.meshes, np.repeat(np.array([start], dtype=float), len(early), axis=0),
-                    [at_start]).obstacle_contacts:
-        return False
+    from the crossing on (sampled every 0.1 s; one sweep of the start configuration serves
+    both of its tests)."""
     run = np.arange(0.0, duration + 0.1, 0.1)
     grown = PlacedShape("sphere", Sphere(sphere.radius + START_MARGIN),
                         tuple(Placement(_triple(sphere.centre(t))) for t in run))
     swept = sweep_meshes(robot.meshes, np.repeat(np.array([start], dtype=float), len(run), axis=0), [grown])
-    if any(contact.first in FIXED_LINKS for contact in swept.obstacle_contacts):
+    if any(contact.first in FIXED_LINKS or run[contact.samples[0]] < REACTION_TIME + 0.05
+           for contact in swept.obstacle_contacts):
         return False
     times = np.arange(sphere.crossing_time + SETTLE_TIME, duration + 0.1, 0.1)
     later = PlacedShape("sphere", Sphere(sphere.radius), tuple(Placement(_triple(sphere.centre(t))) for t in times))
