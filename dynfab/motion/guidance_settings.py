@@ -308,16 +308,16 @@ class GuidanceSettings:
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
                 raise ValueError(f"GuidanceSettings.{name} must be a finite number >= 0, got {value}")
-        for name in _COUNTS:
+        for name, least in _COUNTS.items():
             value = getattr(self, name)
-            least = 1 if name in ("attempts", "mesh_escape_samples") else 0
             if not (isinstance(value, int) and value >= least):
                 raise ValueError(f"GuidanceSettings.{name} must be an integer >= {least}, got {value!r}")
         if not math.isfinite(self.tight_margin):
             raise ValueError(f"GuidanceSettings.tight_margin must be finite, got {self.tight_margin}")
         for name in ("detour_ratio", "sweep_detour"):
-            if not (math.isfinite(getattr(self, name)) and getattr(self, name) >= 1.0):
-                raise ValueError(f"GuidanceSettings.{name} must be a finite number >= 1, got {getattr(self, name)}")
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 1.0):
+                raise ValueError(f"GuidanceSettings.{name} must be a finite number >= 1, got {value}")
         for slow, stop in _RAMPS:
             if not getattr(self, slow) < getattr(self, stop):
                 raise ValueError(f"GuidanceSettings.{slow} must be below {stop}, got {getattr(self, slow)} and "
@@ -335,9 +335,9 @@ _NON_NEGATIVE = ("mesh_margin", "mesh_goal_floor", "goal_overshoot", "approach_c
                  "blocked_interval", "check_horizon", "sweep_horizon", "stall_rate", "stall_progress",
                  "stall_margin", "goal_clearance", "way_clearance", "sphere_coverage", "approach_pull",
                  "approach_pull_rate", "approach_pull_limit", "approach_hold_time", "close_time")
-#: counts of tries and samples
-_COUNTS = ("goal_region_targets", "goal_region_samples", "mesh_escape_samples", "attempts", "detour_tries",
-           "replans")
+#: counts of tries and samples, each with its least value
+_COUNTS = {"goal_region_targets": 0, "goal_region_samples": 0, "mesh_escape_samples": 1, "attempts": 1,
+           "detour_tries": 0, "replans": 0}
 #: the (slow, stop) thresholds of each clock ramp: the clock slows from the first and stops at the second
 _RAMPS = (("lag_slow", "lag_stop"), ("approach_lag_slow", "approach_lag_stop"),
           ("approach_offset_slow", "approach_offset_stop"), ("close_lag_slow", "close_lag_stop"))
