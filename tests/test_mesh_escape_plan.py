@@ -13,7 +13,7 @@ import trimesh
 
 import dynfab.motion.mesh_escape_plan as escape_module
 from dynfab.geometry.point_cloud import PointCloud
-from dynfab.geometry.shapes import Box, Mesh, Placement
+from dynfab.geometry.shapes import Box, Mesh, Placement, Sphere
 from dynfab.motion.guidance import GuidanceError, GuidanceSettings, JointGuidance
 from dynfab.motion.guidance_settings import counted_checks
 from dynfab.motion.configuration_checker import PlacedObstacle
@@ -28,6 +28,9 @@ START = Q + np.array([0.3, 0.8, 0.0, 0.2, 0.0, 0.0, 0.0])
 #: a few points beside the cube
 _CLOUD = PlacedObstacle(PointCloud.from_points(np.array([[0.0, 0.0, 0.0], [0.01, 0.0, 0.0]]), voxel=0.01),
                         Placement((0.6, 0.6, 0.6)))
+
+#: a sphere passing far from the arm (the scene changes before a search ends)
+_PASSING = PlacedObstacle(Sphere(0.05), Placement((1.5, 0.0, 0.5)), (0.0, 0.3, 0.0))
 
 
 @pytest.fixture(scope="module")
@@ -68,7 +71,8 @@ def test_the_wider_margin_is_searched_first_then_mesh_margin_with_every_seed(pan
     assert margins == [(0.006, 4), (0.006, 5), (0.003, 4), (0.003, 5), (0.003, 6)]
 
 
-def test_among_meshes_it_searches_unless_told_not_to_and_never_among_point_clouds(panda, monkeypatch) -> None:
+def test_among_meshes_it_searches_unless_told_not_to_and_never_among_point_clouds_or_what_moves(
+        panda, monkeypatch) -> None:
     searched = []
 
     def finding_none(validity, start, goal, lower, upper, settings, seed, seconds):
@@ -82,7 +86,10 @@ def test_among_meshes_it_searches_unless_told_not_to_and_never_among_point_cloud
                                         (MeshEscapeSettings(among_meshes=False), (BESIDE_LINK2, mesh), 0),
                                         (MeshEscapeSettings(), (mesh,), 2),
                                         (MeshEscapeSettings(), (BESIDE_LINK2, mesh), 2),
-                                        (MeshEscapeSettings(), (BESIDE_LINK2, _CLOUD), 0)):
+                                        (MeshEscapeSettings(), (BESIDE_LINK2, _CLOUD), 0),
+                                        (MeshEscapeSettings(), (BESIDE_LINK2, _PASSING), 0),
+                                        (MeshEscapeSettings(), (BESIDE_LINK2, replace(_PASSING, velocity=(0.0,) * 3)),
+                                         2)):
         scene = _scene(panda, escape)
         scene.checker.set_obstacles(obstacles)
         searched.clear()
