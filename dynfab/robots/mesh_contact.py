@@ -19,10 +19,11 @@ not handled (:class:`ValueError`).
 Measured on MBM's kitchen around development kitchen/0005's start (seed 1), 200
 configurations, 3 mm: 2.99 ms a configuration against 31.1 ms for the exact distances at
 load 6.5 (0.41 against 4.4 ms at load 1.4), the same answer on all 200
-(``bench/bench_mesh_contact.py``). The bounding boxes, tested at once, and the links' coal
-transforms made once per configuration: 3.4-4.0 times faster than a bounding sphere per pair
-tested in turn around moving-sphere bookshelf_thin/0089's start (seed 17; 2000
-configurations, 0.3 rad apart, margins 0-6 mm, the same answers), 2.0-2.3 ms → 0.5-0.6 ms.
+(``bench/bench_mesh_contact.py``). The bounding boxes tested at once and the links' coal
+transforms made once per configuration (session 25) against a bounding sphere per pair
+tested in turn, on the same machine at load 2: that bench 1.61 → 0.62 ms a configuration;
+around moving-sphere bookshelf_thin/0089's start (``--seed 17``; 2000 configurations,
+σ = 0.3 rad, margins 0, 3 and 6 mm) 2.7-3.0 → 0.39-0.47 ms (6.3-7.0×), the same answers.
 """
 
 from __future__ import annotations
