@@ -41,6 +41,7 @@ from dynfab.motion.joint_planning import (ApproachTest, JointPath, JointPlannerS
 from dynfab.motion.joint_trajectory import JointTrajectory, TimingError, time_path
 from dynfab.motion.guidance_settings import GuidanceSettings
 from dynfab.motion.phased_trajectory import PhasedTrajectory
+from dynfab.motion.placed_obstacle import any_moving
 from dynfab.motion.plan_values import GoalTargets, GuidanceError, JointTarget, Plan
 from dynfab.motion.way_speed import WaySpeed
 from dynfab.robots.joint_bounds import finite_joint_bounds
@@ -154,11 +155,14 @@ class JointGuidance:
     def _plan_to(self, start: NDArray[np.float64], target: NDArray[np.float64], obstacles: Sequence[PlacedObstacle],
                  seed: int, wide: bool, began: float) -> Plan:
         """:meth:`plan`'s attempts from ``start`` to the goal configuration ``target``."""
-        tries = self._tries(seed, wide)
+        count = self.settings.attempts
+        if any_moving(obstacles):
+            count = min(count, self.settings.moving_attempts)
+        tries = self._tries(seed, wide, count)
         focus = self.settings.cloud_focus
         first = len(tries)
         if focus is not None and any(isinstance(o.shape, PointCloud) for o in obstacles):
-            first = min(first, first - self.settings.attempts + focus.whole_attempts)
+            first = min(first, first - count + focus.whole_attempts)
         try:
             return self._attempts(start, target, tries[:first], began)
         except GuidanceError as failure:
@@ -170,12 +174,13 @@ class JointGuidance:
         self.checker.set_obstacles(focused)  # the endpoints' tests are then made on the focus's grid
         return self._attempts(start, target, tries, began)
 
-    def _tries(self, seed: int, wide: bool) -> list[tuple[JointPlannerSettings, int]]:
-        """The planner's settings and seed of each attempt: each with the next seed and twice the
-        time limit, a ``wide`` one first (:meth:`plan`)."""
+    def _tries(self, seed: int, wide: bool, count: int) -> list[tuple[JointPlannerSettings, int]]:
+        """The planner's settings and seed of each of ``count`` attempts: each with the next
+        seed and twice the time limit, a ``wide`` one first (:meth:`plan`); ``count`` is
+        ``attempts``, among moving obstacles at most ``moving_attempts``."""
         path_settings = self.settings.path
         tries = [(replace(path_settings, time_limit=path_settings.time_limit * 2**attempt), seed + attempt)
-                 for attempt in range(self.settings.attempts)]
+                 for attempt in range(count)]
         if wide and self.settings.stall_margin > path_settings.margin:
             tries.insert(0, (replace(path_settings, margin=self.settings.stall_margin,
                                      time_limit=self.settings.stall_margin_time), seed))

@@ -23,6 +23,14 @@ from the plan's start (guidance's attempts before it included; in the simulators
 plans are bounded by checks at any load, ``WALL_FACTOR`` times as long): spent, the plan
 fails with ``mesh_escape_budget``. A simulated run does not wait for it (a plan's latency
 is fixed), a robot in real time would.
+
+It is not searched among moving obstacles (one with a velocity other than zero): its
+searches take tens of seconds (90 000 mesh checks at 0.3-0.5 ms each) and the scene has
+changed when they end; the plan fails with its reason and is asked for again as the
+obstacle moves on. Moving-sphere bookshelf_thin/0089 (``--seed 17``, session 24) searched it
+eight times among the sphere, as it was or as the capsule it sweeps, each to its budget,
+and none found a path; the run took 614 s of wall time for its 20 s and reached its goal on
+a later plan.
 """
 
 from __future__ import annotations
@@ -42,6 +50,7 @@ from dynfab.motion.joint_trajectory import JointTrajectory, TimingError, time_pa
 from dynfab.motion.mesh_escape import MeshEscapeSettings, SpheresOrMeshes, mesh_path
 from dynfab.motion.mesh_goal_check import MeshGoalCheck
 from dynfab.motion.phased_trajectory import PhasedTrajectory
+from dynfab.motion.placed_obstacle import any_moving
 from dynfab.motion.plan_values import GuidanceError, Plan
 from dynfab.robots.limits import MotionLimits
 from dynfab.robots.mesh_collision import MeshCollisionModel, moving_part
@@ -94,7 +103,7 @@ def escape_plan(scene: EscapeScene, start: NDArray[np.float64], target: NDArray[
     obstacles, searched at each margin of :func:`search_margins` with the first
     ``wide_searches`` of ``seeds`` (at ``mesh_margin`` with each) (the first path found that
     passes the exact check kept); None among point clouds, among meshes unless
-    ``among_meshes``, among moving obstacles (:func:`_moving`), without ``mesh_escape``
+    ``among_meshes``, among moving obstacles, without ``mesh_escape``
     settings, or if every search ended within its checks without such a path.
 
     Args:
@@ -111,7 +120,7 @@ def escape_plan(scene: EscapeScene, start: NDArray[np.float64], target: NDArray[
     """
     settings, path = scene.settings.mesh_escape, scene.settings.path
     shapes = [o.shape for o in scene.checker.obstacles]
-    if (settings is None or any(isinstance(s, PointCloud) for s in shapes) or _moving(scene.checker.obstacles)
+    if (settings is None or any(isinstance(s, PointCloud) for s in shapes) or any_moving(scene.checker.obstacles)
             or (not settings.among_meshes and any(isinstance(s, Mesh) for s in shapes))):
         return None
     wall = settings.budget * (1.0 if path.check_rate is None else WALL_FACTOR)
@@ -132,17 +141,6 @@ def escape_plan(scene: EscapeScene, start: NDArray[np.float64], target: NDArray[
             if way is not None and scene.meshes.polyline_free(way, path.resolution / 2, least / 2):
                 return _timed_plan(scene, way, target, began, validity.checks)
     return None
-
-
-def _moving(obstacles: Sequence[PlacedObstacle]) -> bool:
-    """Whether any of ``obstacles`` moves (a velocity other than zero): the meshes' plan is
-    not searched then. Its searches take tens of seconds (90 000 mesh checks, 30 s at
-    0.34 ms each) and the scene has changed when they end; the plan fails with its reason
-    and is asked for again as the obstacle moves on. Moving-sphere bookshelf_thin/0089
-    (``--seed 17``, session 24): eight searches among a moving sphere, as it was or as the
-    capsule it sweeps, each to its budget, none found a path; the run took 614 s of wall
-    time for 20 s simulated and reached its goal on a later plan among primitives."""
-    return any(np.any(np.asarray(o.velocity, dtype=float) != 0.0) for o in obstacles)
 
 
 def _validity(scene: EscapeScene, start: NDArray[np.float64], target: NDArray[np.float64],

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 from dynfab.geometry.shapes import Placement, Shape
 
-__all__ = ["PlacedObstacle"]
+__all__ = ["PlacedObstacle", "any_moving"]
 
 
 @dataclass(frozen=True)
@@ -23,3 +24,8 @@ class PlacedObstacle:
     shape: Shape
     placement: Placement
     velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
+def any_moving(obstacles: Sequence[PlacedObstacle]) -> bool:
+    """Whether any of ``obstacles`` moves (a velocity other than zero)."""
+    return any(any(v != 0.0 for v in o.velocity) for o in obstacles)
