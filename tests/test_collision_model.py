@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 from pathlib import Path
 
 import numpy as np
@@ -203,22 +202,24 @@ def test_pair_selection_refuses_bad_parameters() -> None:
         PairSelection(near_spread=0.0)
 
 
-def test_cache_is_used_and_a_changed_urdf_refits(tmp_path: Path) -> None:
-    source = arm_urdf("ur5")
-    robot_dir = tmp_path / "ur_description"
-    shutil.copytree(source.parents[1], robot_dir)
-    urdf = robot_dir / source.parent.name / source.name
+def test_cache_is_used_and_a_changed_urdf_or_mesh_refits(tmp_path: Path) -> None:
+    """A second load reads the cache; a changed joint limit or a changed mesh file fits
+    again, into a new entry (three short links, the last one a mesh: a fit of seconds)."""
+    trimesh.creation.box((0.2, 0.1, 0.1)).export(tmp_path / "c.stl")
+    urdf = tmp_path / "arm.urdf"
+    text = (Path(__file__).parent / "data" / "three_links.urdf").read_text().replace("1.0 0.1 0.1", "0.3 0.1 0.1")
+    urdf.write_text(text.replace("<!--MESH-->", '<collision><geometry><mesh filename="c.stl"/></geometry></collision>'))
     first = auto_collision_model(urdf, cache=tmp_path / "cache")
     again = auto_collision_model(urdf, cache=tmp_path / "cache")
     assert not first.from_cache and again.from_cache
     assert again.spheres == first.spheres and again.self_collision_pairs == first.self_collision_pairs
     assert len(list((tmp_path / "cache").iterdir())) == 1
-    text = urdf.read_text()
-    urdf.write_text(text.replace('upper="3.14159265"', 'upper="3.0"', 1) if 'upper="3.14159265"' in text
-                    else text.replace("<robot ", "<robot  ", 1))
-    changed = auto_collision_model(urdf, cache=tmp_path / "cache")
-    assert not changed.from_cache
+    urdf.write_text(urdf.read_text().replace('upper="3.0"', 'upper="2.5"', 1))
+    assert not auto_collision_model(urdf, cache=tmp_path / "cache").from_cache
     assert len(list((tmp_path / "cache").iterdir())) == 2
+    trimesh.creation.box((0.25, 0.1, 0.1)).export(tmp_path / "c.stl")
+    assert not auto_collision_model(urdf, cache=tmp_path / "cache").from_cache
+    assert len(list((tmp_path / "cache").iterdir())) == 3
 
 
 def test_cache_dir_comes_from_the_environment(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

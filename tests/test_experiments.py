@@ -25,6 +25,7 @@ from dynfab.scenario.schema import load_scenario
 from dynfab.motion.trajectory_mapping import trajectory_from_mapping
 
 RUNS, JOBS = 2, 2
+MPC_REPLAYED = {"exp4"}   # the experiments whose MPC runs are replayed (test_scenario_files_replay...)
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 TIMING_KEYS = {"solver_time_ms", "plan_time_ms"}  # wall-clock metrics, the only ones allowed to differ on replay
 
@@ -109,10 +110,11 @@ def test_summary_counts_outcomes_and_averages_over_common_successes(series: Seri
 
 
 def test_scenario_files_replay_to_the_same_metrics(series: SeriesResult) -> None:
-    """Every fabric run and the first MPC run (about 10 s each) replay from their files to
-    identical metrics (apart from the solver time)."""
-    mpc = [r for r in series.records if r.planner == MPC]
-    replayed = [r for r in series.records if r.planner != MPC] + mpc[:1]
+    """The first seed's run of every planner replays from its file to identical metrics
+    (apart from the solver time); MPC's on the Boxer (exp4, seconds) and not on the Panda
+    (exp1, about 50 s of test time a run)."""
+    name = series.summary.experiment.name
+    replayed = [r for r in series.records if r.seed == 0 and (r.planner != MPC or name in MPC_REPLAYED)]
     for record in replayed:
         path = scenario_file(series.out_dir, series.summary.experiment.name, record.seed, record.planner)
         metrics = run_scenario(load_scenario(path)).metrics.to_dict()

@@ -340,12 +340,12 @@ def test_cli_planner_mpc_override_on_a_mobile_robot_reaches_the_goal(
     clearances are grazes between the 10 Hz stage times (up to (s h)² / (8 R) for a
     sphere moving at s = 2.1 m/s past R = 0.49 m, 11 mm), so ``success`` is false by
     the metric's ``clearance < 0`` and only the goal and the graze bound are asserted. The
-    runs last 6 s (the files say 10 s and 15 s): the goal is reached before, and an MPC step
+    runs last 4.5 s (the files say 10 s and 15 s): the goal is reached before, and an MPC step
     of the mobile manipulator costs 0.1-1 s of test time."""
     scenario = yaml.safe_load((EXAMPLES / example).read_text(encoding="utf-8"))
     assert scenario["robot"] == robot
     shortened = tmp_path / example
-    shortened.write_text(yaml.safe_dump({**scenario, "duration": 6.0}), encoding="utf-8")
+    shortened.write_text(yaml.safe_dump({**scenario, "duration": 4.5}), encoding="utf-8")
     code = main(["run", str(shortened), "--planner", "mpc", "--json"])
     out, _ = capsys.readouterr()
     metrics = json.loads(out)

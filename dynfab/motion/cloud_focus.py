@@ -36,8 +36,9 @@ from numpy.typing import NDArray
 from dynfab.geometry.focused_cloud import FocusedCloud, split_cloud
 from dynfab.geometry.point_cloud import PointCloud
 from dynfab.motion.configuration_checker import PlacedObstacle
+from dynfab.robots.robot import Robot
 
-__all__ = ["CloudFocus", "focused_obstacles"]
+__all__ = ["CloudFocus", "FocusCache", "focused_obstacles"]
 
 
 @dataclass(frozen=True)
@@ -84,3 +85,32 @@ def focused_obstacles(obstacles: Sequence[PlacedObstacle], centres: NDArray[np.f
         parts = split_cloud(cloud, low, high, focus.pitch)
         result.extend(PlacedObstacle(part, obstacle.placement) for part in parts if part is not None)
     return tuple(result)
+
+
+class FocusCache:
+    """The focus of the last plan's clouds around ``robot`` at its goal, made again only for
+    other obstacles or another goal (a replan builds no new grids)."""
+
+    def __init__(self, robot: Robot, focus: CloudFocus | None) -> None:
+        self.robot = robot
+        self.focus = focus
+        self._last: tuple[tuple[PlacedObstacle, ...], bytes, tuple[PlacedObstacle, ...]] | None = None
+
+    def focused(self, obstacles: Sequence[PlacedObstacle],
+                target: NDArray[np.float64]) -> tuple[PlacedObstacle, ...] | None:
+        """``obstacles`` with their point clouds focused around the robot at ``target``
+        (:func:`focused_obstacles`), None without clouds or focus; the last result reused for
+        the same obstacles (shapes and placements) and goal."""
+        if self.focus is None or not any(isinstance(o.shape, PointCloud) for o in obstacles):
+            return None
+        key = np.asarray(target, dtype=float).tobytes()
+        last = self._last
+        if (last is not None and last[1] == key and len(last[0]) == len(obstacles)
+                and all(a.shape is b.shape and np.array_equal(a.placement.position, b.placement.position)
+                        and np.array_equal(a.placement.orientation, b.placement.orientation)
+                        for a, b in zip(last[0], obstacles))):
+            return last[2]
+        centres = np.asarray(self.robot.sphere_centers(target), dtype=float)
+        focused = focused_obstacles(obstacles, centres, np.asarray(self.robot.sphere_radii, dtype=float), self.focus)
+        self._last = (tuple(obstacles), key, focused)
+        return focused

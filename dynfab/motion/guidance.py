@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 from dynfab.geometry.focused_cloud import FocusedCloud
 from dynfab.geometry.shapes import PointCloud
 from dynfab.motion.allowance_tables import AllowanceTables
-from dynfab.motion.cloud_focus import focused_obstacles
+from dynfab.motion.cloud_focus import FocusCache
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.goal_configuration import GoalSearch
 from dynfab.motion.goal_region import room_at_the_goal, roomier_goal
@@ -56,8 +56,6 @@ _FOCUS_HELPS = frozenset({"start_in_collision", "goal_in_collision", "no_path"})
 _ENDPOINT_FAILURES = frozenset({"start_in_collision", "goal_in_collision"})   # (its next test may find an escape)
 
 
-
-
 class JointGuidance:
     """Plans joint-space references for ``robot`` (module docstring).
 
@@ -81,8 +79,7 @@ class JointGuidance:
         self._ahead = ConfigurationChecker(robot.planning_robot)   # what moves (blocked_ahead)
         self._way_speed = WaySpeed(robot, settings)
         self._mesh_check: MeshGoalCheck | None | bool = False  # made on first use; None: no meshes
-        # the last focus made: the obstacles, the goal's bytes and the focused obstacles
-        self._focus: tuple[tuple[PlacedObstacle, ...], bytes, tuple[PlacedObstacle, ...]] | None = None
+        self._focus = FocusCache(robot, settings.cloud_focus)   # the last plan's clouds around its goal
         kin = robot.kinematics
         self._lower, self._upper = finite_joint_bounds(kin.lower, kin.upper)
 
@@ -166,7 +163,7 @@ class JointGuidance:
         try:
             return self._attempts(start, target, tries[:first], began)
         except GuidanceError as failure:
-            focused = self._focused(obstacles, target) if failure.reason in _FOCUS_HELPS else None
+            focused = self._focus.focused(obstacles, target) if failure.reason in _FOCUS_HELPS else None
             if focused is None:
                 if first == len(tries) or failure.reason == "timing":
                     raise
@@ -366,26 +363,6 @@ class JointGuidance:
         limits, settings = self.robot.limits, self.settings
         return time_path(segment, settings.approach_speed * limits.velocity,
                          settings.approach_speed * limits.acceleration, settings.timing)
-
-    def _focused(self, obstacles: Sequence[PlacedObstacle],
-                 target: NDArray[np.float64]) -> tuple[PlacedObstacle, ...] | None:
-        """``obstacles`` with their point clouds focused around the robot at ``target``
-        (:mod:`dynfab.motion.cloud_focus`), None without clouds or focus; the last result
-        reused for the same obstacles and goal (a replan builds no new grids)."""
-        focus = self.settings.cloud_focus
-        if focus is None or not any(isinstance(o.shape, PointCloud) for o in obstacles):
-            return None
-        key = target.tobytes()
-        last = self._focus
-        if (last is not None and last[1] == key and len(last[0]) == len(obstacles)
-                and all(a.shape is b.shape and np.array_equal(a.placement.position, b.placement.position)
-                        and np.array_equal(a.placement.orientation, b.placement.orientation)
-                        for a, b in zip(last[0], obstacles))):
-            return last[2]
-        centres = np.asarray(self.robot.sphere_centers(target), dtype=float)
-        focused = focused_obstacles(obstacles, centres, np.asarray(self.robot.sphere_radii, dtype=float), focus)
-        self._focus = (tuple(obstacles), key, focused)
-        return focused
 
     def _endpoint_tests(self, q: NDArray[np.float64], goal: bool = False) -> tuple[ApproachTest | None, ...]:
         """The tests of a blocked endpoint's segment (of a ``goal``'s approach, else of a
