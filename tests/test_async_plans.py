@@ -151,3 +151,45 @@ def test_a_replan_that_finds_no_plan_is_counted_as_failed_not_as_a_plan(panda) -
         step += 1
     assert guided.status.failed_plans == 1 and guided.status.plans == 1 and guided.status.replans_stalled == 1
     assert guided.status.failure == "no_path" and guided.plan is first
+
+
+def test_a_plan_asked_for_in_a_tick_starts_once_the_ticks_command_is_computed(panda) -> None:
+    """In real time the worker starts after the tick's command (it would hold the
+    interpreter while the command is computed); a caller that only updates starts it at its
+    next tick."""
+    controller = _controller(panda, plan_latency=None)
+    guided = controller.guided
+    events: list[str] = []
+    plan, inner = guided.guidance.plan, controller.inner
+
+    def recorded_plan(*args, **kwargs):
+        events.append("plan")
+        return plan(*args, **kwargs)
+
+    def recorded_inner(*args, **kwargs):
+        events.append("command")
+        return inner(*args, **kwargs)
+
+    guided.guidance.plan = recorded_plan
+    controller.inner = recorded_inner
+    try:
+        controller(0.0, START, np.zeros(7))
+        step = 0
+        while step < 2000 and guided.plan is None:
+            step += 1
+            time.sleep(0.005)
+            guided.update(step * DT, START)
+        assert guided.plan is not None and events[:2] == ["command", "plan"]
+        events.clear()
+        guided.set_goal(JointTarget(tuple(START)), 1.0, GOAL)   # update() alone, a later tick: started there
+        guided.update(1.0, GOAL)
+        time.sleep(0.2)
+        assert guided.planning and events == []
+        guided.update(1.0 + DT, GOAL)
+        while step < 4000 and guided.planning:
+            step += 1
+            time.sleep(0.005)
+            guided.update(1.0 + DT * (step + 1), GOAL)
+        assert events == ["plan"] and guided.status.plans == 2
+    finally:
+        guided.close()

@@ -217,6 +217,9 @@ class GuidedFabric:
         blocked ahead or progress stalled (the old reference's clock stands still until it
         arrives, outside an approach)."""
         self._q = np.array(q, dtype=float)
+        waiting = self._maker.waiting_since()
+        if waiting is not None and waiting < t:   # asked for on an earlier tick whose caller did not start it
+            self._maker.start()
         self._receive(t, q, moving)
         if self._plan is None:
             if self._pending is not None:
@@ -254,9 +257,20 @@ class GuidedFabric:
 
     def compute(self, t: float, q: NDArray[np.float64], qdot: NDArray[np.float64],
                 moving: Sequence[PlacedObstacle] = ()) -> NDArray[np.float64]:
-        """:meth:`update`, then the fabric's command (always finite, within the limits)."""
+        """:meth:`update`, then the fabric's command (always finite, within the limits), then
+        :meth:`start_plans`."""
         self.update(t, q, moving)
-        return self.fabric.compute(q, qdot)
+        command = self.fabric.compute(q, qdot)
+        self.start_plans()
+        return command
+
+    def start_plans(self) -> None:
+        """Start making a plan asked for in this tick (on the worker thread in real time;
+        a simulated plan is made when asked for): :meth:`compute` calls it once the command
+        is computed, so that the plan does not hold the interpreter while it is; a caller
+        computing the command itself calls it after. A plan left waiting starts at the next
+        tick's :meth:`update`."""
+        self._maker.start()
 
     def _entering(self) -> bool:
         """Whether the reference's clock is within ``close_time`` before the plan's approach."""

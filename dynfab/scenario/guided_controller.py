@@ -180,7 +180,9 @@ class GuidedController:
                 if slot is not None:  # a camera's cloud takes none
                     slot.write(self.inner.planner.parameters, float(allowance))
             self._written = allowances
-        return self.inner(t, q, qdot)
+        command = self.inner(t, q, qdot)
+        self.guided.start_plans()   # a plan asked for in this tick runs once its command is computed
+        return command
 
 
 @dataclass(frozen=True)
