@@ -116,7 +116,7 @@ def test_scenario_files_replay_to_the_same_metrics(series: SeriesResult) -> None
     name = series.summary.experiment.name
     replayed = [r for r in series.records if r.seed == 0 and (r.planner != MPC or name in MPC_REPLAYED)]
     for record in replayed:
-        path = scenario_file(series.out_dir, series.summary.experiment.name, record.seed, record.planner)
+        path = scenario_file(series.out_dir, name, record.seed, record.planner)
         metrics = run_scenario(load_scenario(path)).metrics.to_dict()
         for key in METRIC_KEYS:
             if key not in TIMING_KEYS:

@@ -217,9 +217,7 @@ class GuidedFabric:
         blocked ahead or progress stalled (the old reference's clock stands still until it
         arrives, outside an approach)."""
         self._q = np.array(q, dtype=float)
-        waiting = self._maker.waiting_since()
-        if waiting is not None and waiting < t:   # asked for on an earlier tick whose caller did not start it
-            self._maker.start()
+        self._maker.start(asked_before=t)   # a plan of an earlier tick whose caller did not start it
         self._receive(t, q, moving)
         if self._plan is None:
             if self._pending is not None:

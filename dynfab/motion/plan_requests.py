@@ -25,6 +25,7 @@ Two ways to make it:
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -282,19 +283,16 @@ class BackgroundPlans:
         self._waiting = PendingPlan(request)
         return self._waiting
 
-    def start(self) -> None:
-        """Start making the plan asked for last, if it waits."""
-        if self._waiting is None:
+    def start(self, asked_before: float = math.inf) -> None:
+        """Start making the plan asked for last, if it waits and was asked for before the
+        caller's time ``asked_before`` [s] (any time by default)."""
+        if self._waiting is None or self._waiting.request.t >= asked_before:
             return
         if self._executor is None:   # closed, and asked again
             self._start_worker()
         assert self._executor is not None
         self._waiting.run_on(self._executor, self._guidance)
         self._waiting = None
-
-    def waiting_since(self) -> float | None:
-        """The request time [s] of a plan asked for and not started, or None."""
-        return None if self._waiting is None else self._waiting.request.t
 
     def close(self) -> None:
         """Drop a plan not started; let the worker thread end once the plan it makes is done."""
@@ -324,12 +322,8 @@ class DelayedPlans:
         pending.run_now(self._guidance, request.t + self.latency - 1e-9)   # whole ticks land on a tick
         return pending
 
-    def start(self) -> None:
+    def start(self, asked_before: float = math.inf) -> None:
         """Nothing waits: a plan is made when it is asked for."""
-
-    def waiting_since(self) -> float | None:
-        """None: no plan waits to be started."""
-        return None
 
     def close(self) -> None:
         """Nothing runs in the background."""
