@@ -5,6 +5,13 @@ The cache key is the SHA-256 of the URDF's bytes, the bytes of every collision m
 references, the fitting and pair-selection parameters and the active / locked joints, so
 that any change refits and an unchanged robot loads in milliseconds. The cache folder is
 ``$DYNFAB_CACHE_DIR`` or ``~/.cache/dynfab``; entries are JSON files.
+
+Where the cache has no entry, the entries that ship with dynfab (``data/collision_models``,
+:data:`SHIPPED_DIR`) are looked in, by the same key: the fits of the URDF robots dynfab's
+experiments and benchmarks name (example-robot-data 6.0's UR5, with and without its gripper,
+Kinova j2s6s200, xArm7, Panda, Z1 and SO-100; a fit takes 20-70 s on this project's 2-core
+machine), written by ``python -m dynfab.experiments.shipped_models``. Another version of a
+URDF or of its meshes has another key and is fitted as any robot is.
 """
 
 from __future__ import annotations
@@ -31,10 +38,14 @@ from .robot import CollisionSphere
 from .self_collision import PairSelection, bodies, select_pairs
 from .urdf import MeshFile, UrdfModel, load_urdf, urdf_path
 
-__all__ = ["CollisionModel", "LinkFit", "auto_collision_model", "cache_dir", "fit_body_spheres", "fit_link_spheres"]
+__all__ = ["SHIPPED_DIR", "CollisionModel", "LinkFit", "auto_collision_model", "cache_dir", "entry_name",
+           "fit_body_spheres", "fit_link_spheres"]
 
-#: Bump when the fit or the file layout changes, so that old entries are not reused.
+#: Bump when the fit or the file layout changes, so that old entries are not reused (and
+#: rewrite the shipped ones: ``python -m dynfab.experiments.shipped_models``).
 _CACHE_VERSION = 4
+#: The fits that ship with dynfab (module docstring).
+SHIPPED_DIR = Path(__file__).parent / "data" / "collision_models"
 
 
 @dataclass(frozen=True)
@@ -140,7 +151,7 @@ def auto_collision_model(path: str | os.PathLike[str], joints: Sequence[str] | N
                          parameters: SphereFitParameters = SphereFitParameters(),
                          selection: PairSelection = PairSelection(),
                          spheres: Sequence[CollisionSphere] | None = None,
-                         cache: Path | None = None) -> CollisionModel:
+                         cache: Path | None = None, shipped: bool = True) -> CollisionModel:
     """Fitted spheres (unless ``spheres`` are given) and selected pairs of a URDF robot.
 
     The result is cached by content (the URDF, its meshes, the parameters); a fit, which
@@ -155,6 +166,8 @@ def auto_collision_model(path: str | os.PathLike[str], joints: Sequence[str] | N
         selection: Pair selection parameters.
         spheres: Use these spheres (one pseudo-link entry each) and only select pairs.
         cache: Cache folder; :func:`cache_dir` if None.
+        shipped: Whether the entries that ship with dynfab are looked in where the cache
+            has none (:data:`SHIPPED_DIR`).
 
     Raises:
         OSError, UrdfError: The URDF cannot be read.
@@ -164,14 +177,14 @@ def auto_collision_model(path: str | os.PathLike[str], joints: Sequence[str] | N
     """
     model = load_urdf(path, package_dirs)
     kinematics = Kinematics(model, joints=joints, locked=locked)
-    key = _key(urdf_path(path, package_dirs), model, kinematics, parameters, selection, spheres)
-    entry = (cache_dir() if cache is None else cache) / f"collision-{key}.json"
-    if entry.is_file():
-        try:
-            cached = _decode(json.loads(entry.read_text(encoding="utf-8")))
-        except (ValueError, KeyError, TypeError):
-            pass  # a damaged entry is refitted and overwritten
-        else:
+    name = _entry_name(urdf_path(path, package_dirs), model, kinematics, parameters, selection, spheres)
+    entry = (cache_dir() if cache is None else cache) / name
+    for stored in (entry, SHIPPED_DIR / name) if shipped else (entry,):
+        if stored.is_file():
+            try:
+                cached = _decode(json.loads(stored.read_text(encoding="utf-8")))
+            except (ValueError, KeyError, TypeError):
+                continue  # a damaged entry is refitted and overwritten
             if spheres is None:
                 _check_not_empty(cached.links, path, kinematics)
             return cached
@@ -205,15 +218,31 @@ def _check_not_empty(links: Sequence[LinkFit], path: str | os.PathLike[str], kin
                             "geometry to fit spheres to; give collision_spheres by hand")
 
 
+def entry_name(path: str | os.PathLike[str], joints: Sequence[str] | None = None,
+               locked: Mapping[str, float] | None = None, package_dirs: Sequence[str | os.PathLike[str]] = (),
+               parameters: SphereFitParameters = SphereFitParameters(), selection: PairSelection = PairSelection(),
+               spheres: Sequence[CollisionSphere] | None = None) -> str:
+    """The file name of :func:`auto_collision_model`'s entry for these arguments (its key:
+    the module docstring), without fitting anything.
+
+    Raises:
+        OSError, UrdfError: The URDF cannot be read.
+        ValueError: Unknown joints or locked names.
+    """
+    model = load_urdf(path, package_dirs)
+    kinematics = Kinematics(model, joints=joints, locked=locked)
+    return _entry_name(urdf_path(path, package_dirs), model, kinematics, parameters, selection, spheres)
+
+
 def cache_dir() -> Path:
     """``$DYNFAB_CACHE_DIR`` or ``~/.cache/dynfab``."""
     configured = os.environ.get("DYNFAB_CACHE_DIR")
     return Path(configured) if configured else Path.home() / ".cache" / "dynfab"
 
 
-def _key(path: Path, model: UrdfModel, kinematics: Kinematics, parameters: SphereFitParameters,
-         selection: PairSelection, spheres: Sequence[CollisionSphere] | None) -> str:
-    """SHA-256 over everything the result depends on."""
+def _entry_name(path: Path, model: UrdfModel, kinematics: Kinematics, parameters: SphereFitParameters,
+                selection: PairSelection, spheres: Sequence[CollisionSphere] | None) -> str:
+    """``collision-<key>.json``, the key the SHA-256 over everything the result depends on."""
     digest = hashlib.sha256()
     digest.update(f"v{_CACHE_VERSION}\n".encode())
     digest.update(path.read_bytes())
@@ -225,7 +254,7 @@ def _key(path: Path, model: UrdfModel, kinematics: Kinematics, parameters: Spher
                  "joints": list(kinematics.joint_names), "locked": sorted(kinematics.locked.items()),
                  "spheres": None if spheres is None else [dataclasses.asdict(s) for s in spheres]}
     digest.update(json.dumps(described, sort_keys=True).encode())
-    return digest.hexdigest()
+    return f"collision-{digest.hexdigest()}.json"
 
 
 def _encode(model: CollisionModel) -> dict[str, object]:
