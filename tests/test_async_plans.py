@@ -17,7 +17,7 @@ from dynfab.scenario.guided_controller import SIMULATED_PLAN_LATENCY, make_scena
 from dynfab.scenario.references import scenario_references
 from dynfab.scenario.runner import run_scenario
 from dynfab.scenario.schema import scenario_from_dict, validate_for_robot
-from wall_scene import GOAL, START, WALL_ENTRY
+from wall_scene import GOAL, START, WALL_ENTRY, goal_near_the_wall
 
 DT = 0.01
 
@@ -33,8 +33,8 @@ def _scenario(duration: float = 5.0) -> dict:
             "obstacles": [WALL_ENTRY]}
 
 
-def _controller(panda, plan_latency: float | None):
-    scenario = validate_for_robot(scenario_from_dict(_scenario()), panda)
+def _controller(panda, plan_latency: float | None, data: dict | None = None):
+    scenario = validate_for_robot(scenario_from_dict(_scenario() if data is None else data), panda)
     return make_scenario_controller(scenario, panda, scenario_references(scenario, panda), plan_latency=plan_latency)
 
 
@@ -100,6 +100,27 @@ def test_in_simulation_the_robot_moves_toward_the_goal_until_the_plan_arrives_an
     assert arrived_at == pytest.approx(latency)   # the first tick at the latency: not before, not later
     assert lag_at_arrival <= start_lag            # joined no farther back than where the plan began
     assert lag_at_arrival < guided.guidance.settings.lag_slow   # the reference's clock runs at once
+
+
+def test_from_a_start_nearer_the_obstacles_than_the_margin_the_robot_waits_for_the_plans_way_out(panda) -> None:
+    latency = 0.2
+    start = goal_near_the_wall(panda, 0.005)   # 5 mm from the wall on the spheres: the planner's 1 cm refuses it
+    data = _scenario()
+    data["initial_state"]["q"], data["goal"] = start.tolist(), [{"type": "joint", "position": START.tolist()}]
+    controller = _controller(panda, latency, data)
+    guided, params = controller.guided, controller.guided.fabric.parameters
+    q, qdot = start.copy(), np.zeros(7)
+    for step in range(30):
+        t = step * DT
+        qddot = controller(t, q, qdot)
+        assert _within_limits(controller, qddot), t
+        if t < latency - 1e-9:
+            assert guided.plan is None
+            np.testing.assert_array_equal(params.goal_position[0], q)   # held where the robot is
+            np.testing.assert_array_equal(params.goal_velocity[0], np.zeros(7))
+        q, qdot = q + DT * qdot + 0.5 * DT**2 * qddot, qdot + DT * qddot
+    assert guided.plan is not None and guided.plan.departure > 0.0   # the plan's way out of the blocked start
+    assert not guided.guidance.clear_of_obstacles(start) and guided.guidance.clear_of_obstacles(START)
 
 
 def test_a_guided_run_with_a_plan_latency_reaches_its_goal_and_reproduces(panda) -> None:

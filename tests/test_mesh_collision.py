@@ -13,7 +13,7 @@ from dynfab.geometry.point_cloud import PointCloud
 from dynfab.geometry.shapes import Box, Placement, Plane, Sphere, quaternion_from_rpy
 from dynfab.robots import Kinematics, load_urdf, parse_urdf
 from dynfab.robots.mesh_collision import adjacent_links, mesh_collision_model
-from dynfab.robots.mesh_sweep import PlacedShape, sweep_meshes
+from dynfab.robots.mesh_sweep import PlacedShape, clearance_per_sample, sweep_meshes
 
 
 def _box_link(name: str, size: float = 0.1, z: float = 0.0) -> str:
@@ -111,6 +111,19 @@ def test_sweep_minima_and_contacts_are_those_of_brute_force(ur5) -> None:  # typ
     expected = {(ur5.links[i], obstacles[o].name, tuple(np.flatnonzero(obstacle[:, i, o] <= 0.0)))
                 for i, o in itertools.product(range(len(ur5.links)), range(3)) if (obstacle[:, i, o] <= 0.0).any()}
     assert found == expected and len(found) >= 2  # the run does hit something
+
+
+def test_per_sample_clearance_is_brute_forces_and_a_cap_bounds_it(ur5) -> None:  # type: ignore[no-untyped-def]
+    start, end = np.array([0.0, -1.57, 1.57, -1.57, -1.57, 0.0]), np.array([2.0, -0.6, 2.6, -2.5, 0.4, 1.0])
+    qs = start + np.linspace(0.0, 1.0, 30)[:, None] * (end - start)
+    obstacles = [
+        PlacedShape("box", Box((0.1, 0.3, 0.2)), (Placement((0.1, 0.35, 0.45), quaternion_from_rpy((0.2, 0.0, 0.5))),)),
+        PlacedShape("floor", Plane(), (Placement((0.0, 0.0, 0.02)),)),
+    ]
+    exact = _brute_force(ur5, qs, obstacles)[0].min(axis=(1, 2))
+    np.testing.assert_allclose(clearance_per_sample(ur5, qs, obstacles), exact, atol=1e-12)
+    cap = float(np.median(exact))   # half the samples farther
+    np.testing.assert_allclose(clearance_per_sample(ur5, qs, obstacles, cap=cap), np.minimum(exact, cap), atol=1e-12)
 
 
 def test_an_arm_folded_into_itself_is_a_self_collision(ur5) -> None:  # type: ignore[no-untyped-def]

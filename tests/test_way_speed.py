@@ -15,6 +15,7 @@ from dynfab.motion.configuration_checker import PlacedObstacle
 from dynfab.motion.guidance import JointGuidance, JointTarget
 from dynfab.motion.guidance_settings import GuidanceSettings
 from dynfab.motion.joint_trajectory import time_path
+from dynfab.motion.mesh_goal_check import MeshGoalCheck, robot_mesh_model
 from dynfab.robots import load_robot
 from wall_scene import MESH_WALL, START, WALL
 
@@ -62,11 +63,43 @@ def test_guidance_slows_its_reference_where_the_way_passes_close_to_a_mesh_wall(
     scale = slow.speed_scale(q)
     assert scale.min() < 1.0   # the way does pass within slow_clearance of the wall
     assert np.all(ratio <= settings.speed * np.maximum(scale, settings.slow_speed) + 0.03)
-    clearance = slow.checker.batch(q)[:, 0]
-    np.testing.assert_allclose(scale, np.clip(clearance / settings.slow_clearance, settings.slow_speed, 1.0))
     unslowed = fast.plan(START, JointTarget(goal), [FARTHER_WALL])
     np.testing.assert_allclose(unslowed.trajectory.waypoints, plan.trajectory.waypoints)   # the same path
     assert plan.trajectory.duration > unslowed.trajectory.duration
+
+
+def _expected_scale(guidance: JointGuidance, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """σ from the meshes' clearance measured at every row of ``q`` where the spheres come
+    within ``slow_clearance`` (each configuration alone, with coal), and σ from the spheres."""
+    settings = guidance.settings
+    spheres = guidance.checker.batch(q)[:, 0]
+    meshes = MeshGoalCheck(robot_mesh_model(guidance.robot), 0.0)
+    meshes.set_obstacles(guidance.checker.obstacles)
+    exact = np.array([meshes.clearance(row)[0] for row in q])
+    by_meshes = np.where(spheres < settings.slow_clearance,
+                         np.clip(exact / settings.slow_clearance, settings.slow_speed, 1.0), 1.0)
+    return by_meshes, np.clip(spheres / settings.slow_clearance, settings.slow_speed, 1.0)
+
+
+def test_the_way_is_slowed_by_the_meshes_clearance_where_the_spheres_come_near() -> None:
+    panda = load_robot("panda")
+    guidance = JointGuidance(panda)
+    guidance.set_obstacles((FARTHER_WALL,))
+    q = np.tile(START, (12, 1))
+    q[:, 0] = np.linspace(1.0, -1.3, 12)   # the hand swept through the wall's plane, rows MEASURED_SPACING apart
+    by_meshes, by_spheres = _expected_scale(guidance, q)
+    scale = guidance.speed_scale(q)
+    np.testing.assert_allclose(scale, by_meshes, atol=1e-9)
+    assert scale.min() == guidance.settings.slow_speed   # through the wall: the slowest
+    assert np.any(scale > by_spheres + 0.05)             # the meshes have room where the spheres read little
+    dense = np.tile(START, (100, 1))
+    dense[:, 0] = np.linspace(1.0, -1.3, 100)   # 0.023 rad apart: measured every MEASURED_SPACING, read between
+    by_meshes, by_spheres = _expected_scale(guidance, dense)
+    scale = guidance.speed_scale(dense)
+    near = np.flatnonzero(by_spheres < 1.0)   # one run of rows: its ends are measured
+    assert np.all(np.diff(near) == 1)
+    assert scale[near[0]] == pytest.approx(by_meshes[near[0]]) and scale[near[-1]] == pytest.approx(by_meshes[near[-1]])
+    assert np.max(np.abs(scale - by_meshes)) < 0.1
 
 
 def test_point_clouds_and_primitives_do_not_slow_the_way_and_the_meshes_beside_them_do() -> None:

@@ -109,6 +109,12 @@ class JointGuidance:
         """
         return GoalSearch(self.robot, self.checker, self._meshes, self.settings, self.bounds).solution(goal, q, seed)
 
+    def clear_of_obstacles(self, q: NDArray[np.float64]) -> bool:
+        """Whether ``q`` keeps the planner's margin from the checker's obstacles (a plan from
+        a ``q`` that does not leaves along an escape's way out:
+        :func:`~dynfab.motion.joint_planning.plan_joint_path`)."""
+        return self.checker.free(np.clip(q, self._lower, self._upper), self.settings.path.margin, -np.inf)
+
     def set_obstacles(self, obstacles: Sequence[PlacedObstacle]) -> None:
         """Check against ``obstacles`` from now on: on the robot's planning spheres, or among
         point clouds on the fabric's own. A cloud is a surface the fabric's nearest-point leaf
@@ -354,8 +360,8 @@ class JointGuidance:
         return PhasedTrajectory((way, self._approach_timed(path.waypoints[-2:])))
 
     def speed_scale(self, qs: NDArray[np.float64]) -> NDArray[np.float64]:
-        """The factor of the way's velocity limits at each of ``qs`` (m, n) among the last
-        plan's obstacles [-] (:mod:`dynfab.motion.way_speed`)."""
+        """The factor of the way's velocity limits at each of ``qs`` (m, n; in order along
+        a way) among the last plan's obstacles [-] (:mod:`dynfab.motion.way_speed`)."""
         return self._way_speed.scale(self.checker, qs)
 
     def _approach_timed(self, segment: NDArray[np.float64]) -> JointTrajectory:

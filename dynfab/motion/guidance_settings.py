@@ -99,8 +99,10 @@ class GuidanceSettings:
         speed: fraction of the velocity limits the reference uses [-].
         slow_clearance, slow_speed: on the way (before an approach) the reference's velocity
             limits are further scaled by ``σ(q) = clip(c(q) / slow_clearance, slow_speed, 1)``,
-            ``c(q)`` the planning spheres' clearance from the plan's mesh obstacles
-            (:meth:`JointGuidance.speed_scale` says why not from the others) [m]: where the
+            ``c(q)`` the robot's meshes' clearance from the plan's mesh obstacles where
+            its planning spheres come nearer them than ``slow_clearance`` (the spheres'
+            own for a robot without meshes; :mod:`dynfab.motion.way_speed` says why not
+            from the other obstacles, and why the meshes' since session 27) [m]: where the
             way is tight the reference slows, so the robot lags less behind it and does not
             cut a corner the plan rounds closely (:meth:`JointGuidance.speed_scale`);
             ``slow_clearance`` 0 keeps the speed. Set before measuring (session 18), checked

@@ -11,7 +11,13 @@ reference is the straight joint-space motion to the goal configuration at the pl
 cruise limits (:class:`~dynfab.motion.straight_motion.StraightMotion`; the goal
 configuration is known at once for a joint goal, after inverse kinematics for the others,
 and the reference holds the robot's configuration before that), so the fabric heads for
-the goal alone, its obstacle, limit and self-collision leaves on. Every tick
+the goal alone, its obstacle, limit and self-collision leaves on. From a start closer to
+the obstacles than the planner's margin the reference holds the robot's configuration until
+the plan arrives: the plan leaves such a start along a checked way out, and a straight
+motion toward the goal does not know it (fresh MBM kitchen seed 32/0002: a start 0.1 mm from
+the cupboard on Franka's meshes, 1.6 cm into it on the spheres; heading for the goal for the
+plan's 50 ms of latency, ``panda_link5`` touched the cupboard at 0.13 s; holding, the run
+reached its goal without a contact). Every tick
 :meth:`GuidedFabric.update` writes ``q_r, q̇_r, q̈_r`` into that goal, where the dynamic
 pullback and energization of the fabric (paper section IV) track it, while the fabric's
 leaves keep acting on everything the user writes into its slots.

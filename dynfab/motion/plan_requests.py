@@ -115,7 +115,9 @@ class PendingPlan:
 
     Attributes:
         request: what the plan is made from.
-        goal_configuration: the plan's goal configuration (n,) [rad] once known, else None.
+        goal_configuration: the plan's goal configuration (n,) [rad] once known, else None;
+            None throughout for a start closer to the obstacles than the planner's margin
+            (the robot then waits for the plan, whose way out leaves them).
     """
 
     def __init__(self, request: PlanRequest) -> None:
@@ -232,7 +234,8 @@ def _plan_among(guidance: JointGuidance, request: PlanRequest, obstacles: tuple[
         plan = _replan_to(guidance, request, obstacles, publish)
     if plan is None:
         target, moved = guidance.goal_solution(request.goal, request.q, request.seed)
-        publish(target)
+        if guidance.clear_of_obstacles(request.q):   # else the robot waits for the plan's way out
+            publish(target)
         tolerance = request.goal.tolerance if isinstance(request.goal, JointTarget) else 0.0
         plan = guidance.plan(request.q, JointTarget(tuple(target), tolerance), obstacles, seed=request.seed,
                              wide=request.wide)

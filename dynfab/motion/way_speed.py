@@ -3,12 +3,20 @@ way's velocity limits (``time_path(..., speed_scale)``, :mod:`dynfab.motion.join
 
     σ(q) = clip(c(q) / slow_clearance, slow_speed, 1)   [-]
 
-with ``c`` the planning spheres' clearance from the plan's mesh obstacles [m] (σ = 1 without
-meshes; ``slow_clearance`` and ``slow_speed`` of
+with ``c`` the clearance of the robot's collision meshes from the plan's mesh obstacles [m]
+(coal's exact distances, :func:`~dynfab.robots.mesh_sweep.clearance_per_sample`, measured
+only where the planning spheres are nearer them than ``slow_clearance``, elsewhere σ = 1,
+and there every :data:`MEASURED_SPACING` along the way, interpolated between);
+for a robot without meshes the planning spheres' clearance; σ = 1 without mesh obstacles
+(``slow_clearance`` and ``slow_speed`` of
 :class:`~dynfab.motion.guidance_settings.GuidanceSettings`). A robot lagging ``e`` behind a
 reference that turns a corner is pulled across it by about ``e`` times its lever; slower, it
 lags less (MBM kitchen seed 11/0004 with a 10 cm mesh band: 0.07 rad behind at 0.5 of the
-limits, a finger 11 mm into a cupboard). Only meshes slow it:
+limits, a finger 11 mm into a cupboard). The room it has for that is the meshes' clearance:
+the spheres stick out of the meshes by up to 1 cm at the hand and 2 cm on the arm, and read
+from them the way crawled where the meshes had room (session 27: fresh kitchen seed 31/0002's
+way, 10.8 rad, took 22 s of a 20 s run, 13.6 s of it below half speed, its spheres 17 mm and
+its meshes 24 mm from the kitchen at the median). Only meshes slow it:
 
 - primitives have their own guard, the reference waits where it is out of sight of the
   robot (:func:`~dynfab.motion.plan_joining.in_sight`), and slowed among them the way cost
@@ -26,20 +34,34 @@ from numpy.typing import NDArray
 from dynfab.geometry.shapes import Mesh
 from dynfab.motion.configuration_checker import ConfigurationChecker
 from dynfab.motion.guidance_settings import GuidanceSettings
+from dynfab.motion.mesh_goal_check import robot_mesh_model
+from dynfab.robots.mesh_collision import moving_part
+from dynfab.robots.mesh_sweep import PlacedShape, clearance_per_sample
 from dynfab.robots.robot import Robot
 
-__all__ = ["WaySpeed"]
+__all__ = ["MEASURED_SPACING", "WaySpeed"]
+
+#: Joint-space distance [rad] between the configurations of a way whose meshes are measured;
+#: one between two measured ones reads their clearances interpolated by its place between
+#: them (kitchen seed 31/0002's way: 18.0 s timed so, 18.1 s measured everywhere, 19.5 s
+#: with the lesser of the two; 90 ms instead of 670 ms). Chosen for cost: one
+#: measurement takes about 2 ms in MBM's kitchen (the robot inside a cupboard whose convex
+#: hull holds it, so every link near it is measured exactly), and TOPP-RA's grid has one
+#: configuration every 0.05 rad.
+MEASURED_SPACING = 0.2
 
 
 class WaySpeed:
-    """``q ↦ σ(q)`` of the module docstring for ``robot``'s planning spheres."""
+    """``q ↦ σ(q)`` of the module docstring for ``robot``'s planning spheres and meshes."""
 
     def __init__(self, robot: Robot, settings: GuidanceSettings) -> None:
+        self._robot = robot
         self._settings = settings
         self._meshes_alone = ConfigurationChecker(robot.planning_robot)   # the meshes among other shapes
 
     def scale(self, checker: ConfigurationChecker, qs: NDArray[np.float64]) -> NDArray[np.float64]:
-        """``σ`` at each of ``qs`` (m, n) among ``checker``'s obstacles (``checker`` on the
+        """``σ`` at each of ``qs`` (m, n; in order along a way: the meshes are measured at
+        some of them and read between) among ``checker``'s obstacles (``checker`` on the
         planning spheres) [-]."""
         obstacles = checker.obstacles
         meshes = [o for o in obstacles if isinstance(o.shape, Mesh)]
@@ -48,6 +70,26 @@ class WaySpeed:
         if len(meshes) < len(obstacles):   # among others: the planning spheres against the meshes alone
             self._meshes_alone.set_obstacles(meshes)
             checker = self._meshes_alone
-        clearance = checker.batch(qs)[:, 0]
         settings = self._settings
+        qs = np.asarray(qs, dtype=float)
+        clearance = checker.batch(qs)[:, 0]
+        model = robot_mesh_model(self._robot)
+        near = np.flatnonzero(clearance < settings.slow_clearance)
+        if model is not None and near.size:
+            shapes = tuple(PlacedShape(f"obstacles[{k}]", o.shape, (o.placement,)) for k, o in enumerate(meshes))
+            measured = _spaced(qs, near)
+            exact = clearance_per_sample(moving_part(model), qs[measured], shapes, cap=settings.slow_clearance)
+            clearance[near] = np.interp(near, measured, exact)
         return np.clip(clearance / settings.slow_clearance, settings.slow_speed, 1.0)
+
+
+def _spaced(qs: NDArray[np.float64], rows: NDArray[np.intp]) -> NDArray[np.intp]:
+    """The ``rows`` of ``qs`` (in increasing order) whose meshes are measured: the first and
+    last of every run of consecutive rows, and within a run the next one at least
+    :data:`MEASURED_SPACING` from the last measured."""
+    kept = [int(rows[0])]
+    for k in range(1, len(rows)):
+        row, ends_run = int(rows[k]), k + 1 == len(rows) or rows[k + 1] != rows[k] + 1
+        if rows[k - 1] != row - 1 or ends_run or np.linalg.norm(qs[row] - qs[kept[-1]]) >= MEASURED_SPACING:
+            kept.append(row)
+    return np.array(kept, dtype=np.intp)

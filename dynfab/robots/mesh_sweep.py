@@ -125,19 +125,21 @@ def sweep_meshes(model: MeshCollisionModel, qs: ArrayLike, obstacles: Sequence[P
                      _by_first_sample(self_contacts))
 
 
-def clearance_per_sample(model: MeshCollisionModel, qs: ArrayLike, obstacles: Sequence[PlacedShape]
-                         ) -> NDArray[np.float64]:
+def clearance_per_sample(model: MeshCollisionModel, qs: ArrayLike, obstacles: Sequence[PlacedShape],
+                         cap: float = np.inf) -> NDArray[np.float64]:
     """The mesh clearance at each sample: ``min`` over links and obstacles of the mesh
     distance, shape (T,) [m] (inf without obstacles); its minimum is
     :attr:`MeshSweep.clearance` of the same run, for the same three tiers (module doc) are
-    searched per sample, each to its exact minimum.
+    searched per sample, each to its exact minimum. With a ``cap`` [m], a clearance above
+    it reads ``cap`` (nothing farther is measured: a caller that only needs to know the
+    clearance up to a distance pays for the links nearer than it).
 
     Raises:
         ValueError: An obstacle whose number of placements is neither 1 nor T.
     """
     poses, centers, radii = _link_spheres(model, qs)
     columns = [_obstacle_distances(model, obstacle, poses, centers, radii) for obstacle in obstacles]
-    clearance = np.full(poses.shape[0], np.inf)
+    clearance = np.full(poses.shape[0], float(cap))
     if not columns:
         return clearance
     bound = np.concatenate([column_bound for column_bound, _ in columns], axis=1)
