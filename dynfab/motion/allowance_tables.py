@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 from dynfab.fabric.leaves.surface_points import moving_spheres
 from dynfab.geometry.shapes import Mesh, PointCloud
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
+from dynfab.motion.placed_obstacle import any_cloud
 from dynfab.motion.guidance_settings import GuidanceSettings
 from dynfab.motion.joint_planning import polyline_samples
 from dynfab.motion.mesh_escape_plan import mesh_allowances
@@ -69,7 +70,7 @@ class AllowanceTables:
         waypoints = plan.trajectory.phases[-1].waypoints
         segment = polyline_samples(waypoints, self._settings.path.resolution)
         goal_clearance = self._settings.goal_clearance
-        if (len(waypoints) > 2 and not any(isinstance(o.shape, PointCloud) for o in obstacles)
+        if (len(waypoints) > 2 and not any_cloud(obstacles)
                 and (check := meshes()) is not None):   # the meshes' plan's polyline (mesh_escape_plan)
             return segment, self._seeing_meshes(check, segment, obstacles, buffers)
         clearances = np.empty((len(segment), len(obstacles)))
@@ -119,7 +120,7 @@ class AllowanceTables:
         if self._robot.planning_robot is not self._robot:
             self._planned_way(samples, obstacles, buffers, table)
         columns = [k for k, o in enumerate(obstacles) if isinstance(o.shape, Mesh)]
-        if plan.departure > 0.0 and columns and not any(isinstance(o.shape, PointCloud) for o in obstacles):
+        if plan.departure > 0.0 and columns and not any_cloud(obstacles):
             check = meshes()
             if check is not None:
                 leaving = len(polyline_samples(waypoints[:2], settings.path.resolution))

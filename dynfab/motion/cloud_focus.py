@@ -36,6 +36,7 @@ from numpy.typing import NDArray
 from dynfab.geometry.focused_cloud import FocusedCloud, split_cloud
 from dynfab.geometry.point_cloud import PointCloud
 from dynfab.motion.configuration_checker import PlacedObstacle
+from dynfab.motion.placed_obstacle import any_cloud
 from dynfab.robots.robot import Robot
 
 __all__ = ["CloudFocus", "FocusCache", "focused_obstacles"]
@@ -101,7 +102,7 @@ class FocusCache:
         """``obstacles`` with their point clouds focused around the robot at ``target``
         (:func:`focused_obstacles`), None without clouds or focus; the last result reused for
         the same obstacles (shapes and placements) and goal."""
-        if self.focus is None or not any(isinstance(o.shape, PointCloud) for o in obstacles):
+        if self.focus is None or not any_cloud(obstacles):
             return None
         key = np.asarray(target, dtype=float).tobytes()
         last = self._last

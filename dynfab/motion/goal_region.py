@@ -32,8 +32,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from dynfab.geometry.shapes import PointCloud
 from dynfab.motion.configuration_checker import ConfigurationChecker
+from dynfab.motion.placed_obstacle import any_cloud
 from dynfab.motion.guidance_settings import GuidanceSettings
 from dynfab.motion.inverse_kinematics import AxisTarget, IkResult, IkSettings, PointTarget, solve_ik
 from dynfab.motion.mesh_goal_check import MeshGoalCheck
@@ -96,7 +96,7 @@ def room_at_the_goal(goal: GoalTargets, target: NDArray[np.float64], checker: Co
     it. Not among clouds: their kept points read the surfaces up to ``δ`` and the noise
     nearer, so nearly every grasp would read near."""
     if (not isinstance(goal, JointTarget) or goal.tolerance <= 0.0
-            or any(isinstance(o.shape, PointCloud) for o in checker.obstacles)
+            or any_cloud(checker.obstacles)
             or checker.clearances(target)[0] >= settings.mesh_margin + settings.sphere_coverage):
         return None
     check = meshes()

@@ -41,7 +41,7 @@ from dynfab.motion.joint_planning import (ApproachTest, JointPath, JointPlannerS
 from dynfab.motion.joint_trajectory import JointTrajectory, TimingError, time_path
 from dynfab.motion.guidance_settings import GuidanceSettings
 from dynfab.motion.phased_trajectory import PhasedTrajectory
-from dynfab.motion.placed_obstacle import any_moving
+from dynfab.motion.placed_obstacle import any_cloud, any_moving
 from dynfab.motion.plan_values import GoalTargets, GuidanceError, JointTarget, Plan
 from dynfab.motion.way_speed import WaySpeed
 from dynfab.robots.joint_bounds import finite_joint_bounds
@@ -122,7 +122,7 @@ class JointGuidance:
         drove generated-problem table_pick/0092 (points, ``--seed 3``, 81-96) through the
         table top, ``panda_link6`` 5 cm deep, where the fabric's spheres' plan reaches the
         goal."""
-        clouds = any(isinstance(o.shape, PointCloud) for o in obstacles)
+        clouds = any_cloud(obstacles)
         self.checker = self._coarse if clouds else self._planning
         self.checker.set_obstacles(obstacles)
 
@@ -164,7 +164,7 @@ class JointGuidance:
         tries = self._tries(seed, wide, count)
         focus = self.settings.cloud_focus
         first = len(tries)
-        if focus is not None and any(isinstance(o.shape, PointCloud) for o in obstacles):
+        if focus is not None and any_cloud(obstacles):
             first = min(first, first - count + focus.whole_attempts)
         try:
             return self._attempts(start, target, tries[:first], began)

@@ -49,6 +49,7 @@ from dynfab.geometry.shapes import Mesh
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
 from dynfab.motion.guidance_settings import GuidanceSettings
 from dynfab.motion.joint_planning import ApproachTest, polyline_samples
+from dynfab.motion.placed_obstacle import any_cloud
 from dynfab.robots.builtin_meshes import builtin_collision_meshes
 from dynfab.robots.link_meshes import LinkMeshError
 from dynfab.robots.mesh_collision import MeshCollisionModel, mesh_collision_model, moving_part
@@ -162,7 +163,7 @@ def endpoint_tests(q: NDArray[np.float64], checker: ConfigurationChecker,
     if checker.free(q, path.margin, path.self_margin):
         return (None,)
     surfaces = any(isinstance(o.shape, Mesh | PointCloud) for o in checker.obstacles)
-    clouds = any(isinstance(o.shape, PointCloud) for o in checker.obstacles)
+    clouds = any_cloud(checker.obstacles)
     meshes = mesh_check()   # made on first use
     if meshes is None:
         return (None,)

@@ -5,9 +5,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from dynfab.geometry.shapes import Placement, Shape
+from dynfab.geometry.shapes import Placement, PointCloud, Shape
 
-__all__ = ["PlacedObstacle", "any_moving"]
+__all__ = ["PlacedObstacle", "any_cloud", "any_moving"]
 
 
 @dataclass(frozen=True)
@@ -29,3 +29,8 @@ class PlacedObstacle:
 def any_moving(obstacles: Sequence[PlacedObstacle]) -> bool:
     """Whether any of ``obstacles`` moves (a velocity other than zero)."""
     return any(any(v != 0.0 for v in o.velocity) for o in obstacles)
+
+
+def any_cloud(obstacles: Sequence[PlacedObstacle]) -> bool:
+    """Whether any of ``obstacles`` is a point cloud."""
+    return any(isinstance(o.shape, PointCloud) for o in obstacles)
