@@ -360,8 +360,8 @@ class JointGuidance:
         return PhasedTrajectory((way, self._approach_timed(path.waypoints[-2:])))
 
     def speed_scale(self, qs: NDArray[np.float64]) -> NDArray[np.float64]:
-        """The factor of the way's velocity limits at each of ``qs`` (m, n; in order along
-        a way) among the last plan's obstacles [-] (:mod:`dynfab.motion.way_speed`)."""
+        """The factor of the way's velocity limits at each of ``qs`` (m, n) among the last
+        plan's obstacles [-] (:mod:`dynfab.motion.way_speed`)."""
         return self._way_speed.scale(self.checker, qs)
 
     def _approach_timed(self, segment: NDArray[np.float64]) -> JointTrajectory:

@@ -5,8 +5,11 @@ way's velocity limits (``time_path(..., speed_scale)``, :mod:`dynfab.motion.join
 
 with ``c`` the clearance of the robot's collision meshes from the plan's mesh obstacles [m]
 (coal's exact distances, :func:`~dynfab.robots.mesh_sweep.clearance_per_sample`, measured
-only where the planning spheres are nearer them than ``slow_clearance``, elsewhere σ = 1,
-and there every :data:`MEASURED_SPACING` along the way, interpolated between);
+at every configuration where the planning spheres are nearer them than ``slow_clearance``,
+elsewhere σ = 1: about 2 ms each in MBM's kitchen, whose cupboard's convex hull holds the
+robot, so a way of 10 rad costs 0.3-0.7 s. Measured every 0.2 rad and interpolated, it cost
+90 ms, but a finger passed a bar of fresh table_bars seed 33 at speed between two
+measurements and touched it in 0007 and 0012);
 for a robot without meshes the planning spheres' clearance; σ = 1 without mesh obstacles
 (``slow_clearance`` and ``slow_speed`` of
 :class:`~dynfab.motion.guidance_settings.GuidanceSettings`). A robot lagging ``e`` behind a
@@ -39,16 +42,7 @@ from dynfab.robots.mesh_collision import moving_part
 from dynfab.robots.mesh_sweep import PlacedShape, clearance_per_sample
 from dynfab.robots.robot import Robot
 
-__all__ = ["MEASURED_SPACING", "WaySpeed"]
-
-#: Joint-space distance [rad] between the configurations of a way whose meshes are measured;
-#: one between two measured ones reads their clearances interpolated by its place between
-#: them (kitchen seed 31/0002's way: 18.0 s timed so, 18.1 s measured everywhere, 19.5 s
-#: with the lesser of the two; 90 ms instead of 670 ms). Chosen for cost: one
-#: measurement takes about 2 ms in MBM's kitchen (the robot inside a cupboard whose convex
-#: hull holds it, so every link near it is measured exactly), and TOPP-RA's grid has one
-#: configuration every 0.05 rad.
-MEASURED_SPACING = 0.2
+__all__ = ["WaySpeed"]
 
 
 class WaySpeed:
@@ -60,8 +54,7 @@ class WaySpeed:
         self._meshes_alone = ConfigurationChecker(robot.planning_robot)   # the meshes among other shapes
 
     def scale(self, checker: ConfigurationChecker, qs: NDArray[np.float64]) -> NDArray[np.float64]:
-        """``σ`` at each of ``qs`` (m, n; in order along a way: the meshes are measured at
-        some of them and read between) among ``checker``'s obstacles (``checker`` on the
+        """``σ`` at each of ``qs`` (m, n) among ``checker``'s obstacles (``checker`` on the
         planning spheres) [-]."""
         obstacles = checker.obstacles
         meshes = [o for o in obstacles if isinstance(o.shape, Mesh)]
@@ -77,19 +70,5 @@ class WaySpeed:
         near = np.flatnonzero(clearance < settings.slow_clearance)
         if model is not None and near.size:
             shapes = tuple(PlacedShape(f"obstacles[{k}]", o.shape, (o.placement,)) for k, o in enumerate(meshes))
-            measured = _spaced(qs, near)
-            exact = clearance_per_sample(moving_part(model), qs[measured], shapes, cap=settings.slow_clearance)
-            clearance[near] = np.interp(near, measured, exact)
+            clearance[near] = clearance_per_sample(moving_part(model), qs[near], shapes, cap=settings.slow_clearance)
         return np.clip(clearance / settings.slow_clearance, settings.slow_speed, 1.0)
-
-
-def _spaced(qs: NDArray[np.float64], rows: NDArray[np.intp]) -> NDArray[np.intp]:
-    """The ``rows`` of ``qs`` (in increasing order) whose meshes are measured: the first and
-    last of every run of consecutive rows, and within a run the next one at least
-    :data:`MEASURED_SPACING` from the last measured."""
-    kept = [int(rows[0])]
-    for k in range(1, len(rows)):
-        row, ends_run = int(rows[k]), k + 1 == len(rows) or rows[k + 1] != rows[k] + 1
-        if rows[k - 1] != row - 1 or ends_run or np.linalg.norm(qs[row] - qs[kept[-1]]) >= MEASURED_SPACING:
-            kept.append(row)
-    return np.array(kept, dtype=np.intp)
