@@ -23,6 +23,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cache
+from pathlib import Path
 from typing import Any
 
 import casadi as ca
@@ -69,10 +70,7 @@ class Arm:
         Raises:
             FileNotFoundError: example-robot-data is not installed.
         """
-        path = resolve_uri(self.urdf, None)
-        if path is None:
-            raise FileNotFoundError(f"{self.urdf}: install dynfab[robots] (example-robot-data)")
-        return Kinematics(load_urdf(path), joints=self.joints, locked=dict(self.locked))
+        return Kinematics(load_urdf(installed_urdf(self.urdf)), joints=self.joints, locked=dict(self.locked))
 
     def scenario_mapping(self, planner: str, duration: float, goal: dict[str, Any],
                          obstacles: list[dict[str, Any]]) -> dict[str, Any]:
@@ -90,6 +88,18 @@ class Arm:
         if self.locked:
             robot["locked"] = dict(self.locked)
         return robot
+
+
+def installed_urdf(uri: str) -> Path:
+    """The file a ``package://`` ``uri`` of example-robot-data names.
+
+    Raises:
+        FileNotFoundError: example-robot-data is not installed.
+    """
+    path = resolve_uri(uri, None)
+    if path is None:
+        raise FileNotFoundError(f"{uri}: install dynfab[robots] (example-robot-data)")
+    return Path(path)
 
 
 _ERD = "package://example-robot-data/robots/"

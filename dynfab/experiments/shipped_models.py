@@ -19,10 +19,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from dynfab.benchmarks.mbm.ur5 import UR5_URDF
-from dynfab.experiments.arms import ARMS
+from dynfab.experiments.arms import ARMS, installed_urdf
 from dynfab.experiments.arms_pose import POSE_ARMS
 from dynfab.robots.collision_model import SHIPPED_DIR, auto_collision_model, entry_name
-from dynfab.robots.mesh_paths import resolve_uri
 
 __all__ = ["SHIPPED_ROBOTS", "ShippedRobot", "main", "shipped_names"]
 
@@ -41,17 +40,6 @@ class ShippedRobot:
     joints: tuple[str, ...] | None = None
     locked: tuple[tuple[str, float], ...] = ()
 
-    def path(self) -> Path:
-        """The URDF file.
-
-        Raises:
-            FileNotFoundError: example-robot-data is not installed.
-        """
-        path = resolve_uri(self.urdf, None)
-        if path is None:
-            raise FileNotFoundError(f"{self.urdf}: install dynfab[robots] (example-robot-data)")
-        return Path(path)
-
 
 #: The arms experiments' robots as their scenarios name them, each of example-robot-data's
 #: arms with every movable joint active (``dynfab spheres`` on its URDF), and the UR5 with
@@ -64,15 +52,15 @@ SHIPPED_ROBOTS: tuple[ShippedRobot, ...] = tuple(dict.fromkeys(
 
 def shipped_names() -> dict[str, ShippedRobot]:
     """The entry file name of each of :data:`SHIPPED_ROBOTS` with the installed URDFs."""
-    return {entry_name(robot.path(), robot.joints, dict(robot.locked)): robot for robot in SHIPPED_ROBOTS}
+    return {entry_name(installed_urdf(robot.urdf), robot.joints, dict(robot.locked)): robot for robot in SHIPPED_ROBOTS}
 
 
 def main() -> None:
     """Fit every one of :data:`SHIPPED_ROBOTS` afresh and write :data:`SHIPPED_DIR` anew."""
     with tempfile.TemporaryDirectory() as folder:
         for name, robot in shipped_names().items():
-            model = auto_collision_model(robot.path(), robot.joints, dict(robot.locked), cache=Path(folder),
-                                         shipped=False)
+            model = auto_collision_model(installed_urdf(robot.urdf), robot.joints, dict(robot.locked),
+                                         cache=Path(folder), shipped=False)
             print(f"{robot.urdf} ({len(model.spheres)} spheres, {len(model.self_collision_pairs)} pairs): {name}",
                   file=sys.stderr)
         SHIPPED_DIR.mkdir(parents=True, exist_ok=True)

@@ -48,14 +48,14 @@ from dynfab.motion.guidance_settings import GuidanceSettings
 from dynfab.motion.joint_planning import WALL_FACTOR
 from dynfab.motion.joint_trajectory import JointTrajectory, TimingError, time_path
 from dynfab.motion.mesh_escape import MeshEscapeSettings, SpheresOrMeshes, mesh_path
-from dynfab.motion.mesh_goal_check import MeshGoalCheck
+from dynfab.motion.mesh_goal_check import MeshGoalCheck, placed_shapes
 from dynfab.motion.phased_trajectory import PhasedTrajectory
 from dynfab.motion.placed_obstacle import any_moving
 from dynfab.motion.plan_values import GuidanceError, Plan
 from dynfab.robots.limits import MotionLimits
 from dynfab.robots.mesh_collision import MeshCollisionModel, moving_part
 from dynfab.robots.mesh_contact import MeshContactCheck
-from dynfab.robots.mesh_sweep import PlacedShape, clearance_per_sample
+from dynfab.robots.mesh_sweep import clearance_per_sample
 
 __all__ = ["END_SHARE", "LEAF_SLACK", "EscapeScene", "escape_plan", "mesh_allowances", "search_margins"]
 
@@ -200,9 +200,8 @@ def mesh_allowances(model: MeshCollisionModel, segment: NDArray[np.float64], obs
     0.28 mm from the kitchen). The barrier brakes only a motion toward the obstacle, harder
     the nearer it reads (:mod:`dynfab.fabric.leaves.barrier`)."""
     moving = moving_part(model)
-    meshes = np.column_stack([clearance_per_sample(moving, segment, (PlacedShape(f"obstacles[{k}]", o.shape,
-                                                                                 (o.placement,)),))
-                              for k, o in enumerate(obstacles)]) if obstacles else np.zeros((len(segment), 0))
+    meshes = np.column_stack([clearance_per_sample(moving, segment, (shape,)) for shape in placed_shapes(obstacles)]
+                             ) if obstacles else np.zeros((len(segment), 0))
     return np.maximum(0.0, np.asarray(buffers, dtype=float) + np.minimum(goal_clearance, meshes + LEAF_SLACK) - spheres)
 
 

@@ -56,7 +56,7 @@ from dynfab.robots.mesh_collision import MeshCollisionModel, mesh_collision_mode
 from dynfab.robots.robot import Robot
 from dynfab.robots.mesh_sweep import PlacedShape, meshes_clear, sweep_meshes
 
-__all__ = ["ROUNDING", "MeshGoalCheck", "endpoint_tests", "robot_mesh_model"]
+__all__ = ["ROUNDING", "MeshGoalCheck", "endpoint_tests", "placed_shapes", "robot_mesh_model"]
 
 #: Slack [m] of :meth:`MeshGoalCheck.polyline_free`'s floor: a clearance read less ``δ`` and
 #: given back as a floor plus ``δ`` can come back an ulp above the raw distance, so that an
@@ -84,7 +84,7 @@ class MeshGoalCheck:
 
     def set_obstacles(self, obstacles: Sequence[PlacedObstacle]) -> None:
         """Check against ``obstacles`` from now on."""
-        self._shapes = tuple(PlacedShape(f"obstacles[{k}]", o.shape, (o.placement,)) for k, o in enumerate(obstacles))
+        self._shapes = placed_shapes(obstacles)
         self._lowering = max((o.shape.lowering for o in obstacles if isinstance(o.shape, PointCloud)), default=0.0)
 
     def clearance(self, q: NDArray[np.float64]) -> tuple[float, float]:
@@ -183,6 +183,12 @@ def endpoint_tests(q: NDArray[np.float64], checker: ConfigurationChecker,
     if not surfaces:
         return (alone,) if free_on_meshes else (both,) if obstacle > 0.0 and itself > 0.0 else (None,)
     return (both, alone) if free_on_meshes and not clouds else (both,)
+
+
+def placed_shapes(obstacles: Sequence[PlacedObstacle]) -> tuple[PlacedShape, ...]:
+    """``obstacles`` as the mesh sweep measures them (:mod:`dynfab.robots.mesh_sweep`), each
+    named ``obstacles[k]`` by its place."""
+    return tuple(PlacedShape(f"obstacles[{k}]", o.shape, (o.placement,)) for k, o in enumerate(obstacles))
 
 
 @lru_cache(maxsize=4)

@@ -37,9 +37,9 @@ from numpy.typing import NDArray
 from dynfab.geometry.shapes import Mesh
 from dynfab.motion.configuration_checker import ConfigurationChecker
 from dynfab.motion.guidance_settings import GuidanceSettings
-from dynfab.motion.mesh_goal_check import robot_mesh_model
+from dynfab.motion.mesh_goal_check import placed_shapes, robot_mesh_model
 from dynfab.robots.mesh_collision import moving_part
-from dynfab.robots.mesh_sweep import PlacedShape, clearance_per_sample
+from dynfab.robots.mesh_sweep import clearance_per_sample
 from dynfab.robots.robot import Robot
 
 __all__ = ["WaySpeed"]
@@ -69,6 +69,6 @@ class WaySpeed:
         model = robot_mesh_model(self._robot)
         near = np.flatnonzero(clearance < settings.slow_clearance)
         if model is not None and near.size:
-            shapes = tuple(PlacedShape(f"obstacles[{k}]", o.shape, (o.placement,)) for k, o in enumerate(meshes))
-            clearance[near] = clearance_per_sample(moving_part(model), qs[near], shapes, cap=settings.slow_clearance)
+            clearance[near] = clearance_per_sample(moving_part(model), qs[near], placed_shapes(meshes),
+                                                   cap=settings.slow_clearance)
         return np.clip(clearance / settings.slow_clearance, settings.slow_speed, 1.0)
