@@ -89,6 +89,7 @@ from dynfab.fabric.leaves.goal import GoalAttractor
 from dynfab.fabric.planner import FabricPlanner, GoalConfig
 from dynfab.geometry.shapes import Mesh, PointCloud
 from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObstacle
+from dynfab.motion.allowance_tables import AllowanceTables, departure_rows
 from dynfab.motion.approach_pull import ApproachPull
 from dynfab.motion.approach_segment import allowances_ahead, leaf_buffers, segment_offset
 from dynfab.motion.guidance import GoalTargets, GuidanceSettings, JointGuidance, Plan
@@ -99,7 +100,7 @@ from dynfab.motion.reference_clock import approach_rate, in_approach, way_rate
 from dynfab.motion.plan_requests import PendingPlan, PlanRequest, plan_maker
 from dynfab.motion.replan_reasons import ReplanWatch, counted
 from dynfab.motion.straight_motion import StraightMotion
-from dynfab.motion.way_window import allowances_near
+from dynfab.motion.way_window import way_window
 
 __all__ = ["GuidanceStatus", "GuidedFabric", "guided_goal_config"]
 
@@ -141,7 +142,9 @@ class GuidedFabric:
         self._interim: tuple[float, StraightMotion] | None = None   # since when, toward the goal
         planning = fabric.robot.planning_robot   # the plans' spheres; these two are not the worker's checkers
         self._joining, self._sight = ConfigurationChecker(planning), ConfigurationChecker(planning)
+        self._own_way = AllowanceTables(fabric.robot, settings)   # the way's allowances where the robot is
         self._static: tuple[PlacedObstacle, ...] = ()
+        self._buffers: tuple[float, ...] = ()                # the leaves' clearance from each [m]
         self._goal: GoalTargets | None = None
         self._plan: Plan | None = None
         self._tau = 0.0
@@ -152,6 +155,7 @@ class GuidedFabric:
         self._table = np.zeros((1, 0))                     # the allowances at each (k, m) [m]
         self._way = np.zeros((1, fabric.robot.dof))        # the way's configurations (k, n) [rad]
         self._way_table = np.zeros((1, 0))                 # the allowances at each (k, m) [m]
+        self._departure_rows = 0                           # the way's first rows that see the meshes
         self._q = np.zeros(fabric.robot.dof)               # the robot at the last update [rad]
         self._reference = np.zeros(fabric.robot.dof)       # q_r(τ) written last, without the pull [rad]
         self._pull = ApproachPull(settings, fabric.robot.dof)
@@ -179,6 +183,7 @@ class GuidedFabric:
         the new obstacles get no allowance along an approach or a way under way (a row per sample: a
         camera's scene replaced mid-approach once crashed :meth:`allowances`)."""
         self._static = tuple(obstacles)
+        self._buffers = leaf_buffers(self.fabric.config, self._static)
         self._sight.set_obstacles([o for o in self._static if not isinstance(o.shape, Mesh | PointCloud)])  # in_sight
         self._table = np.zeros((len(self._segment), len(self._static)))
         self._way_table = np.zeros((len(self._way), len(self._static)))
@@ -194,12 +199,19 @@ class GuidedFabric:
         spheres may enter it now: while :attr:`approaching`, the largest allowance at the
         approach's configurations from the robot's (its projection on the segment, less one
         sample) to the goal, else those of the plan's way near the robot
-        (:func:`~dynfab.motion.way_window.allowances_near`; module docstring)."""
+        (:func:`~dynfab.motion.way_window.way_window`), each at most what the planning
+        spheres give where the robot is (:meth:`~dynfab.motion.allowance_tables.AllowanceTables.way_at`),
+        except along a blocked start's way out, where the leaves see the meshes (module docstring)."""
         if self._approaching:
             return allowances_ahead(self._segment, self._table, self._q)
         if self._plan is None or not self._way_table.any():
             return np.zeros(len(self._static))
-        return allowances_near(self._way, self._way_table, self._q, self._reference, self._settings.way_reach)
+        window = way_window(self._way, self._q, self._reference, self._settings.way_reach)
+        allowances = window.held * self._way_table[window.rows].max(axis=0)
+        if window.rows.start < self._departure_rows or not allowances.any():
+            return allowances
+        own = self._own_way.way_at(self._q, self._static, self._buffers, np.flatnonzero(allowances))
+        return np.minimum(allowances, own)
 
     def set_goal(self, goal: GoalTargets, t: float, q: NDArray[np.float64],
                  moving: Sequence[PlacedObstacle] = ()) -> None:
@@ -291,7 +303,7 @@ class GuidedFabric:
         elif after is not None and self._plan is not None:
             previous_goal = self._plan.goal.copy()
         request = PlanRequest(t, np.array(q, dtype=float), self._goal, self._static, tuple(moving), previous_goal,
-                              self._seed, after in ("held", "short"), leaf_buffers(self.fabric.config, self._static), after)
+                              self._seed, after in ("held", "short"), self._buffers, after)
         self._seed += self._settings.attempts
         self._pending = self._maker.submit(request)
 
@@ -327,6 +339,7 @@ class GuidedFabric:
         self._approaching = False
         self._segment, self._table = outcome.segment, outcome.table
         self._way, self._way_table = outcome.way, outcome.way_table
+        self._departure_rows = departure_rows(plan, self._settings.path.resolution)
         self._pull.reset()
         self._joining.set_obstacles(request.static + tuple(moving))
         self._tau = join_time(plan, np.asarray(q, dtype=float), self._joining, self._settings.path.resolution)

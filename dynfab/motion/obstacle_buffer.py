@@ -23,7 +23,7 @@ from dynfab.geometry.shapes import Box, Capsule, Cylinder, Mesh, Plane, PointClo
 from dynfab.motion.placed_obstacle import PlacedObstacle
 from dynfab.robots.collision_model import cache_dir
 
-__all__ = ["ROW", "gridded", "obstacle_buffer", "obstacle_row", "same_grids"]
+__all__ = ["ROW", "gridded", "mesh_grid", "obstacle_buffer", "obstacle_row", "same_grids"]
 
 #: numbers per obstacle row
 ROW = 17
@@ -53,12 +53,17 @@ def obstacle_buffer(obstacles: Sequence[PlacedObstacle]) -> NDArray[np.float64]:
     for k, obstacle in enumerate(obstacles):
         if gridded(obstacle):
             shape = obstacle.shape
-            grid = (distance_grid(shape, cache=cache_dir() / "distance-grids") if isinstance(shape, Mesh)
-                    else _cloud_grid(shape)).packed()
+            grid = (mesh_grid(shape) if isinstance(shape, Mesh) else _cloud_grid(shape)).packed()
             rows[k, 13] = end - ROW * k
             grids.append(grid)
             end += grid.size
     return np.ascontiguousarray(np.concatenate([rows.reshape(-1), *grids]))
+
+
+def mesh_grid(mesh: Mesh) -> DistanceGrid:
+    """The lower-bound grid the checker reads ``mesh`` from (kept on the mesh and on disk:
+    :func:`~dynfab.geometry.distance_grid.distance_grid`)."""
+    return distance_grid(mesh, cache=cache_dir() / "distance-grids")
 
 
 def obstacle_row(obstacle: PlacedObstacle) -> NDArray[np.float64]:

@@ -18,25 +18,47 @@ spheres fit its meshes tightly, touched that box).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["WAY_AHEAD", "allowances_near"]
+__all__ = ["WAY_AHEAD", "WayWindow", "allowances_near", "way_window"]
 
 #: configurations of the way (``path.resolution`` apart) beyond the robot's and the
 #: reference's nearest whose allowances count [-]
 WAY_AHEAD = 3
 
 
-def allowances_near(way: NDArray[np.float64], table: NDArray[np.float64], q: NDArray[np.float64],
-                    reference: NDArray[np.float64], reach: float = np.inf) -> NDArray[np.float64]:
-    """Per obstacle, the largest allowance [m] of ``table`` (k, m) at the configurations of
-    ``way`` (k, n) [rad] near the robot at ``q`` and its reference at ``reference``, times
-    ``clip(2 − d / reach, 0, 1)``, ``d`` the robot's distance from the nearest of them [rad]
+@dataclass(frozen=True)
+class WayWindow:
+    """Where on its way the robot is.
+
+    Attributes:
+        rows: The way's configurations whose allowances count (module docstring).
+        held: The share of them that holds, ``clip(2 − d / reach, 0, 1)`` [-].
+    """
+
+    rows: slice
+    held: float
+
+
+def way_window(way: NDArray[np.float64], q: NDArray[np.float64], reference: NDArray[np.float64],
+               reach: float = np.inf) -> WayWindow:
+    """The window of ``way`` (k, n) [rad] near the robot at ``q`` and its reference at
+    ``reference``, ``d`` the robot's distance from the nearest of its configurations [rad]
     (module docstring)."""
     distances = np.linalg.norm(way - q, axis=1)
     robot = int(np.argmin(distances))
     followed = int(np.argmin(np.linalg.norm(way - reference, axis=1)))
     first = max(0, min(robot, followed) - 1)
     held = float(np.clip(2.0 - distances[robot] / reach, 0.0, 1.0))
-    return held * table[first:max(robot, followed) + WAY_AHEAD + 1].max(axis=0)
+    return WayWindow(slice(first, max(robot, followed) + WAY_AHEAD + 1), held)
+
+
+def allowances_near(way: NDArray[np.float64], table: NDArray[np.float64], q: NDArray[np.float64],
+                    reference: NDArray[np.float64], reach: float = np.inf) -> NDArray[np.float64]:
+    """Per obstacle, the largest allowance [m] of ``table`` (k, m) at the configurations of
+    ``way`` (k, n) [rad] in :func:`way_window`, times its ``held``."""
+    window = way_window(way, q, reference, reach)
+    return window.held * table[window.rows].max(axis=0)
