@@ -36,7 +36,10 @@ on its clock to the latest point within a second that the robot sees
 (:func:`~dynfab.motion.plan_joining.sight_time`), or, if there is none, its clock stands
 still. Along the plan's way the static primitives get the allowances that let the fabric's
 leaves see what the plan's tighter spheres kept
-(:meth:`~dynfab.motion.guidance.JointGuidance.way_allowances`).
+(:meth:`~dynfab.motion.guidance.JointGuidance.way_allowances`), near where the robot is on
+the way (:mod:`dynfab.motion.way_window`) and at most what the same rule gives at the
+robot's own configuration (:meth:`~dynfab.motion.allowance_tables.AllowanceTables.way_at`,
+on checkers of the control loop's own), except along a blocked start's way out.
 
 It asks for a replan from where the robot is (at most ``replans`` times; until the new
 one arrives the old reference's clock stands still outside a grasp's approach, so the

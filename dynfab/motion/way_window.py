@@ -13,7 +13,10 @@ the way's configurations, so it holds only near the way: in full while the robot
 that (a robot pushed off its way kept an allowance meant for another sphere: fresh
 generated seed 21, as posed table_under_pick/0005, lay 0.25 rad off its way with the 14 mm
 allowance of a box that its hand's spheres needed on the way, and ``panda_link7``, whose
-spheres fit its meshes tightly, touched that box).
+spheres fit its meshes tightly, touched that box). Within ``reach`` the guided fabric caps
+them by what the robot's own configuration gives
+(:meth:`~dynfab.motion.allowance_tables.AllowanceTables.way_at`): 0.09 rad beside its way
+a robot kept the way's 7-10 mm and put a finger on MBM table_bars' bars (fresh seed 34).
 """
 
 from __future__ import annotations
