@@ -14,7 +14,7 @@ from dynfab.motion.configuration_checker import ConfigurationChecker, PlacedObst
 from dynfab.motion.guidance import JointGuidance, Plan
 from dynfab.motion.joint_trajectory import time_path
 from dynfab.motion.phased_trajectory import PhasedTrajectory
-from dynfab.motion.way_window import WAY_AHEAD, allowances_near
+from dynfab.motion.way_window import WAY_AHEAD, way_window
 from dynfab.robots import load_robot
 
 START = np.array([0.0, -0.5, 0.0, -2.0, 0.0, 1.8, 0.8])
@@ -92,10 +92,10 @@ def test_way_allowances_hold_from_before_the_robot_to_just_beyond_its_reference(
     table = np.zeros((21, 2))
     table[10, 0], table[4, 1] = 0.01, 0.02
     at = way[3] + 1e-4
-    np.testing.assert_allclose(allowances_near(way, table, at, way[3]), [0.0, 0.02])   # 4 is ahead, 10 is not
-    np.testing.assert_allclose(allowances_near(way, table, at, way[10 - WAY_AHEAD]), [0.01, 0.02])
-    np.testing.assert_allclose(allowances_near(way, table, way[12], way[14]), [0.0, 0.0])   # both passed
-    np.testing.assert_allclose(allowances_near(way, table, way[11], way[14]), [0.01, 0.0])  # the one before counts
+    np.testing.assert_allclose(way_window(way, at, way[3]).allowances(table), [0.0, 0.02])   # 4 is ahead, 10 is not
+    np.testing.assert_allclose(way_window(way, at, way[10 - WAY_AHEAD]).allowances(table), [0.01, 0.02])
+    np.testing.assert_allclose(way_window(way, way[12], way[14]).allowances(table), [0.0, 0.0])   # both passed
+    np.testing.assert_allclose(way_window(way, way[11], way[14]).allowances(table), [0.01, 0.0])  # the one before counts
 
 
 def test_way_allowances_fade_as_the_robot_leaves_its_way() -> None:
@@ -105,12 +105,11 @@ def test_way_allowances_fade_as_the_robot_leaves_its_way() -> None:
     off = np.array([0.0, 0.0, 1.0])   # across the way
     for distance, kept in ((0.0, 1.0), (0.1, 1.0), (0.15, 0.5), (0.2, 0.0), (0.5, 0.0)):
         q = way[10] + distance * off
-        np.testing.assert_allclose(allowances_near(way, table, q, way[10], reach=0.1), [0.01 * kept], atol=1e-12)
+        np.testing.assert_allclose(way_window(way, q, way[10], reach=0.1).allowances(table), [0.01 * kept], atol=1e-12)
 
 
-
-def test_a_guided_fabric_gives_its_plans_way_allowances_where_the_robot_is(panda, monkeypatch) -> None:
-    from dynfab.motion.guidance import JointTarget
+def _guided_before_the_wall(panda):
+    """The guided fabric of a scenario from before the wall to behind it (plans made at once)."""
     from dynfab.scenario.guided_controller import make_scenario_controller
     from dynfab.scenario.references import scenario_references
     from dynfab.scenario.schema import scenario_from_dict, validate_for_robot
@@ -121,7 +120,15 @@ def test_a_guided_fabric_gives_its_plans_way_allowances_where_the_robot_is(panda
             "initial_state": {"q": BEFORE_THE_WALL.tolist()}, "goal": [{"type": "joint", "position": GOAL.tolist()}],
             "obstacles": [WALL_ENTRY]}
     scenario = validate_for_robot(scenario_from_dict(data), panda)
-    guided = make_scenario_controller(scenario, panda, scenario_references(scenario, panda), plan_latency=0.0).guided
+    return make_scenario_controller(scenario, panda, scenario_references(scenario, panda), plan_latency=0.0).guided
+
+
+def test_a_guided_fabric_gives_its_plans_way_allowances_where_the_robot_is(panda, monkeypatch) -> None:
+    from dynfab.motion.guidance import JointTarget
+    from wall_scene import GOAL
+    from wall_scene import START as BEFORE_THE_WALL
+
+    guided = _guided_before_the_wall(panda)
     made = guided.guidance.way_allowances
 
     def marked(plan, obstacles, buffers):   # the plan's own way, an allowance at its middle tenth
@@ -139,7 +146,7 @@ def test_a_guided_fabric_gives_its_plans_way_allowances_where_the_robot_is(panda
         q = plan.trajectory.evaluate(float(guided._tau)).position
         guided.update(float(tau), q)
         now = guided.allowances()
-        window = allowances_near(way, guided._way_table, q, guided._reference)
+        window = way_window(way, q, guided._reference).allowances(guided._way_table)
         own = guided._own_way.way_at(q, guided._static, guided._buffers, [0])   # where the robot is
         np.testing.assert_allclose(now, np.minimum(window, own), atol=0.0)
         given.append(now[0])
@@ -241,17 +248,10 @@ def test_near_its_way_or_off_it_an_allowance_lets_the_leaves_see_no_more_than_th
     0016, 0019). Checked on independent checkers of both sphere sets, for a way whose
     every configuration is given 15 mm."""
     from dynfab.motion.guidance import JointTarget
-    from dynfab.scenario.guided_controller import make_scenario_controller
-    from dynfab.scenario.references import scenario_references
-    from dynfab.scenario.schema import scenario_from_dict, validate_for_robot
-    from wall_scene import GOAL, WALL, WALL_ENTRY
+    from wall_scene import GOAL, WALL
     from wall_scene import START as BEFORE_THE_WALL
 
-    data = {"robot": "panda", "planner": "dynamic-fabric", "dt": 0.01, "duration": 5.0,
-            "initial_state": {"q": BEFORE_THE_WALL.tolist()}, "goal": [{"type": "joint", "position": GOAL.tolist()}],
-            "obstacles": [WALL_ENTRY]}
-    scenario = validate_for_robot(scenario_from_dict(data), panda)
-    guided = make_scenario_controller(scenario, panda, scenario_references(scenario, panda), plan_latency=0.0).guided
+    guided = _guided_before_the_wall(panda)
     made = guided.guidance.way_allowances
     settings = guided.guidance.settings
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from dynfab.fabric.leaves.surface_points import moving_spheres
 from dynfab.geometry.shapes import Mesh, PointCloud
@@ -164,10 +164,15 @@ class AllowanceTables:
             if isinstance(obstacle.shape, PointCloud) or (fabric := self.obstacle_clearance(q, obstacle, within)) >= within:
                 continue
             self._single_planning.set_obstacles((obstacle,))
-            planned = self._single_planning.clearances(q)[0]
-            allowances[k] = max(0.0, buffers[k] + min(settings.way_clearance, planned - settings.sphere_coverage)
-                                - fabric)
+            allowances[k] = self._way_rule(buffers[k], self._single_planning.clearances(q)[0], fabric)
         return allowances
+
+    def _way_rule(self, buffer: float, planned: ArrayLike, fabric: ArrayLike) -> NDArray[np.float64]:
+        """``a = max(0, buffer + min(way_clearance, p − sphere_coverage) − c)`` [m] of
+        :meth:`way` for the planning spheres' clearance ``p`` and the fabric's ``c`` [m]."""
+        settings = self._settings
+        return np.maximum(0.0, buffer + np.minimum(settings.way_clearance,
+                                                   np.asarray(planned) - settings.sphere_coverage) - fabric)
 
     def _seeing_meshes(self, check: MeshGoalCheck, segment: NDArray[np.float64],
                        obstacles: Sequence[PlacedObstacle], buffers: Sequence[float]) -> NDArray[np.float64]:
@@ -198,8 +203,7 @@ class AllowanceTables:
             if isinstance(obstacle.shape, Mesh):
                 fabric[near] = [self.obstacle_clearance(q, obstacle) for q in samples[near]]
             planned = self._clearances(self._single_planning, samples[near], obstacle)
-            seen = np.minimum(settings.way_clearance, planned - settings.sphere_coverage)
-            table[near, k] = np.maximum(0.0, buffers[k] + seen - fabric[near])
+            table[near, k] = self._way_rule(buffers[k], planned, fabric[near])
 
     def obstacle_clearance(self, q: NDArray[np.float64], obstacle: PlacedObstacle, within: float = np.inf) -> float:
         """``c_k(q)`` [m] (module docstring): the checker's, or for a mesh or a point cloud

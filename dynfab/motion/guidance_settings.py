@@ -195,7 +195,7 @@ class GuidanceSettings:
             defaults of the approach's ``goal_clearance`` and the fit's coverage).
         way_reach: how far from its way's configurations [rad] the robot keeps their
             allowances in full; they fade to none at twice that
-            (:func:`~dynfab.motion.way_window.allowances_near`). 0.1 (``lag_slow``), chosen
+            (:func:`~dynfab.motion.way_window.way_window`). 0.1 (``lag_slow``), chosen
             on generated seed 21 (as posed: the robots lay within 0.1 rad of their ways
             at 99 % of the ticks with an allowance, up to 0.2 rad on bookshelf_small/0005;
             table_under_pick/0005 touched a box 0.25 rad off its way).

@@ -210,7 +210,7 @@ class GuidedFabric:
         if self._plan is None or not self._way_table.any():
             return np.zeros(len(self._static))
         window = way_window(self._way, self._q, self._reference, self._settings.way_reach)
-        allowances = window.held * self._way_table[window.rows].max(axis=0)
+        allowances = window.allowances(self._way_table)
         if window.rows.start < self._departure_rows or not allowances.any():
             return allowances
         own = self._own_way.way_at(self._q, self._static, self._buffers, np.flatnonzero(allowances))

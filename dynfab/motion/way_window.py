@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["WAY_AHEAD", "WayWindow", "allowances_near", "way_window"]
+__all__ = ["WAY_AHEAD", "WayWindow", "way_window"]
 
 #: configurations of the way (``path.resolution`` apart) beyond the robot's and the
 #: reference's nearest whose allowances count [-]
@@ -45,6 +45,10 @@ class WayWindow:
     rows: slice
     held: float
 
+    def allowances(self, table: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Per obstacle, the largest allowance [m] of ``table`` (k, m) in :attr:`rows`, times :attr:`held`."""
+        return self.held * table[self.rows].max(axis=0)
+
 
 def way_window(way: NDArray[np.float64], q: NDArray[np.float64], reference: NDArray[np.float64],
                reach: float = np.inf) -> WayWindow:
@@ -58,10 +62,3 @@ def way_window(way: NDArray[np.float64], q: NDArray[np.float64], reference: NDAr
     held = float(np.clip(2.0 - distances[robot] / reach, 0.0, 1.0))
     return WayWindow(slice(first, max(robot, followed) + WAY_AHEAD + 1), held)
 
-
-def allowances_near(way: NDArray[np.float64], table: NDArray[np.float64], q: NDArray[np.float64],
-                    reference: NDArray[np.float64], reach: float = np.inf) -> NDArray[np.float64]:
-    """Per obstacle, the largest allowance [m] of ``table`` (k, m) at the configurations of
-    ``way`` (k, n) [rad] in :func:`way_window`, times its ``held``."""
-    window = way_window(way, q, reference, reach)
-    return window.held * table[window.rows].max(axis=0)
